@@ -1,0 +1,1 @@
+//! Reference radiosity solvers: pointwise path tracing, classical and hierarchical radiosity.

@@ -1,0 +1,1 @@
+//! Growing Cells Radiosity: radiosity on evolving networks (Bohn 2000).

@@ -1,0 +1,1 @@
+//! Incremental supervised growing cell structures: a generic function approximator (Bohn 2000, ch. 2).

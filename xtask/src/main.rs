@@ -1,0 +1,68 @@
+//! `cargo xtask figures` regenerates the dissertation's figures into `docs/figures/`;
+//! `cargo xtask bench` runs the time-against-error benchmarks and writes `docs/benchmarks.md`.
+
+mod bench;
+mod figures;
+#[allow(dead_code)] // used by the figure and benchmark groups as they land
+mod plot;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(name = "xtask", about = "GCR project automation")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Regenerate the dissertation's figures (PNG) into docs/figures/.
+    Figures {
+        /// Small sizes: a smoke run that finishes in seconds (CI runs this).
+        #[arg(long)]
+        quick: bool,
+        /// Only the figure groups whose name contains this text (e.g. `isgcs`, `gauss`).
+        #[arg(long)]
+        only: Option<String>,
+        /// Output folder.
+        #[arg(long, default_value = "docs/figures")]
+        out: PathBuf,
+    },
+    /// Benchmarks: time against error, scaling curves; writes docs/benchmarks*.md.
+    Bench {
+        /// Small sizes: a smoke run.
+        #[arg(long)]
+        quick: bool,
+        /// Only the benchmark groups whose name contains this text.
+        #[arg(long)]
+        only: Option<String>,
+        /// Output folder.
+        #[arg(long, default_value = "docs")]
+        out: PathBuf,
+    },
+}
+
+/// What every figure or benchmark group receives.
+pub struct Ctx {
+    /// Smoke-run sizes.
+    pub quick: bool,
+    /// Output folder.
+    pub out: PathBuf,
+}
+
+fn main() -> Result<()> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Figures { quick, only, out } => {
+            std::fs::create_dir_all(&out)?;
+            figures::run(&Ctx { quick, out }, only.as_deref())
+        }
+        Command::Bench { quick, only, out } => {
+            std::fs::create_dir_all(&out)?;
+            bench::run(&Ctx { quick, out }, only.as_deref())
+        }
+    }
+}

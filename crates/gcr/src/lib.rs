@@ -1,1 +1,9 @@
 //! Growing Cells Radiosity: radiosity on evolving networks (Bohn 2000).
+//!
+//! The solver learns the light flow K(x,y)·B(x) with a growing-cell-structures network (the
+//! *kernel network*, [`isgcs`]), meshes the surfaces with a second one (the *shading network*),
+//! and integrates between them in closed form ([`gauss_integrals`]).
+
+pub mod mesh;
+pub mod output;
+pub mod retriangulate;

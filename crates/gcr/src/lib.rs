@@ -7,3 +7,4 @@
 pub mod mesh;
 pub mod output;
 pub mod retriangulate;
+pub mod shading;

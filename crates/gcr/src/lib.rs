@@ -5,6 +5,7 @@
 //! and integrates between them in closed form ([`gauss_integrals`]).
 
 pub mod mesh;
+pub mod metrics;
 pub mod output;
 pub mod retriangulate;
 pub mod shading;

@@ -1,0 +1,96 @@
+//! Metrics of one solve, written as JSON by `gcr solve --metrics`.
+
+use serde::Serialize;
+
+/// Wall time spent per phase of a solve, in seconds.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct PhaseTimes {
+    /// Drawing rays and evaluating the kernel goal function (tracing visibility).
+    pub sampling: f64,
+    /// Training steps of the kernel network (USL, SL, insertions, deletions).
+    pub kernel_training: f64,
+    /// Training steps of the shading network.
+    pub shading_training: f64,
+    /// FEM steps: base, Gram matrix, orthonormalization, transfer, sample updates.
+    pub fem: f64,
+    /// Resampling of critical regions.
+    pub resampling: f64,
+    /// Re-triangulation and the final gather at the output vertices.
+    pub gather: f64,
+    /// Writing images and meshes.
+    pub output: f64,
+    /// Everything, end to end.
+    pub total: f64,
+}
+
+/// Everything a user may want to know about a solve.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Metrics {
+    /// Scene name or file.
+    pub scene: String,
+    /// Number of scene triangles (3-D) or segments (Flatland).
+    pub scene_elements: usize,
+    /// Colour bands solved (1 for grey scenes, 3 for RGB).
+    pub bands: usize,
+    /// Seed of the run.
+    pub seed: u64,
+    /// Worker threads used.
+    pub threads: usize,
+    /// Kernel network cells ("links") at the end.
+    pub kernel_cells: usize,
+    /// Shading network cells at the end.
+    pub shading_cells: usize,
+    /// Shading network simplices used as the integration domain in the last FEM step.
+    pub shading_triangles: usize,
+    /// Training samples (rays) held at the end.
+    pub samples: usize,
+    /// Rays traced for visibility in total (sampling, resampling, gather).
+    pub rays_traced: u64,
+    /// FEM steps executed.
+    pub fem_steps: usize,
+    /// Kernel training steps executed.
+    pub training_steps: u64,
+    /// Base components rejected as nearly dependent in the last FEM step.
+    pub rejected_base_components: usize,
+    /// Output mesh vertices and triangles.
+    pub output_vertices: usize,
+    /// Output mesh triangles.
+    pub output_triangles: usize,
+    /// Gather mode used for the output (`base`, `kernel` or `rays`).
+    pub gather: String,
+    /// Share of the output radiosity (area-weighted, all bands) that came from the networks
+    /// (indirect light), as opposed to exact emission and, with `rays`, exact direct light.
+    pub network_share: f64,
+    /// Energy balance of the last FEM step: total reflected power over the power that the
+    /// emitted-plus-reflected light deposits times the reflectance (1 when consistent).
+    pub energy_balance: f64,
+    /// Time per phase.
+    pub seconds: PhaseTimes,
+    /// Peak resident memory of the process in bytes (Linux: VmHWM), if known.
+    pub peak_memory_bytes: Option<u64>,
+    /// The reason the training stopped (`cells`, `time`, `error`, `steps`).
+    pub stopped_by: String,
+}
+
+/// Peak resident set size of this process (`VmHWM` from `/proc/self/status`), when available.
+pub fn peak_memory_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn metrics_serialize_and_memory_is_reported_on_linux() {
+        let m = Metrics { scene: "x".into(), ..Default::default() };
+        let json = serde_json::to_string(&m).unwrap();
+        assert!(json.contains("\"kernel_cells\":0"));
+        if cfg!(target_os = "linux") {
+            assert!(peak_memory_bytes().unwrap() > 1 << 20);
+        }
+    }
+}

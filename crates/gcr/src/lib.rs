@@ -9,3 +9,4 @@ pub mod metrics;
 pub mod output;
 pub mod retriangulate;
 pub mod shading;
+pub mod spatial;

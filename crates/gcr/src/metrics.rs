@@ -86,7 +86,10 @@ mod tests {
 
     #[test]
     fn metrics_serialize_and_memory_is_reported_on_linux() {
-        let m = Metrics { scene: "x".into(), ..Default::default() };
+        let m = Metrics {
+            scene: "x".into(),
+            ..Default::default()
+        };
         let json = serde_json::to_string(&m).unwrap();
         assert!(json.contains("\"kernel_cells\":0"));
         if cfg!(target_os = "linux") {

@@ -54,7 +54,7 @@ impl BoxGrid {
     /// Ids of the items whose boxes intersect the ball (centre, radius), each once, ascending.
     pub fn query_ball(&self, centre: DVec3, radius: f64, out: &mut Vec<u32>) {
         out.clear();
-        if !(radius >= 0.0) || !centre.is_finite() {
+        if radius.is_nan() || radius < 0.0 || !centre.is_finite() {
             return;
         }
         let r = DVec3::splat(radius);

@@ -1,5 +1,6 @@
 //! The shading network's geometry as the FEM sees it (sec. 3.2, 3.9.4): cells with centres,
-//! widths and learned normals, the triangles of its k = 2 topology, and the per-cell properties
+//! widths and learned normals, the simplices of its topology (triangles, k = 2, in 3-D; segments,
+//! k = 1, in Flatland, whose points lie in the z = 0 plane), and the per-cell properties
 //! the integration criterion needs — surface roughness SR, its diffusion FSR, depth flags DF and
 //! sub-network ids — plus the "breaking operator" the dissertation asks for (sec. 4.4.2).
 //!
@@ -20,14 +21,17 @@ pub struct ShadingGeometry {
     pub widths: Vec<f64>,
     /// Unit normals learned by the output layer (sec. 3.2); zero where unknown.
     pub normals: Vec<DVec3>,
-    /// The k = 2 simplices that survive the breaking operator, oriented so that their geometric
-    /// normal agrees with the mean learned normal of their corners.
-    pub triangles: Vec<[usize; 3]>,
-    /// Sub-network id per cell (connected components over `triangles`; isolated cells get their
+    /// Topology dimension: 2 (triangles) or 1 (Flatland segments).
+    pub k: usize,
+    /// The simplices that survive the breaking operator, oriented so that their geometric normal
+    /// agrees with the mean learned normal of their corners. Only the first `k + 1` entries of
+    /// each are used.
+    pub simplices: Vec<[usize; 3]>,
+    /// Sub-network id per cell (connected components over `simplices`; isolated cells get their
     /// own id).
     pub component: Vec<u32>,
     /// Surface roughness SR_i: the root-mean-square angle (radians) between the normals of the
-    /// triangles around cell i and their mean (sec. 3.9.4).
+    /// simplices around cell i and their mean (sec. 3.9.4).
     pub roughness: Vec<f64>,
     /// Fuzzy surface roughness FSR_i: SR diffused over the edges (sec. 3.9.4).
     pub fuzzy_roughness: Vec<f64>,
@@ -60,7 +64,8 @@ impl Default for Breaking {
 }
 
 impl ShadingGeometry {
-    /// Builds the geometry from the network's cells and simplices.
+    /// Builds the geometry from the network's cells and its `k`-simplices (`k` = 1 or 2; for
+    /// `k` = 1 the third index of each simplex is ignored).
     ///
     /// `spans_gap(a, b)` answers whether the straight edge between two cell centres leaves the
     /// scene's surfaces; it is only consulted when `breaking.enabled`.
@@ -68,27 +73,31 @@ impl ShadingGeometry {
         centres: Vec<DVec3>,
         widths: Vec<f64>,
         normals: Vec<DVec3>,
+        k: usize,
         simplices: &[[usize; 3]],
         breaking: Breaking,
         spans_gap: impl Fn(DVec3, DVec3) -> bool,
     ) -> Self {
+        assert!(k == 1 || k == 2, "shading networks have k = 1 or k = 2");
         let n = centres.len();
         let normals: Vec<DVec3> = normals.into_iter().map(|v| v.normalize_or_zero()).collect();
         let mut gap_cache: HashMap<(usize, usize), bool> = HashMap::new();
-        let mut triangles = Vec::with_capacity(simplices.len());
-        for &[a, b, c] in simplices {
-            if a >= n || b >= n || c >= n || a == b || b == c || a == c {
+        let mut kept = Vec::with_capacity(simplices.len());
+        for simplex in simplices {
+            let s = &simplex[..=k];
+            if s.iter().any(|&i| i >= n) || (1..s.len()).any(|i| s[..i].contains(&s[i])) {
                 continue;
             }
+            let pairs = simplex_edges(s);
             if breaking.enabled {
                 let cos_max = breaking.max_normal_angle.cos();
-                let disagree = [(a, b), (b, c), (c, a)]
+                if pairs
                     .iter()
-                    .any(|&(i, j)| normals[i].dot(normals[j]) < cos_max);
-                if disagree {
+                    .any(|&(i, j)| normals[i].dot(normals[j]) < cos_max)
+                {
                     continue;
                 }
-                let gap = [(a, b), (b, c), (c, a)].iter().any(|&(i, j)| {
+                let gap = pairs.iter().any(|&(i, j)| {
                     *gap_cache
                         .entry((i.min(j), i.max(j)))
                         .or_insert_with(|| spans_gap(centres[i], centres[j]))
@@ -98,19 +107,19 @@ impl ShadingGeometry {
                 }
             }
             // Orient by the learned normals (the network's simplices carry no orientation).
-            let geometric = (centres[b] - centres[a]).cross(centres[c] - centres[a]);
-            let learned = normals[a] + normals[b] + normals[c];
-            triangles.push(if geometric.dot(learned) < 0.0 {
-                [a, c, b]
-            } else {
-                [a, b, c]
-            });
+            let learned: DVec3 = s.iter().map(|&i| normals[i]).sum();
+            let mut oriented = *simplex;
+            if geometric_normal(&centres, &oriented, k).dot(learned) < 0.0 {
+                oriented.swap(0, 1);
+            }
+            kept.push(oriented);
         }
         let mut geo = Self {
             centres,
             widths,
             normals,
-            triangles,
+            k,
+            simplices: kept,
             component: Vec::new(),
             roughness: Vec::new(),
             fuzzy_roughness: Vec::new(),
@@ -133,33 +142,33 @@ impl ShadingGeometry {
         self.centres.is_empty()
     }
 
-    /// Unit normal of triangle `t` (zero for a degenerate triangle).
-    pub fn triangle_normal(&self, t: usize) -> DVec3 {
-        let [a, b, c] = self.triangles[t].map(|i| self.centres[i]);
-        (b - a).cross(c - a).normalize_or_zero()
+    /// The cells of simplex `t` (k + 1 of them).
+    pub fn simplex(&self, t: usize) -> &[usize] {
+        &self.simplices[t][..=self.k]
     }
 
-    /// Corner positions of triangle `t`.
-    pub fn triangle(&self, t: usize) -> [DVec3; 3] {
-        self.triangles[t].map(|i| self.centres[i])
+    /// Unit normal of simplex `t` (zero when degenerate). Flatland segments lie in z = 0 and
+    /// their normal is the edge direction turned by +90°.
+    pub fn simplex_normal(&self, t: usize) -> DVec3 {
+        geometric_normal(&self.centres, &self.simplices[t], self.k).normalize_or_zero()
     }
 
-    /// Triangles incident to each cell.
-    pub fn incident_triangles(&self) -> Vec<Vec<usize>> {
+    /// Simplices incident to each cell.
+    pub fn incident_simplices(&self) -> Vec<Vec<usize>> {
         let mut inc = vec![Vec::new(); self.len()];
-        for (t, tri) in self.triangles.iter().enumerate() {
-            for &i in tri {
+        for t in 0..self.simplices.len() {
+            for &i in self.simplex(t) {
                 inc[i].push(t);
             }
         }
         inc
     }
 
-    /// Edge adjacency over the surviving triangles (sorted, deduplicated).
+    /// Edge adjacency over the surviving simplices (sorted, deduplicated).
     pub fn neighbours(&self) -> Vec<Vec<usize>> {
         let mut nb = vec![Vec::new(); self.len()];
-        for &[a, b, c] in &self.triangles {
-            for (i, j) in [(a, b), (b, c), (c, a)] {
+        for t in 0..self.simplices.len() {
+            for (i, j) in simplex_edges(self.simplex(t)) {
                 nb[i].push(j);
                 nb[j].push(i);
             }
@@ -195,12 +204,12 @@ impl ShadingGeometry {
     }
 
     fn surface_roughness(&self) -> Vec<f64> {
-        let inc = self.incident_triangles();
+        let inc = self.incident_simplices();
         inc.iter()
             .map(|ts| {
                 let ns: Vec<DVec3> = ts
                     .iter()
-                    .map(|&t| self.triangle_normal(t))
+                    .map(|&t| self.simplex_normal(t))
                     .filter(|n| *n != DVec3::ZERO)
                     .collect();
                 if ns.len() < 2 {
@@ -246,32 +255,43 @@ impl ShadingGeometry {
             .collect()
     }
 
-    /// DF: breadth-first distance (in edges) from the boundary. A boundary cell has an edge used
-    /// by exactly one triangle, or no triangle at all.
+    /// DF: breadth-first distance (in edges) from the boundary. A boundary cell lies on a facet
+    /// (an edge of a triangle, an end point of a segment) used by exactly one simplex, or belongs
+    /// to no simplex at all. On a closed surface every cell keeps `u32::MAX` ("infinitely deep").
     fn depth_flags(&self) -> Vec<u32> {
-        let mut edge_use: HashMap<(usize, usize), u32> = HashMap::new();
-        for &[a, b, c] in &self.triangles {
-            for (i, j) in [(a, b), (b, c), (c, a)] {
-                *edge_use.entry((i.min(j), i.max(j))).or_default() += 1;
+        let mut facet_use: HashMap<(usize, usize), u32> = HashMap::new();
+        for t in 0..self.simplices.len() {
+            let s = self.simplex(t);
+            if self.k == 2 {
+                for (i, j) in simplex_edges(s) {
+                    *facet_use.entry((i.min(j), i.max(j))).or_default() += 1;
+                }
+            } else {
+                for &i in s {
+                    *facet_use.entry((i, i)).or_default() += 1;
+                }
             }
         }
         let mut depth = vec![u32::MAX; self.len()];
         let mut queue = VecDeque::new();
-        let inc = self.incident_triangles();
+        let inc = self.incident_simplices();
         for i in 0..self.len() {
             if inc[i].is_empty() {
                 depth[i] = 0;
                 queue.push_back(i);
             }
         }
-        for (&(i, j), &uses) in &edge_use {
-            if uses == 1 {
-                for k in [i, j] {
-                    if depth[k] != 0 {
-                        depth[k] = 0;
-                        queue.push_back(k);
-                    }
-                }
+        let mut boundary: Vec<usize> = facet_use
+            .iter()
+            .filter(|(_, uses)| **uses == 1)
+            .flat_map(|(&(i, j), _)| [i, j])
+            .collect();
+        boundary.sort_unstable();
+        boundary.dedup();
+        for k in boundary {
+            if depth[k] != 0 {
+                depth[k] = 0;
+                queue.push_back(k);
             }
         }
         let nb = self.neighbours();
@@ -283,8 +303,30 @@ impl ShadingGeometry {
                 }
             }
         }
-        // A closed surface has no boundary: every cell is "infinitely" deep.
         depth
+    }
+}
+
+/// The vertex pairs (edges) of a simplex given by its cells.
+fn simplex_edges(s: &[usize]) -> Vec<(usize, usize)> {
+    let mut out = Vec::with_capacity(3);
+    for i in 0..s.len() {
+        for j in i + 1..s.len() {
+            out.push((s[i], s[j]));
+        }
+    }
+    out
+}
+
+/// Unnormalised normal of a simplex: the triangle's cross product, or a Flatland segment's
+/// direction turned by +90° in the z = 0 plane (left of a→b, as in FORMATS.md).
+fn geometric_normal(centres: &[DVec3], s: &[usize; 3], k: usize) -> DVec3 {
+    let (a, b) = (centres[s[0]], centres[s[1]]);
+    if k == 1 {
+        let e = b - a;
+        DVec3::new(-e.y, e.x, 0.0)
+    } else {
+        (b - a).cross(centres[s[2]] - a)
     }
 }
 
@@ -324,17 +366,19 @@ mod tests {
     #[test]
     fn flat_grid_has_zero_roughness_depth_rings_and_one_component() {
         let (c, nrm, t) = grid(7, None);
-        let g = ShadingGeometry::new(c, vec![1.0; 49], nrm, &t, Breaking::default(), |_, _| false);
-        assert_eq!(g.triangles.len(), 72);
+        let g = ShadingGeometry::new(c, vec![1.0; 49], nrm, 2, &t, Breaking::default(), |_, _| {
+            false
+        });
+        assert_eq!(g.simplices.len(), 72);
         assert!(g.roughness.iter().all(|&r| r < 1e-12));
         assert!(g.fuzzy_roughness.iter().all(|&r| r < 1e-12));
         assert!(g.component.iter().all(|&c| c == 0));
         // Centre of a 7×7 grid is 3 edges from the border.
         assert_eq!(g.depth[3 * 7 + 3], 3);
         assert_eq!(g.depth[0], 0);
-        for t in 0..g.triangles.len() {
+        for t in 0..g.simplices.len() {
             assert!(
-                g.triangle_normal(t).z > 0.99,
+                g.simplex_normal(t).z > 0.99,
                 "oriented along the learned normals"
             );
         }
@@ -347,6 +391,7 @@ mod tests {
             c.clone(),
             vec![1.0; 64],
             nrm.clone(),
+            2,
             &t,
             Breaking {
                 enabled: false,
@@ -360,7 +405,9 @@ mod tests {
             "the fold is rough"
         );
         let broken =
-            ShadingGeometry::new(c, vec![1.0; 64], nrm, &t, Breaking::default(), |_, _| false);
+            ShadingGeometry::new(c, vec![1.0; 64], nrm, 2, &t, Breaking::default(), |_, _| {
+                false
+            });
         let floor = broken.component[0];
         let wall = broken.component[7];
         assert_ne!(floor, wall);
@@ -379,6 +426,7 @@ mod tests {
             c,
             vec![1.0; 64],
             nrm,
+            2,
             &t,
             Breaking {
                 enabled: false,
@@ -398,9 +446,67 @@ mod tests {
     fn gap_test_removes_spanning_triangles() {
         let (c, nrm, t) = grid(6, None);
         // Pretend there is a slit along x = 2.5.
-        let g = ShadingGeometry::new(c, vec![1.0; 36], nrm, &t, Breaking::default(), |a, b| {
+        let g = ShadingGeometry::new(c, vec![1.0; 36], nrm, 2, &t, Breaking::default(), |a, b| {
             (a.x - 2.5) * (b.x - 2.5) < 0.0
         });
         assert_ne!(g.component[0], g.component[5]);
+    }
+
+    #[test]
+    fn flatland_chain_folded_at_a_corner() {
+        // A floor along +x (normal +y) meeting a wall along +y at x = 0 (normal +x), with the
+        // chain's segments given in arbitrary orientation.
+        let mut centres = Vec::new();
+        let mut normals = Vec::new();
+        for i in (1..=4).rev() {
+            centres.push(DVec3::new(0.0, i as f64, 0.0));
+            normals.push(DVec3::X);
+        }
+        for i in 0..=4 {
+            centres.push(DVec3::new(i as f64, 0.0, 0.0));
+            normals.push(DVec3::Y);
+        }
+        let segs: Vec<[usize; 3]> = (0..8)
+            .map(|i| {
+                if i % 2 == 0 {
+                    [i, i + 1, 0]
+                } else {
+                    [i + 1, i, 0]
+                }
+            })
+            .collect();
+        let g = ShadingGeometry::new(
+            centres.clone(),
+            vec![1.0; 9],
+            normals.clone(),
+            1,
+            &segs,
+            Breaking {
+                enabled: false,
+                ..Default::default()
+            },
+            |_, _| false,
+        );
+        assert_eq!(g.simplices.len(), 8);
+        for t in 0..8 {
+            let n = g.simplex_normal(t);
+            let learned: DVec3 = g.simplex(t).iter().map(|&i| g.normals[i]).sum();
+            assert!(n.dot(learned) > 0.0, "oriented by the learned normals");
+        }
+        assert_eq!(g.depth[0], 0);
+        assert_eq!(g.depth[8], 0);
+        assert_eq!(g.depth[4], 4);
+        assert!(g.roughness[4] > 0.5, "the corner cell is rough");
+        let broken = ShadingGeometry::new(
+            centres,
+            vec![1.0; 9],
+            normals,
+            1,
+            &segs,
+            Breaking::default(),
+            |_, _| false,
+        );
+        assert_ne!(broken.component[0], broken.component[8]);
+        assert_eq!(broken.simplices.len(), 7);
     }
 }

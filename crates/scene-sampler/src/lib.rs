@@ -1,1 +1,108 @@
-//! Radiosity scenes (OBJ, glTF, Flatland, built-ins), area-uniform sampling, BVH visibility and the radiosity kernel.
+//! Radiosity scenes (OBJ, glTF, Flatland, built-ins), area-uniform sampling, BVH visibility and the radiosity
+//! kernel.
+//!
+//! This crate is the geometric ground every GCR solver stands on:
+//!
+//! * **Scenes** — [`Scene`] (3-D triangles) and [`FlatlandScene`] (2-D segments), each face with reflectance ρ
+//!   and emitted radiosity E per colour band ([`Spectrum`]), validated on load ([`SceneError`]). Loaders:
+//!   [`load`] (OBJ + MTL, glTF/GLB, Flatland JSON), built-ins by name: [`builtin`], [`BUILTIN_NAMES`].
+//! * **Sampling** — area-uniform parameterizations [`SurfaceSampler`] (`[0,1]² →` surface) and [`FlatSampler`]
+//!   (`[0,1] →` segments), with inverses (fig. B.2); cosine-weighted direction helpers.
+//! * **Visibility** — [`SceneBvh`] (a CWBVH from obvhs, f32, with a documented self-intersection policy):
+//!   occlusion between surface points, batched in parallel, and closest-hit queries; [`FlatVisibility`].
+//! * **The kernel** — [`KernelSampler`] / [`FlatKernelSampler`] evaluate `K(x,y) = ρ(y)·G(x,y)·V(x,y)` (sec. 3.1,
+//!   MATH.md §4), with the `r → 0` singularity clamped as documented in [`kernel`].
+//! * **Probes** — [`read_probes`] / [`Scene::snap_probe`]: the points where all solvers report radiosity.
+//!
+//! # Units
+//! Files give emitted **radiance** (OBJ `Ke`, glTF emissive); scenes store emitted radiosity `E = π·Ke`, and
+//! solvers report radiosity B (exitance). Flatland JSON gives E directly.
+//!
+//! ```
+//! use scene_sampler::{builtin, AnyScene, SceneBvh, KernelSampler};
+//! let AnyScene::ThreeD(scene) = builtin("cornell-box").unwrap() else { unreachable!() };
+//! let bvh = SceneBvh::new(&scene);
+//! let k = KernelSampler::new(&scene, &bvh);
+//! let s = k.sample([0.1, 0.2, 0.7, 0.4]);
+//! assert!(s.g >= 0.0);
+//! ```
+
+pub mod builtin;
+pub mod bvh;
+pub mod error;
+pub mod flatland;
+pub mod kernel;
+pub mod load;
+pub mod probe;
+pub mod sample;
+pub mod scene;
+pub mod spectrum;
+
+pub use builtin::{BUILTIN_NAMES, builtin, random_boxes};
+pub use bvh::{BuildQuality, FlatHit, FlatVisibility, Hit, SceneBvh};
+pub use error::{Result, SceneError};
+pub use flatland::{FlatView, FlatlandScene, Segment};
+pub use kernel::{FlatKernelSample, FlatKernelSampler, KernelSample, KernelSampler};
+pub use load::{
+    load, load_flatland, load_gltf, load_obj, load_or_builtin, write_flatland, write_obj,
+};
+pub use probe::{FlatProbe, Probe, parse_flat_probes, parse_probes, read_flat_probes, read_probes};
+pub use sample::{
+    FlatPoint, FlatSampler, SurfacePoint, SurfaceSampler, cosine_halfplane, cosine_hemisphere,
+    orthonormal_basis,
+};
+pub use scene::{Camera, Face, Scene};
+pub use spectrum::Spectrum;
+
+/// A scene of either dimension, as returned by [`load`] and [`builtin`].
+#[derive(Clone, Debug)]
+pub enum AnyScene {
+    /// A 3-D triangle scene.
+    ThreeD(Scene),
+    /// A Flatland segment scene.
+    Flatland(FlatlandScene),
+}
+
+impl AnyScene {
+    /// The scene's name.
+    pub fn name(&self) -> &str {
+        match self {
+            AnyScene::ThreeD(s) => &s.name,
+            AnyScene::Flatland(s) => &s.name,
+        }
+    }
+    /// Number of colour bands (1 or 3).
+    pub fn bands(&self) -> usize {
+        match self {
+            AnyScene::ThreeD(s) => s.bands,
+            AnyScene::Flatland(s) => s.bands,
+        }
+    }
+    /// Non-fatal load warnings.
+    pub fn warnings(&self) -> &[String] {
+        match self {
+            AnyScene::ThreeD(s) => &s.warnings,
+            AnyScene::Flatland(s) => &s.warnings,
+        }
+    }
+    /// The 3-D scene, or an error naming the scene if it is Flatland.
+    pub fn into_3d(self) -> Result<Scene> {
+        match self {
+            AnyScene::ThreeD(s) => Ok(s),
+            AnyScene::Flatland(s) => Err(SceneError::WrongDimension(format!(
+                "`{}` is a Flatland scene, a 3-D scene is needed",
+                s.name
+            ))),
+        }
+    }
+    /// The Flatland scene, or an error if it is 3-D.
+    pub fn into_flatland(self) -> Result<FlatlandScene> {
+        match self {
+            AnyScene::Flatland(s) => Ok(s),
+            AnyScene::ThreeD(s) => Err(SceneError::WrongDimension(format!(
+                "`{}` is a 3-D scene, a Flatland scene is needed",
+                s.name
+            ))),
+        }
+    }
+}

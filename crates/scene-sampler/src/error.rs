@@ -1,0 +1,123 @@
+//! Errors of scene loading, validation and probe parsing.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong while loading or validating a scene or a probe file.
+///
+/// Every variant names its source (a file path, or `builtin:<name>` for built-in scenes) and, where it
+/// applies, the face (triangle or segment index in the file's order) or line, so that the message alone
+/// tells the user what to fix. Bad input never panics.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("{path}: cannot read: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not well-formed in its format.
+    #[error("{source_name}: malformed: {message}")]
+    Parse {
+        /// The file (or `builtin:<name>`).
+        source_name: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The file extension names no supported format.
+    #[error("{path}: unsupported scene format (expected .obj, .gltf, .glb or .json)")]
+    UnsupportedFormat {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A built-in scene name that does not exist.
+    #[error("unknown built-in scene `{name}` (known: {known})")]
+    UnknownBuiltin {
+        /// The name asked for.
+        name: String,
+        /// The known names, comma-separated.
+        known: String,
+    },
+    /// A vertex coordinate, normal or attribute is NaN or infinite.
+    #[error("{source_name}: face {face}: non-finite {what}")]
+    NonFinite {
+        /// The file.
+        source_name: String,
+        /// Face index (in load order, before degenerate faces are dropped).
+        face: usize,
+        /// Which quantity (e.g. `vertex coordinate`, `emission`).
+        what: String,
+    },
+    /// A reflectance outside `[0, 1)`: energy would not be conserved (or would be negative).
+    #[error("{source_name}: face {face}: reflectance {value} in band {band} is outside [0, 1)")]
+    ReflectanceOutOfRange {
+        /// The file.
+        source_name: String,
+        /// Face index (load order).
+        face: usize,
+        /// The colour band (0 = r, 1 = g, 2 = b).
+        band: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// A negative emission.
+    #[error("{source_name}: face {face}: negative emission {value} in band {band}")]
+    NegativeEmission {
+        /// The file.
+        source_name: String,
+        /// Face index (load order).
+        face: usize,
+        /// The colour band.
+        band: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// Every face was degenerate (or the file had none).
+    #[error("{source_name}: no usable faces ({dropped} degenerate faces dropped)")]
+    NoFaces {
+        /// The file.
+        source_name: String,
+        /// How many degenerate faces were dropped.
+        dropped: usize,
+    },
+    /// No face emits: the radiosity solution would be zero everywhere.
+    #[error(
+        "{source_name}: no face emits light (set Ke in the MTL, emissiveFactor in glTF, `emission` in Flatland JSON)"
+    )]
+    NoEmitter {
+        /// The file.
+        source_name: String,
+    },
+    /// A probe line that is not `x y z nx ny nz` (3-D) or `x y nx ny` (Flatland).
+    #[error("{source_name}:{line}: bad probe: {message}")]
+    ProbeParse {
+        /// The probe file.
+        source_name: String,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A probe farther than the tolerance from every surface facing its normal.
+    #[error(
+        "{source_name}:{line}: probe is {distance:.3e} from the nearest surface facing its normal (tolerance {tolerance:.3e})"
+    )]
+    ProbeOffSurface {
+        /// The probe file.
+        source_name: String,
+        /// 1-based line number.
+        line: usize,
+        /// Distance to the nearest compatible surface (infinite if none faces the probe's normal).
+        distance: f64,
+        /// The tolerance used.
+        tolerance: f64,
+    },
+    /// A 3-D operation on a Flatland scene or vice versa.
+    #[error("{0}")]
+    WrongDimension(String),
+}
+
+/// Shorthand for results of this crate.
+pub type Result<T, E = SceneError> = std::result::Result<T, E>;

@@ -1,0 +1,236 @@
+//! The radiosity kernel as a goal function (sec. 3.1, MATH.md §4, §6, §7).
+//!
+//! The kernel of the radiosity equation (eq. 1.2) is `K(x, y) = ρ(y)·G(x, y)·V(x, y)`, with
+//! * 3-D: `G = cos θx cos θy / (π r²)`,
+//! * Flatland: `G = cos θx cos θy / (2 r)` (integrates to 1 over a half-plane),
+//!
+//! and the kernel network's training target is `K(x, y)·s(x)` per band, `s(x) = E(x) + B_refl(x)` (MATH.md §4).
+//! A [`KernelSample`] stores everything but `s`, so a caller can re-evaluate `K·s` for a new `s` without
+//! tracing again.
+//!
+//! # The `r → 0` singularity (MATH.md §6)
+//! Where two surfaces meet (a corner), `G` grows like `1/r²` (Flatland `1/r`): the integral stays finite but
+//! single samples become arbitrarily large. We clamp the distance: `G_c = cos θx cos θy / (π max(r, r_min)²)`
+//! (Flatland `/(2 max(r, r_min))`) with `r_min = 10⁻³ · diagonal` by default ([`KernelSampler::r_min`]).
+//! The clamp only lowers `G`, so the bias is negative and confined to pairs closer than `r_min`; for a receiver
+//! at distance `h` from a right-angle corner the lost fraction of the form factor is O(r_min/h)·small — the
+//! test `clamp_bias_at_corner` measures it against the analytic perpendicular-rectangle factor (MATH.md §8).
+//! `g_unclamped` is kept for callers who want the raw value.
+
+use crate::{
+    FlatPoint, FlatSampler, FlatVisibility, FlatlandScene, Scene, SceneBvh, Spectrum, SurfacePoint,
+    SurfaceSampler,
+};
+use std::f64::consts::PI;
+
+/// One evaluated kernel sample `(x, y)` in 3-D: x is the sender, y the receiver.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KernelSample {
+    /// Sender point x.
+    pub x: SurfacePoint,
+    /// Receiver point y.
+    pub y: SurfacePoint,
+    /// `cos θx = n_x · (y − x)/r` (may be ≤ 0).
+    pub cos_x: f64,
+    /// `cos θy = n_y · (x − y)/r` (may be ≤ 0).
+    pub cos_y: f64,
+    /// Distance `r = |x − y|`.
+    pub r: f64,
+    /// Geometry term with the distance clamp (0 if either cosine ≤ 0).
+    pub g: f64,
+    /// Geometry term without the clamp (0 if either cosine ≤ 0).
+    pub g_unclamped: f64,
+    /// Mutual visibility (false without tracing when either cosine ≤ 0).
+    pub visible: bool,
+    /// ρ(y) per band.
+    pub rho_y: Spectrum,
+}
+
+impl KernelSample {
+    /// The kernel `K(x,y) = ρ(y)·G·V` per band (clamped G).
+    pub fn kernel(&self) -> Spectrum {
+        if self.visible {
+            self.rho_y * self.g
+        } else {
+            Spectrum::ZERO
+        }
+    }
+    /// The goal function `K(x,y)·s(x)` per band for the sender strength `s` at x (MATH.md §4).
+    pub fn k_times_s(&self, s: Spectrum) -> Spectrum {
+        self.kernel() * s
+    }
+}
+
+/// One evaluated Flatland kernel sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlatKernelSample {
+    /// Sender x.
+    pub x: FlatPoint,
+    /// Receiver y.
+    pub y: FlatPoint,
+    /// `cos θx`.
+    pub cos_x: f64,
+    /// `cos θy`.
+    pub cos_y: f64,
+    /// Distance.
+    pub r: f64,
+    /// `cos θx cos θy / (2 max(r, r_min))`, 0 if a cosine ≤ 0.
+    pub g: f64,
+    /// `cos θx cos θy / (2 r)`, 0 if a cosine ≤ 0.
+    pub g_unclamped: f64,
+    /// Mutual visibility.
+    pub visible: bool,
+    /// ρ(y).
+    pub rho_y: Spectrum,
+}
+
+impl FlatKernelSample {
+    /// `K(x,y) = ρ(y)·G·V` per band.
+    pub fn kernel(&self) -> Spectrum {
+        if self.visible {
+            self.rho_y * self.g
+        } else {
+            Spectrum::ZERO
+        }
+    }
+    /// `K(x,y)·s(x)` per band.
+    pub fn k_times_s(&self, s: Spectrum) -> Spectrum {
+        self.kernel() * s
+    }
+}
+
+/// Evaluates the 3-D kernel at surface pairs, sampled area-uniformly from `(s,t,u,v) ∈ [0,1]⁴` (MATH.md §6, B.2).
+pub struct KernelSampler<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// Its BVH.
+    pub bvh: &'a SceneBvh,
+    /// Its area-uniform parameterization.
+    pub sampler: SurfaceSampler,
+    /// Distance clamp of the `r → 0` singularity (module docs).
+    pub r_min: f64,
+}
+
+impl<'a> KernelSampler<'a> {
+    /// A sampler with the default clamp `r_min = 1e-3 · diagonal`.
+    pub fn new(scene: &'a Scene, bvh: &'a SceneBvh) -> Self {
+        KernelSampler {
+            scene,
+            bvh,
+            sampler: SurfaceSampler::new(scene),
+            r_min: 1e-3 * scene.diagonal(),
+        }
+    }
+    /// Evaluates `K` at a given pair (x sender, y receiver). No ray is traced when either cosine is ≤ 0.
+    pub fn eval(&self, x: SurfacePoint, y: SurfacePoint) -> KernelSample {
+        let d = y.point - x.point;
+        let r = d.length();
+        let rho_y = self.scene.faces[y.face as usize].rho;
+        let (cos_x, cos_y) = if r > 0.0 {
+            (x.normal.dot(d) / r, -y.normal.dot(d) / r)
+        } else {
+            (0.0, 0.0)
+        };
+        if cos_x <= 0.0 || cos_y <= 0.0 || x.face == y.face {
+            return KernelSample {
+                x,
+                y,
+                cos_x,
+                cos_y,
+                r,
+                g: 0.0,
+                g_unclamped: 0.0,
+                visible: false,
+                rho_y,
+            };
+        }
+        let cc = cos_x * cos_y / PI;
+        let g_unclamped = cc / (r * r);
+        let rc = r.max(self.r_min);
+        let g = cc / (rc * rc);
+        let visible = self.bvh.visible(&x, &y);
+        KernelSample {
+            x,
+            y,
+            cos_x,
+            cos_y,
+            r,
+            g,
+            g_unclamped,
+            visible,
+            rho_y,
+        }
+    }
+    /// Samples `x` from `(u[0], u[1])` and `y` from `(u[2], u[3])` area-uniformly and evaluates the kernel.
+    /// The pair density is `1 / A²` (A = total area), so `A²·K·s` is an unbiased estimate of `∫∫ K s`.
+    pub fn sample(&self, u: [f64; 4]) -> KernelSample {
+        let x = self.sampler.sample([u[0], u[1]]);
+        let y = self.sampler.sample([u[2], u[3]]);
+        self.eval(x, y)
+    }
+}
+
+/// Evaluates the Flatland kernel, sampled arc-length-uniformly from `(s, t) ∈ [0,1]²` (x from s, y from t).
+pub struct FlatKernelSampler<'a> {
+    /// The scene.
+    pub scene: &'a FlatlandScene,
+    /// Its visibility structure.
+    pub vis: FlatVisibility,
+    /// Its arc-length parameterization.
+    pub sampler: FlatSampler,
+    /// Distance clamp (default `1e-3 · diagonal`).
+    pub r_min: f64,
+}
+
+impl<'a> FlatKernelSampler<'a> {
+    /// A sampler with the default clamp.
+    pub fn new(scene: &'a FlatlandScene) -> Self {
+        FlatKernelSampler {
+            scene,
+            vis: FlatVisibility::new(scene),
+            sampler: FlatSampler::new(scene),
+            r_min: 1e-3 * scene.diagonal(),
+        }
+    }
+    /// Evaluates `K` at a pair (x sender, y receiver).
+    pub fn eval(&self, x: FlatPoint, y: FlatPoint) -> FlatKernelSample {
+        let d = y.point - x.point;
+        let r = d.length();
+        let rho_y = self.scene.segments[y.segment as usize].rho;
+        let (cos_x, cos_y) = if r > 0.0 {
+            (x.normal.dot(d) / r, -y.normal.dot(d) / r)
+        } else {
+            (0.0, 0.0)
+        };
+        if cos_x <= 0.0 || cos_y <= 0.0 || x.segment == y.segment {
+            return FlatKernelSample {
+                x,
+                y,
+                cos_x,
+                cos_y,
+                r,
+                g: 0.0,
+                g_unclamped: 0.0,
+                visible: false,
+                rho_y,
+            };
+        }
+        let cc = 0.5 * cos_x * cos_y;
+        let visible = self.vis.visible(&x, &y);
+        FlatKernelSample {
+            x,
+            y,
+            cos_x,
+            cos_y,
+            r,
+            g: cc / r.max(self.r_min),
+            g_unclamped: cc / r,
+            visible,
+            rho_y,
+        }
+    }
+    /// Samples x at parameter `s` and y at `t` and evaluates (the kernel plots of figs. 4.1b and 4.6b).
+    pub fn sample(&self, s: f64, t: f64) -> FlatKernelSample {
+        self.eval(self.sampler.sample(s), self.sampler.sample(t))
+    }
+}

@@ -1,0 +1,240 @@
+//! Probe points: where every solver reports radiosity (FORMATS.md).
+//!
+//! 3-D: one probe per line, `x y z nx ny nz` (Radiance `rtrace` order); Flatland: `x y nx ny`. Blank lines and
+//! lines starting with `#` are skipped. The normal selects the side: a probe snaps to the nearest face whose
+//! front normal points the same way (`n_face · n_probe > 0`), and a probe farther than the tolerance from every
+//! such face is an error.
+
+use crate::{FlatPoint, FlatlandScene, Result, Scene, SceneError, SurfacePoint};
+use glam::{DVec2, DVec3};
+use std::path::Path;
+
+/// A 3-D probe as read from a file.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Probe {
+    /// Position.
+    pub point: DVec3,
+    /// Normal (selects the side; normalized on parse).
+    pub normal: DVec3,
+    /// 1-based line in its file (for messages).
+    pub line: usize,
+}
+
+/// A Flatland probe as read from a file.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlatProbe {
+    /// Position.
+    pub point: DVec2,
+    /// Normal (normalized on parse).
+    pub normal: DVec2,
+    /// 1-based line in its file.
+    pub line: usize,
+}
+
+fn parse_numbers(source: &str, text: &str, n: usize) -> Result<Vec<(usize, Vec<f64>)>> {
+    let mut out = Vec::new();
+    for (k, raw) in text.lines().enumerate() {
+        let line = k + 1;
+        let l = raw.trim();
+        if l.is_empty() || l.starts_with('#') {
+            continue;
+        }
+        let vals: Vec<f64> = l
+            .split_whitespace()
+            .map(|w| w.parse::<f64>())
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|e| SceneError::ProbeParse {
+                source_name: source.into(),
+                line,
+                message: e.to_string(),
+            })?;
+        if vals.len() != n {
+            return Err(SceneError::ProbeParse {
+                source_name: source.into(),
+                line,
+                message: format!("expected {n} numbers, found {}", vals.len()),
+            });
+        }
+        if !vals.iter().all(|v| v.is_finite()) {
+            return Err(SceneError::ProbeParse {
+                source_name: source.into(),
+                line,
+                message: "non-finite value".into(),
+            });
+        }
+        out.push((line, vals));
+    }
+    Ok(out)
+}
+
+/// Parses 3-D probes (`x y z nx ny nz` per line). `source` names the file in messages.
+pub fn parse_probes(source: &str, text: &str) -> Result<Vec<Probe>> {
+    parse_numbers(source, text, 6)?
+        .into_iter()
+        .map(|(line, v)| {
+            let n = DVec3::new(v[3], v[4], v[5]);
+            if n.length_squared() == 0.0 {
+                return Err(SceneError::ProbeParse {
+                    source_name: source.into(),
+                    line,
+                    message: "zero normal".into(),
+                });
+            }
+            Ok(Probe {
+                point: DVec3::new(v[0], v[1], v[2]),
+                normal: n.normalize(),
+                line,
+            })
+        })
+        .collect()
+}
+
+/// Parses Flatland probes (`x y nx ny` per line).
+pub fn parse_flat_probes(source: &str, text: &str) -> Result<Vec<FlatProbe>> {
+    parse_numbers(source, text, 4)?
+        .into_iter()
+        .map(|(line, v)| {
+            let n = DVec2::new(v[2], v[3]);
+            if n.length_squared() == 0.0 {
+                return Err(SceneError::ProbeParse {
+                    source_name: source.into(),
+                    line,
+                    message: "zero normal".into(),
+                });
+            }
+            Ok(FlatProbe {
+                point: DVec2::new(v[0], v[1]),
+                normal: n.normalize(),
+                line,
+            })
+        })
+        .collect()
+}
+
+fn read(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        path: path.into(),
+        source,
+    })
+}
+
+/// Reads a 3-D probe file.
+pub fn read_probes(path: impl AsRef<Path>) -> Result<Vec<Probe>> {
+    let p = path.as_ref();
+    parse_probes(&p.display().to_string(), &read(p)?)
+}
+
+/// Reads a Flatland probe file.
+pub fn read_flat_probes(path: impl AsRef<Path>) -> Result<Vec<FlatProbe>> {
+    let p = path.as_ref();
+    parse_flat_probes(&p.display().to_string(), &read(p)?)
+}
+
+/// Writes probes in the file format (one `x y z nx ny nz` line each, full precision).
+pub fn format_probes(probes: &[Probe]) -> String {
+    probes
+        .iter()
+        .map(|p| {
+            format!(
+                "{} {} {} {} {} {}\n",
+                p.point.x, p.point.y, p.point.z, p.normal.x, p.normal.y, p.normal.z
+            )
+        })
+        .collect()
+}
+
+/// Writes Flatland probes (`x y nx ny` per line).
+pub fn format_flat_probes(probes: &[FlatProbe]) -> String {
+    probes
+        .iter()
+        .map(|p| {
+            format!(
+                "{} {} {} {}\n",
+                p.point.x, p.point.y, p.normal.x, p.normal.y
+            )
+        })
+        .collect()
+}
+
+/// The default snapping tolerance: `1e-4 ·` the scene diagonal.
+pub fn default_tolerance(diagonal: f64) -> f64 {
+    1e-4 * diagonal
+}
+
+impl Scene {
+    /// Snaps a probe to the nearest point of a face whose front side faces the probe's normal
+    /// (`n_face · n_probe > 0`), if within `tolerance` (brute force over the faces: O(faces) per probe).
+    /// `source` names the probe file in the error.
+    pub fn snap_probe(&self, probe: &Probe, tolerance: f64, source: &str) -> Result<SurfacePoint> {
+        let mut best: Option<(f64, usize, DVec3)> = None;
+        for (i, f) in self.faces.iter().enumerate() {
+            if f.normal.dot(probe.normal) <= 0.0 {
+                continue;
+            }
+            let c = f.closest_point(probe.point);
+            let d = (c - probe.point).length();
+            if best.is_none_or(|(bd, _, _)| d < bd) {
+                best = Some((d, i, c));
+            }
+        }
+        match best {
+            Some((d, i, c)) if d <= tolerance => Ok(SurfacePoint {
+                point: c,
+                normal: self.faces[i].normal,
+                face: i as u32,
+            }),
+            other => Err(SceneError::ProbeOffSurface {
+                source_name: source.into(),
+                line: probe.line,
+                distance: other.map_or(f64::INFINITY, |b| b.0),
+                tolerance,
+            }),
+        }
+    }
+    /// Snaps every probe with the default tolerance (error on the first that fails).
+    pub fn snap_probes(&self, probes: &[Probe], source: &str) -> Result<Vec<SurfacePoint>> {
+        let tol = default_tolerance(self.diagonal());
+        probes
+            .iter()
+            .map(|p| self.snap_probe(p, tol, source))
+            .collect()
+    }
+}
+
+impl FlatlandScene {
+    /// Snaps a Flatland probe to the nearest segment whose front faces the probe's normal, within `tolerance`.
+    pub fn snap_probe(&self, probe: &FlatProbe, tolerance: f64, source: &str) -> Result<FlatPoint> {
+        let mut best: Option<(f64, usize, DVec2)> = None;
+        for (i, s) in self.segments.iter().enumerate() {
+            if s.normal.dot(probe.normal) <= 0.0 {
+                continue;
+            }
+            let c = s.point(s.closest_t(probe.point));
+            let d = (c - probe.point).length();
+            if best.is_none_or(|(bd, _, _)| d < bd) {
+                best = Some((d, i, c));
+            }
+        }
+        match best {
+            Some((d, i, c)) if d <= tolerance => Ok(FlatPoint {
+                point: c,
+                normal: self.segments[i].normal,
+                segment: i as u32,
+            }),
+            other => Err(SceneError::ProbeOffSurface {
+                source_name: source.into(),
+                line: probe.line,
+                distance: other.map_or(f64::INFINITY, |b| b.0),
+                tolerance,
+            }),
+        }
+    }
+    /// Snaps every probe with the default tolerance.
+    pub fn snap_probes(&self, probes: &[FlatProbe], source: &str) -> Result<Vec<FlatPoint>> {
+        let tol = default_tolerance(self.diagonal());
+        probes
+            .iter()
+            .map(|p| self.snap_probe(p, tol, source))
+            .collect()
+    }
+}

@@ -1,0 +1,225 @@
+//! Area-uniform surface parameterizations (fig. B.2) and direction sampling helpers.
+//!
+//! [`SurfaceSampler`] maps `u ∈ [0,1]²` to a point distributed uniformly by area over all faces (density
+//! `1 / total_area`), [`FlatSampler`] maps `s ∈ [0,1]` to a point uniform by arc length over all segments. Both
+//! are invertible, which the Flatland kernel plots over `(s, t)` (figs. 4.1b, 4.6b) need.
+
+use crate::{FlatlandScene, Scene};
+use glam::{DVec2, DVec3};
+
+/// A point on a 3-D scene's surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePoint {
+    /// Position.
+    pub point: DVec3,
+    /// Unit normal of the front side of `face`.
+    pub normal: DVec3,
+    /// Face index into [`Scene::faces`].
+    pub face: u32,
+}
+
+/// A point on a Flatland scene's segments.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlatPoint {
+    /// Position.
+    pub point: DVec2,
+    /// Unit normal of the front side of `segment`.
+    pub normal: DVec2,
+    /// Segment index into [`FlatlandScene::segments`].
+    pub segment: u32,
+}
+
+/// Area-uniform parameterization of a 3-D scene: `[0,1]² → (point, normal, face)`.
+///
+/// `u.x` selects a face by binary search in the cumulative area table (O(log faces)) and is then rescaled to
+/// `[0,1)` within that face; together with `u.y` it is warped to the triangle by the standard square-root map
+/// `b0 = 1 − √u', b1 = u.y·√u'` (pbrt 4, `SampleUniformTriangle`'s classic form), which is area-uniform.
+/// Neighbouring `u` map to neighbouring points within a face, and the map is a bijection up to face
+/// boundaries, so [`SurfaceSampler::inverse`] exists.
+#[derive(Clone, Debug)]
+pub struct SurfaceSampler {
+    /// `cdf[i]` = (area of faces `0..i`) / total, `cdf[n] = 1`.
+    cdf: Vec<f64>,
+    faces: Vec<([DVec3; 3], DVec3)>,
+    total_area: f64,
+}
+
+impl SurfaceSampler {
+    /// Builds the cumulative area table (O(faces)).
+    pub fn new(scene: &Scene) -> Self {
+        let total: f64 = scene.faces.iter().map(|f| f.area).sum();
+        let mut cdf = Vec::with_capacity(scene.faces.len() + 1);
+        let mut acc = 0.0;
+        cdf.push(0.0);
+        for f in &scene.faces {
+            acc += f.area;
+            cdf.push(acc / total);
+        }
+        *cdf.last_mut().expect("non-empty") = 1.0;
+        SurfaceSampler {
+            cdf,
+            faces: scene.faces.iter().map(|f| (f.v, f.normal)).collect(),
+            total_area: total,
+        }
+    }
+
+    /// Total area; the sampling density is `1 / total_area` per unit area.
+    pub fn total_area(&self) -> f64 {
+        self.total_area
+    }
+
+    /// Probability density per unit area of every sample (`1 / total_area`).
+    pub fn pdf(&self) -> f64 {
+        1.0 / self.total_area
+    }
+
+    /// Maps `u ∈ [0,1]²` to a point. Inputs are clamped to `[0,1]`.
+    pub fn sample(&self, u: [f64; 2]) -> SurfacePoint {
+        let ux = u[0].clamp(0.0, 1.0);
+        let uy = u[1].clamp(0.0, 1.0);
+        // First face with cdf[i+1] > ux (faces of zero area never occur in a validated scene).
+        let n = self.faces.len();
+        let i = (self.cdf.partition_point(|&c| c <= ux).saturating_sub(1)).min(n - 1);
+        let (lo, hi) = (self.cdf[i], self.cdf[i + 1]);
+        let up = ((ux - lo) / (hi - lo)).clamp(0.0, 1.0);
+        let (v, normal) = self.faces[i];
+        let su = up.sqrt();
+        let b1 = uy * su;
+        let b2 = 1.0 - su; // weight of v2: b0 = 1 - su is given to v0, swap keeps orientation irrelevant
+        let point = v[0] * (1.0 - b1 - b2) + v[1] * b1 + v[2] * b2;
+        SurfacePoint {
+            point,
+            normal,
+            face: i as u32,
+        }
+    }
+
+    /// Inverse of [`SurfaceSampler::sample`]: the parameters of a point lying on face `face`
+    /// (the point is projected onto the face's plane first).
+    pub fn inverse(&self, face: u32, point: DVec3) -> [f64; 2] {
+        let i = face as usize;
+        let (v, _) = self.faces[i];
+        let (b1, b2) = barycentric(v, point);
+        let su = (1.0 - b2).clamp(0.0, 1.0);
+        let uy = if su > 0.0 {
+            (b1 / su).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let up = su * su;
+        [self.cdf[i] + up * (self.cdf[i + 1] - self.cdf[i]), uy]
+    }
+}
+
+/// Barycentric weights `(b1, b2)` of `p` projected onto the plane of triangle `v` (weights of v1 and v2).
+pub fn barycentric(v: [DVec3; 3], p: DVec3) -> (f64, f64) {
+    let e1 = v[1] - v[0];
+    let e2 = v[2] - v[0];
+    let d = p - v[0];
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (dp1, dp2) = (d.dot(e1), d.dot(e2));
+    let den = d11 * d22 - d12 * d12;
+    let b1 = (d22 * dp1 - d12 * dp2) / den;
+    let b2 = (d11 * dp2 - d12 * dp1) / den;
+    (b1, b2)
+}
+
+/// Arc-length-uniform parameterization of a Flatland scene: `s ∈ [0,1] → (point, normal, segment)` (fig. B.2).
+///
+/// Segments are laid end to end in scene order, each from `a` to `b`; `s` is the arc length so far divided by
+/// the total length.
+#[derive(Clone, Debug)]
+pub struct FlatSampler {
+    cdf: Vec<f64>,
+    segs: Vec<(DVec2, DVec2, DVec2)>,
+    total_length: f64,
+}
+
+impl FlatSampler {
+    /// Builds the cumulative length table.
+    pub fn new(scene: &FlatlandScene) -> Self {
+        let total: f64 = scene.segments.iter().map(|s| s.length).sum();
+        let mut cdf = vec![0.0];
+        let mut acc = 0.0;
+        for s in &scene.segments {
+            acc += s.length;
+            cdf.push(acc / total);
+        }
+        *cdf.last_mut().expect("non-empty") = 1.0;
+        FlatSampler {
+            cdf,
+            segs: scene
+                .segments
+                .iter()
+                .map(|s| (s.a, s.b, s.normal))
+                .collect(),
+            total_length: total,
+        }
+    }
+    /// Total length; the sampling density is `1 / total_length` per unit length.
+    pub fn total_length(&self) -> f64 {
+        self.total_length
+    }
+    /// Density per unit length (`1 / total_length`).
+    pub fn pdf(&self) -> f64 {
+        1.0 / self.total_length
+    }
+    /// Maps `s ∈ [0,1]` (clamped) to a point.
+    pub fn sample(&self, s: f64) -> FlatPoint {
+        let s = s.clamp(0.0, 1.0);
+        let n = self.segs.len();
+        let i = (self.cdf.partition_point(|&c| c <= s).saturating_sub(1)).min(n - 1);
+        let t = ((s - self.cdf[i]) / (self.cdf[i + 1] - self.cdf[i])).clamp(0.0, 1.0);
+        let (a, b, normal) = self.segs[i];
+        FlatPoint {
+            point: a + t * (b - a),
+            normal,
+            segment: i as u32,
+        }
+    }
+    /// Inverse of [`FlatSampler::sample`] for a point on segment `segment` (projected onto it).
+    pub fn inverse(&self, segment: u32, point: DVec2) -> f64 {
+        let i = segment as usize;
+        let (a, b, _) = self.segs[i];
+        let d = b - a;
+        let t = ((point - a).dot(d) / d.length_squared()).clamp(0.0, 1.0);
+        self.cdf[i] + t * (self.cdf[i + 1] - self.cdf[i])
+    }
+    /// The parameter interval `[s0, s1]` that segment `segment` occupies.
+    pub fn segment_range(&self, segment: u32) -> (f64, f64) {
+        (self.cdf[segment as usize], self.cdf[segment as usize + 1])
+    }
+}
+
+/// An orthonormal basis `(t, b)` completing the unit vector `n` (Duff et al. 2017, branchless).
+pub fn orthonormal_basis(n: DVec3) -> (DVec3, DVec3) {
+    let sign = 1.0f64.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        DVec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        DVec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
+}
+
+/// Cosine-weighted direction on the hemisphere around unit `n`: density `cos θ / π` per steradian
+/// (Malley's method: uniform disk, lifted). With it the pointwise estimator of MATH.md §8,
+/// `B(y) = E(y) + ρ(y)·B(hit(y, ω))`, needs no cosine or π factor.
+pub fn cosine_hemisphere(n: DVec3, u: [f64; 2]) -> DVec3 {
+    let r = u[0].clamp(0.0, 1.0).sqrt();
+    let phi = 2.0 * std::f64::consts::PI * u[1];
+    let (x, y) = (r * phi.cos(), r * phi.sin());
+    let z = (1.0 - u[0].clamp(0.0, 1.0)).max(0.0).sqrt();
+    let (t, b) = orthonormal_basis(n);
+    (t * x + b * y + n * z).normalize()
+}
+
+/// Flatland analogue of [`cosine_hemisphere`]: a direction in the half-plane around unit `n` with density
+/// `cos θ / 2` per radian (θ from the normal), i.e. `sin θ = 2u − 1`. The Flatland kernel
+/// `cos θx cos θy / (2r)` integrates to 1 over the half-plane with exactly this measure.
+pub fn cosine_halfplane(n: DVec2, u: f64) -> DVec2 {
+    let s = (2.0 * u.clamp(0.0, 1.0) - 1.0).clamp(-1.0, 1.0);
+    let c = (1.0 - s * s).max(0.0).sqrt();
+    let t = DVec2::new(-n.y, n.x);
+    (n * c + t * s).normalize()
+}

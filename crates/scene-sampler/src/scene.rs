@@ -1,0 +1,335 @@
+//! The 3-D scene model: triangles with per-face reflectance and emission, validated on construction.
+
+use crate::{Result, SceneError, Spectrum};
+use glam::DVec3;
+use std::collections::HashMap;
+
+/// A pinhole camera for images of a scene (right-handed, `up` roughly perpendicular to the view direction).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Camera {
+    /// Eye position.
+    pub eye: DVec3,
+    /// Point looked at.
+    pub target: DVec3,
+    /// Up direction.
+    pub up: DVec3,
+    /// Vertical field of view in degrees.
+    pub fov_y_deg: f64,
+}
+
+impl Camera {
+    /// A camera that frames an axis-aligned box `[lo, hi]` from the `-z` side, looking toward `+z`.
+    pub fn framing(lo: DVec3, hi: DVec3) -> Self {
+        let c = 0.5 * (lo + hi);
+        let r = 0.5 * (hi - lo).length();
+        let fov: f64 = 40.0;
+        let dist = r / (0.5 * fov.to_radians()).tan() * 1.1;
+        Camera {
+            eye: c - DVec3::Z * dist,
+            target: c,
+            up: DVec3::Y,
+            fov_y_deg: fov,
+        }
+    }
+}
+
+/// One triangle of a scene with its (constant) material.
+///
+/// Winding defines the front side: `normal = normalize((v1 - v0) × (v2 - v0))` (FORMATS.md). Only the front
+/// side reflects and emits; the back is black and, for visibility, still opaque.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Face {
+    /// Vertices, counter-clockwise seen from the front.
+    pub v: [DVec3; 3],
+    /// Unit geometric normal (front side).
+    pub normal: DVec3,
+    /// Area (> 0).
+    pub area: f64,
+    /// Diffuse reflectance ρ per band, each in `[0, 1)`.
+    pub rho: Spectrum,
+    /// Emitted radiosity (exitance) E per band, `E = π·Ke` for a file's emitted radiance Ke.
+    pub emission: Spectrum,
+    /// Object index (into [`Scene::objects`]): OBJ object/group, glTF mesh instance, or built-in part.
+    pub object: u32,
+    /// Surface index: faces that form one flat polygon of the input (a triangulated quad shares one id).
+    pub surface: u32,
+}
+
+impl Face {
+    /// Builds a face from its vertices and material; normal and area are computed (area may be 0: see
+    /// [`Scene::new`] for how degenerate faces are handled).
+    pub fn new(
+        v: [DVec3; 3],
+        rho: Spectrum,
+        emission: Spectrum,
+        object: u32,
+        surface: u32,
+    ) -> Self {
+        let c = (v[1] - v[0]).cross(v[2] - v[0]);
+        let len = c.length();
+        let normal = if len > 0.0 { c / len } else { DVec3::ZERO };
+        Face {
+            v,
+            normal,
+            area: 0.5 * len,
+            rho,
+            emission,
+            object,
+            surface,
+        }
+    }
+    /// The point with barycentric weights `(1 - b1 - b2, b1, b2)`.
+    pub fn point(&self, b1: f64, b2: f64) -> DVec3 {
+        self.v[0] + b1 * (self.v[1] - self.v[0]) + b2 * (self.v[2] - self.v[0])
+    }
+    /// Centroid.
+    pub fn centroid(&self) -> DVec3 {
+        (self.v[0] + self.v[1] + self.v[2]) / 3.0
+    }
+    /// Closest point of the triangle to `p` (Ericson, *Real-Time Collision Detection*, 5.1.5).
+    pub fn closest_point(&self, p: DVec3) -> DVec3 {
+        let [a, b, c] = self.v;
+        let ab = b - a;
+        let ac = c - a;
+        let ap = p - a;
+        let d1 = ab.dot(ap);
+        let d2 = ac.dot(ap);
+        if d1 <= 0.0 && d2 <= 0.0 {
+            return a;
+        }
+        let bp = p - b;
+        let d3 = ab.dot(bp);
+        let d4 = ac.dot(bp);
+        if d3 >= 0.0 && d4 <= d3 {
+            return b;
+        }
+        let vc = d1 * d4 - d3 * d2;
+        if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+            return a + ab * (d1 / (d1 - d3));
+        }
+        let cp = p - c;
+        let d5 = ab.dot(cp);
+        let d6 = ac.dot(cp);
+        if d6 >= 0.0 && d5 <= d6 {
+            return c;
+        }
+        let vb = d5 * d2 - d1 * d6;
+        if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+            return a + ac * (d2 / (d2 - d6));
+        }
+        let va = d3 * d6 - d5 * d4;
+        if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+            return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+        }
+        let denom = 1.0 / (va + vb + vc);
+        a + ab * (vb * denom) + ac * (vc * denom)
+    }
+}
+
+/// A validated 3-D radiosity scene.
+///
+/// Construct it with [`Scene::new`] (which validates), a loader ([`crate::load`]) or a built-in
+/// ([`crate::builtin`]). The face list is immutable afterwards so that samplers and BVHs built from it stay valid.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Name (file stem or built-in name).
+    pub name: String,
+    /// Source used in messages (path or `builtin:<name>`).
+    pub source: String,
+    /// 1 for grey scenes (every ρ and E grey), 3 for RGB.
+    pub bands: usize,
+    /// The triangles (degenerate input faces already dropped).
+    pub faces: Vec<Face>,
+    /// Object names; `Face::object` indexes this.
+    pub objects: Vec<String>,
+    /// Default camera for images.
+    pub camera: Camera,
+    /// Non-fatal problems found on load (dropped degenerate faces, inconsistent windings), one message each.
+    pub warnings: Vec<String>,
+    /// Axis-aligned bounds `(lo, hi)` of all vertices.
+    pub bounds: (DVec3, DVec3),
+}
+
+impl Scene {
+    /// Validates `faces` and builds the scene.
+    ///
+    /// * Non-finite vertex coordinates, ρ or E: error naming the face.
+    /// * ρ outside `[0, 1)` in any band: error (energy would not be conserved). Negative E: error.
+    /// * Degenerate faces (area ≤ 1e-14 · diagonal², or zero normal): dropped, with a count in `warnings`;
+    ///   error if nothing remains.
+    /// * No face with positive emission: error.
+    /// * Inconsistent windings (two faces of one object sharing an edge traversed in the same direction):
+    ///   reported in `warnings`, never "fixed" (FORMATS.md: report, don't guess).
+    ///
+    /// `camera = None` picks a camera framing the scene bounds.
+    pub fn new(
+        name: &str,
+        source: &str,
+        faces: Vec<Face>,
+        objects: Vec<String>,
+        camera: Option<Camera>,
+    ) -> Result<Scene> {
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for (i, f) in faces.iter().enumerate() {
+            if !f.v.iter().all(|v| v.is_finite()) {
+                return Err(SceneError::NonFinite {
+                    source_name: source.into(),
+                    face: i,
+                    what: "vertex coordinate".into(),
+                });
+            }
+            check_material(source, i, f.rho, f.emission)?;
+            for v in f.v {
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+        let diag2 = if faces.is_empty() {
+            0.0
+        } else {
+            (hi - lo).length_squared()
+        };
+        let mut warnings = Vec::new();
+        let n_in = faces.len();
+        let mut kept: Vec<Face> = Vec::with_capacity(n_in);
+        let mut dropped_ids = Vec::new();
+        for (i, f) in faces.into_iter().enumerate() {
+            let f = Face::new(f.v, f.rho, f.emission, f.object, f.surface);
+            if f.area <= 1e-14 * diag2 || f.normal == DVec3::ZERO || !f.normal.is_finite() {
+                dropped_ids.push(i);
+            } else {
+                kept.push(f);
+            }
+        }
+        if !dropped_ids.is_empty() {
+            let shown: Vec<String> = dropped_ids.iter().take(10).map(|i| i.to_string()).collect();
+            warnings.push(format!(
+                "{source}: dropped {} degenerate face(s) (zero area): {}{}",
+                dropped_ids.len(),
+                shown.join(", "),
+                if dropped_ids.len() > 10 { ", ..." } else { "" }
+            ));
+        }
+        if kept.is_empty() {
+            return Err(SceneError::NoFaces {
+                source_name: source.into(),
+                dropped: dropped_ids.len(),
+            });
+        }
+        if !kept.iter().any(|f| f.emission.max() > 0.0) {
+            return Err(SceneError::NoEmitter {
+                source_name: source.into(),
+            });
+        }
+        let inconsistent = inconsistent_windings(&kept);
+        if inconsistent > 0 {
+            warnings.push(format!(
+                "{source}: {inconsistent} edge(s) shared by two faces of one object with the same direction: \
+                 inconsistent windings (normals) — front sides may be wrong"
+            ));
+        }
+        let grey = kept.iter().all(|f| f.rho.is_grey() && f.emission.is_grey());
+        let mut objects = objects;
+        let max_obj = kept
+            .iter()
+            .map(|f| f.object as usize + 1)
+            .max()
+            .unwrap_or(0);
+        while objects.len() < max_obj {
+            objects.push(format!("object{}", objects.len()));
+        }
+        let camera = camera.unwrap_or_else(|| Camera::framing(lo, hi));
+        Ok(Scene {
+            name: name.into(),
+            source: source.into(),
+            bands: if grey { 1 } else { 3 },
+            faces: kept,
+            objects,
+            camera,
+            warnings,
+            bounds: (lo, hi),
+        })
+    }
+
+    /// Total surface area.
+    pub fn total_area(&self) -> f64 {
+        self.faces.iter().map(|f| f.area).sum()
+    }
+    /// Length of the bounding-box diagonal (the scene's length scale).
+    pub fn diagonal(&self) -> f64 {
+        (self.bounds.1 - self.bounds.0).length()
+    }
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.faces.len()
+    }
+    /// True if the scene has no faces (never true for a validated scene).
+    pub fn is_empty(&self) -> bool {
+        self.faces.is_empty()
+    }
+    /// Indices of the faces that emit (some band > 0).
+    pub fn emitters(&self) -> Vec<usize> {
+        (0..self.faces.len())
+            .filter(|&i| self.faces[i].emission.max() > 0.0)
+            .collect()
+    }
+}
+
+/// Checks ρ ∈ [0,1) and E ≥ 0, both finite, for face `i`.
+pub(crate) fn check_material(source: &str, i: usize, rho: Spectrum, e: Spectrum) -> Result<()> {
+    if !rho.is_finite() {
+        return Err(SceneError::NonFinite {
+            source_name: source.into(),
+            face: i,
+            what: "reflectance".into(),
+        });
+    }
+    if !e.is_finite() {
+        return Err(SceneError::NonFinite {
+            source_name: source.into(),
+            face: i,
+            what: "emission".into(),
+        });
+    }
+    for (band, &value) in rho.0.iter().enumerate() {
+        if !(0.0..1.0).contains(&value) {
+            return Err(SceneError::ReflectanceOutOfRange {
+                source_name: source.into(),
+                face: i,
+                band,
+                value,
+            });
+        }
+    }
+    for (band, &value) in e.0.iter().enumerate() {
+        if value < 0.0 {
+            return Err(SceneError::NegativeEmission {
+                source_name: source.into(),
+                face: i,
+                band,
+                value,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Counts directed edges that appear twice within one object (the two faces sharing them wind the same way,
+/// so one of them has its normal flipped relative to the other). Vertices are matched exactly.
+fn inconsistent_windings(faces: &[Face]) -> usize {
+    let key = |p: DVec3| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+    let mut seen: HashMap<(u32, [u64; 3], [u64; 3]), u32> = HashMap::new();
+    let mut bad = 0;
+    for f in faces {
+        for k in 0..3 {
+            let e = (f.object, key(f.v[k]), key(f.v[(k + 1) % 3]));
+            let c = seen.entry(e).or_insert(0);
+            *c += 1;
+            if *c == 2 {
+                bad += 1;
+            }
+        }
+    }
+    bad
+}

@@ -68,7 +68,15 @@ impl Builder {
         self.surface += 1;
     }
     /// Adds a convex block given its bottom and top rectangles (4 points each, same order), outward normals.
-    fn block(&mut self, obj: u32, bottom: [DVec3; 4], top: [DVec3; 4], rho: Spectrum) {
+    /// `with_bottom = false` omits the bottom face (blocks standing on the floor, as in the Cornell data).
+    fn block(
+        &mut self,
+        obj: u32,
+        bottom: [DVec3; 4],
+        top: [DVec3; 4],
+        rho: Spectrum,
+        with_bottom: bool,
+    ) {
         let c = bottom
             .iter()
             .chain(top.iter())
@@ -76,7 +84,9 @@ impl Builder {
             / 8.0;
         let out = |p: &[DVec3]| p.iter().fold(DVec3::ZERO, |a, &b| a + b) / p.len() as f64 - c;
         self.poly(obj, &top, out(&top), rho, Spectrum::ZERO);
-        self.poly(obj, &bottom, out(&bottom), rho, Spectrum::ZERO);
+        if with_bottom {
+            self.poly(obj, &bottom, out(&bottom), rho, Spectrum::ZERO);
+        }
         for k in 0..4 {
             let q = [bottom[k], bottom[(k + 1) % 4], top[(k + 1) % 4], top[k]];
             self.poly(obj, &q, out(&q), rho, Spectrum::ZERO);
@@ -202,7 +212,7 @@ pub fn cornell_box() -> Scene {
         mm(240.0, 165.0, 272.0),
         mm(290.0, 165.0, 114.0),
     ];
-    b.block(short, top.map(|p| DVec3::new(p.x, 0.0, p.z)), top, w);
+    b.block(short, top.map(|p| DVec3::new(p.x, 0.0, p.z)), top, w, false);
     let tall = b.object("tall block");
     let top = [
         mm(423.0, 330.0, 247.0),
@@ -210,7 +220,7 @@ pub fn cornell_box() -> Scene {
         mm(314.0, 330.0, 456.0),
         mm(472.0, 330.0, 406.0),
     ];
-    b.block(tall, top.map(|p| DVec3::new(p.x, 0.0, p.z)), top, w);
+    b.block(tall, top.map(|p| DVec3::new(p.x, 0.0, p.z)), top, w, false);
     let fov = 2.0 * (12.5f64 / 35.0).atan().to_degrees();
     b.finish(
         "cornell-box",
@@ -300,6 +310,7 @@ pub fn two_blockers() -> Scene {
         rect_xz(0.5, 0.9, 0.6, 1.0, 0.0),
         rect_xz(0.5, 0.9, 0.6, 1.0, 0.3),
         rho,
+        false,
     );
     let plate = b.object("blocker 2 (plate)");
     b.block(
@@ -307,6 +318,7 @@ pub fn two_blockers() -> Scene {
         rect_xz(1.0, 1.5, 1.0, 1.3, 0.8),
         rect_xz(1.0, 1.5, 1.0, 1.3, 0.85),
         rho,
+        true,
     );
     b.finish(
         "two-blockers",

@@ -241,31 +241,35 @@ impl FlatlandScene {
         FlatlandScene::new(name, source, segs, objects, view, rgb)
     }
 
-    /// Writes the scene in the Flatland JSON format (round-trips through [`FlatlandScene::from_json`]).
+    /// Writes the scene in the Flatland JSON format, one segment per line (round-trips through
+    /// [`FlatlandScene::from_json`]).
     pub fn to_json(&self) -> String {
-        let val = |s: Spectrum| -> serde_json::Value {
+        let val = |s: Spectrum| -> String {
             if self.bands == 1 {
-                serde_json::json!(s.0[0])
+                format!("{:?}", s.0[0])
             } else {
-                serde_json::json!(s.0)
+                format!("[{:?}, {:?}, {:?}]", s.0[0], s.0[1], s.0[2])
             }
         };
-        let segs: Vec<serde_json::Value> = self
+        let segs: Vec<String> = self
             .segments
             .iter()
             .map(|s| {
-                serde_json::json!({
-                    "name": self.objects[s.object as usize],
-                    "a": [s.a.x, s.a.y], "b": [s.b.x, s.b.y],
-                    "rho": val(s.rho), "emission": val(s.emission)
-                })
+                format!(
+                    "  {{\"name\": {}, \"a\": [{:?}, {:?}], \"b\": [{:?}, {:?}], \"rho\": {}, \"emission\": {}}}",
+                    serde_json::Value::from(self.objects[s.object as usize].as_str()),
+                    s.a.x, s.a.y, s.b.x, s.b.y, val(s.rho), val(s.emission)
+                )
             })
             .collect();
-        let v = serde_json::json!({
-            "segments": segs,
-            "view": {"min": [self.view.min.x, self.view.min.y], "max": [self.view.max.x, self.view.max.y]}
-        });
-        serde_json::to_string_pretty(&v).unwrap_or_default()
+        format!(
+            "{{\"segments\": [\n{}\n],\n\"view\": {{\"min\": [{:?}, {:?}], \"max\": [{:?}, {:?}]}}}}\n",
+            segs.join(",\n"),
+            self.view.min.x,
+            self.view.min.y,
+            self.view.max.x,
+            self.view.max.y
+        )
     }
 }
 

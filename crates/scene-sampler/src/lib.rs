@@ -44,7 +44,8 @@ pub use error::{Result, SceneError};
 pub use flatland::{FlatView, FlatlandScene, Segment};
 pub use kernel::{FlatKernelSample, FlatKernelSampler, KernelSample, KernelSampler};
 pub use load::{
-    load, load_flatland, load_gltf, load_obj, load_or_builtin, write_flatland, write_obj,
+    load, load_flatland, load_gltf, load_obj, load_or_builtin, to_gltf, to_obj, write_flatland,
+    write_gltf, write_obj,
 };
 pub use probe::{FlatProbe, Probe, parse_flat_probes, parse_probes, read_flat_probes, read_probes};
 pub use sample::{

@@ -4,6 +4,8 @@
 //! *kernel network*, [`isgcs`]), meshes the surfaces with a second one (the *shading network*),
 //! and integrates between them in closed form ([`gauss_integrals`]).
 
+pub mod domain;
+pub mod element;
 pub mod mesh;
 pub mod metrics;
 pub mod output;

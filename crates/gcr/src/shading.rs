@@ -67,8 +67,9 @@ impl ShadingGeometry {
     /// Builds the geometry from the network's cells and its `k`-simplices (`k` = 1 or 2; for
     /// `k` = 1 the third index of each simplex is ignored).
     ///
-    /// `spans_gap(a, b)` answers whether the straight edge between two cell centres leaves the
-    /// scene's surfaces; it is only consulted when `breaking.enabled`.
+    /// `spans_gap(a, b, n)` answers whether the straight edge between two cell centres a and b
+    /// (mean learned normal n) leaves the scene's surfaces; it is only consulted when
+    /// `breaking.enabled`.
     pub fn new(
         centres: Vec<DVec3>,
         widths: Vec<f64>,
@@ -76,7 +77,7 @@ impl ShadingGeometry {
         k: usize,
         simplices: &[[usize; 3]],
         breaking: Breaking,
-        spans_gap: impl Fn(DVec3, DVec3) -> bool,
+        spans_gap: impl Fn(DVec3, DVec3, DVec3) -> bool,
     ) -> Self {
         assert!(k == 1 || k == 2, "shading networks have k = 1 or k = 2");
         let n = centres.len();
@@ -98,9 +99,13 @@ impl ShadingGeometry {
                     continue;
                 }
                 let gap = pairs.iter().any(|&(i, j)| {
-                    *gap_cache
-                        .entry((i.min(j), i.max(j)))
-                        .or_insert_with(|| spans_gap(centres[i], centres[j]))
+                    *gap_cache.entry((i.min(j), i.max(j))).or_insert_with(|| {
+                        spans_gap(
+                            centres[i],
+                            centres[j],
+                            (normals[i] + normals[j]).normalize_or_zero(),
+                        )
+                    })
                 });
                 if gap {
                     continue;
@@ -366,9 +371,15 @@ mod tests {
     #[test]
     fn flat_grid_has_zero_roughness_depth_rings_and_one_component() {
         let (c, nrm, t) = grid(7, None);
-        let g = ShadingGeometry::new(c, vec![1.0; 49], nrm, 2, &t, Breaking::default(), |_, _| {
-            false
-        });
+        let g = ShadingGeometry::new(
+            c,
+            vec![1.0; 49],
+            nrm,
+            2,
+            &t,
+            Breaking::default(),
+            |_, _, _| false,
+        );
         assert_eq!(g.simplices.len(), 72);
         assert!(g.roughness.iter().all(|&r| r < 1e-12));
         assert!(g.fuzzy_roughness.iter().all(|&r| r < 1e-12));
@@ -397,17 +408,22 @@ mod tests {
                 enabled: false,
                 ..Default::default()
             },
-            |_, _| false,
+            |_, _, _| false,
         );
         assert!(unbroken.component.iter().all(|&k| k == 0));
         assert!(
             unbroken.roughness.iter().any(|&r| r > 0.3),
             "the fold is rough"
         );
-        let broken =
-            ShadingGeometry::new(c, vec![1.0; 64], nrm, 2, &t, Breaking::default(), |_, _| {
-                false
-            });
+        let broken = ShadingGeometry::new(
+            c,
+            vec![1.0; 64],
+            nrm,
+            2,
+            &t,
+            Breaking::default(),
+            |_, _, _| false,
+        );
         let floor = broken.component[0];
         let wall = broken.component[7];
         assert_ne!(floor, wall);
@@ -432,7 +448,7 @@ mod tests {
                 enabled: false,
                 ..Default::default()
             },
-            |_, _| false,
+            |_, _, _| false,
         );
         for i in 0..g.len() {
             assert!(g.fuzzy_roughness[i] >= g.roughness[i]);
@@ -446,9 +462,15 @@ mod tests {
     fn gap_test_removes_spanning_triangles() {
         let (c, nrm, t) = grid(6, None);
         // Pretend there is a slit along x = 2.5.
-        let g = ShadingGeometry::new(c, vec![1.0; 36], nrm, 2, &t, Breaking::default(), |a, b| {
-            (a.x - 2.5) * (b.x - 2.5) < 0.0
-        });
+        let g = ShadingGeometry::new(
+            c,
+            vec![1.0; 36],
+            nrm,
+            2,
+            &t,
+            Breaking::default(),
+            |a, b, _| (a.x - 2.5) * (b.x - 2.5) < 0.0,
+        );
         assert_ne!(g.component[0], g.component[5]);
     }
 
@@ -485,7 +507,7 @@ mod tests {
                 enabled: false,
                 ..Default::default()
             },
-            |_, _| false,
+            |_, _, _| false,
         );
         assert_eq!(g.simplices.len(), 8);
         for t in 0..8 {
@@ -504,7 +526,7 @@ mod tests {
             1,
             &segs,
             Breaking::default(),
-            |_, _| false,
+            |_, _, _| false,
         );
         assert_ne!(broken.component[0], broken.component[8]);
         assert_eq!(broken.simplices.len(), 7);

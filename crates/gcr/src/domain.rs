@@ -1,0 +1,276 @@
+//! The scene as the solver sees it, in either dimension.
+//!
+//! Flatland points are embedded in the z = 0 plane of 3-D space so that one code path serves both
+//! dimensions (the Gaussian closed forms do not care about an extra zero coordinate); only the
+//! network input dimensions differ: the kernel network sees (x, y) ∈ R^6 in 3-D and R^4 in
+//! Flatland, the shading network R^3 or R^2.
+
+use crate::element::{Bands, Element};
+use glam::{DVec2, DVec3};
+use scene_sampler::{
+    FlatKernelSampler, FlatPoint, FlatlandScene, KernelSampler, Scene, SurfacePoint,
+};
+
+/// One training sample of the kernel network: a ray from sender x to receiver y (sec. 3.4).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Sender x (Flatland: z = 0).
+    pub x: DVec3,
+    /// Unit normal at x.
+    pub nx: DVec3,
+    /// Receiver y.
+    pub y: DVec3,
+    /// Unit normal at y.
+    pub ny: DVec3,
+    /// Face (segment) of x.
+    pub face_x: u32,
+    /// Face (segment) of y.
+    pub face_y: u32,
+    /// The kernel K(x,y) = ρ(y)·G(x,y)·V(x,y) per band (distance-clamped G, see scene-sampler).
+    pub kernel: Bands,
+    /// Emission E(x) per band, read exactly from the scene (MATH.md §4).
+    pub emission_x: Bands,
+}
+
+/// A scene of either dimension with its kernel evaluator.
+pub enum Domain<'a> {
+    /// A 3-D triangle scene.
+    ThreeD(KernelSampler<'a>),
+    /// A Flatland scene.
+    Flat(FlatKernelSampler<'a>),
+}
+
+fn d3(p: DVec2) -> DVec3 {
+    DVec3::new(p.x, p.y, 0.0)
+}
+
+impl Domain<'_> {
+    /// Ambient dimension: 3 or 2.
+    pub fn dim(&self) -> usize {
+        match self {
+            Domain::ThreeD(_) => 3,
+            Domain::Flat(_) => 2,
+        }
+    }
+
+    /// Parameters per ray: 4 (s,t,u,v) in 3-D, 2 (s,t) in Flatland (fig. B.2).
+    pub fn param_dim(&self) -> usize {
+        2 * (self.dim() - 1)
+    }
+
+    /// Surface dimension: 2 in 3-D, 1 in Flatland.
+    pub fn surface_dim(&self) -> u32 {
+        self.dim() as u32 - 1
+    }
+
+    /// Colour bands of the scene (1 or 3).
+    pub fn bands(&self) -> usize {
+        match self {
+            Domain::ThreeD(k) => k.scene.bands,
+            Domain::Flat(k) => k.scene.bands,
+        }
+    }
+
+    /// Length of the scene's bounding-box diagonal.
+    pub fn diagonal(&self) -> f64 {
+        match self {
+            Domain::ThreeD(k) => k.scene.diagonal(),
+            Domain::Flat(k) => k.scene.diagonal(),
+        }
+    }
+
+    /// Total surface area (Flatland: total length).
+    pub fn total_measure(&self) -> f64 {
+        match self {
+            Domain::ThreeD(k) => k.sampler.total_area(),
+            Domain::Flat(k) => k.sampler.total_length(),
+        }
+    }
+
+    /// Draws the ray with parameters `u ∈ [0,1]^param_dim` and evaluates the kernel on it.
+    pub fn ray(&self, u: &[f64]) -> Ray {
+        match self {
+            Domain::ThreeD(k) => {
+                let s = k.sample([u[0], u[1], u[2], u[3]]);
+                Ray {
+                    x: s.x.point,
+                    nx: s.x.normal,
+                    y: s.y.point,
+                    ny: s.y.normal,
+                    face_x: s.x.face,
+                    face_y: s.y.face,
+                    kernel: s.kernel().0,
+                    emission_x: k.scene.faces[s.x.face as usize].emission.0,
+                }
+            }
+            Domain::Flat(k) => {
+                let s = k.sample(u[0], u[1]);
+                Ray {
+                    x: d3(s.x.point),
+                    nx: d3(s.x.normal),
+                    y: d3(s.y.point),
+                    ny: d3(s.y.normal),
+                    face_x: s.x.segment,
+                    face_y: s.y.segment,
+                    kernel: s.kernel().0,
+                    emission_x: k.scene.segments[s.x.segment as usize].emission.0,
+                }
+            }
+        }
+    }
+
+    /// The kernel network's input vector (x, y) for a ray: 6 or 4 numbers.
+    pub fn kernel_input(&self, ray: &Ray, out: &mut Vec<f64>) {
+        out.clear();
+        let d = self.dim();
+        out.extend_from_slice(&ray.x.to_array()[..d]);
+        out.extend_from_slice(&ray.y.to_array()[..d]);
+    }
+
+    /// The scene's surface elements (triangles or segments) for exact integration.
+    pub fn elements(&self) -> Vec<Element> {
+        match self {
+            Domain::ThreeD(k) => k
+                .scene
+                .faces
+                .iter()
+                .filter(|f| f.area > 0.0)
+                .map(|f| Element::Triangle(f.v))
+                .collect(),
+            Domain::Flat(k) => k
+                .scene
+                .segments
+                .iter()
+                .map(|s| Element::Segment([d3(s.a), d3(s.b)]))
+                .collect(),
+        }
+    }
+
+    /// Emission of face (segment) `face`.
+    pub fn emission(&self, face: u32) -> Bands {
+        match self {
+            Domain::ThreeD(k) => k.scene.faces[face as usize].emission.0,
+            Domain::Flat(k) => k.scene.segments[face as usize].emission.0,
+        }
+    }
+
+    /// Reflectance of face (segment) `face`.
+    pub fn reflectance(&self, face: u32) -> Bands {
+        match self {
+            Domain::ThreeD(k) => k.scene.faces[face as usize].rho.0,
+            Domain::Flat(k) => k.scene.segments[face as usize].rho.0,
+        }
+    }
+
+    /// The 3-D scene, if this is one.
+    pub fn scene_3d(&self) -> Option<&Scene> {
+        match self {
+            Domain::ThreeD(k) => Some(k.scene),
+            Domain::Flat(_) => None,
+        }
+    }
+
+    /// The Flatland scene, if this is one.
+    pub fn scene_flat(&self) -> Option<&FlatlandScene> {
+        match self {
+            Domain::ThreeD(_) => None,
+            Domain::Flat(k) => Some(k.scene),
+        }
+    }
+
+    /// True when the midpoint of the straight line a–b lies farther than `tol` from the surfaces
+    /// along the normal `n` (both ways): the line spans empty space (the breaking operator's gap
+    /// test). O(log faces) in 3-D through the BVH.
+    pub fn spans_gap(&self, a: DVec3, b: DVec3, n: DVec3, tol: f64) -> bool {
+        let m = 0.5 * (a + b);
+        if n == DVec3::ZERO {
+            return false;
+        }
+        match self {
+            Domain::ThreeD(k) => k
+                .bvh
+                .closest_hit(m - n * tol, n, 2.0 * tol, u32::MAX)
+                .is_none(),
+            Domain::Flat(k) => {
+                let (m2, n2) = (DVec2::new(m.x, m.y), DVec2::new(n.x, n.y));
+                k.vis
+                    .closest_hit(m2 - n2 * tol, n2 * (2.0 * tol), u32::MAX)
+                    .is_none_or(|h| h.t > 1.0)
+            }
+        }
+    }
+
+    /// A surface point as the 3-D kernel sees it (for gathers at arbitrary points).
+    pub fn surface_point_3d(point: DVec3, normal: DVec3, face: u32) -> SurfacePoint {
+        SurfacePoint {
+            point,
+            normal,
+            face,
+        }
+    }
+
+    /// A Flatland surface point from its embedding.
+    pub fn flat_point(point: DVec3, normal: DVec3, segment: u32) -> FlatPoint {
+        FlatPoint {
+            point: DVec2::new(point.x, point.y),
+            normal: DVec2::new(normal.x, normal.y),
+            segment,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use scene_sampler::{AnyScene, SceneBvh, builtin};
+
+    #[test]
+    fn cornell_rays_have_finite_nonnegative_kernels_and_6d_inputs() {
+        let AnyScene::ThreeD(scene) = builtin("cornell-box").unwrap() else {
+            panic!()
+        };
+        let bvh = SceneBvh::new(&scene);
+        let d = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+        assert_eq!((d.dim(), d.param_dim(), d.surface_dim()), (3, 4, 2));
+        let mut input = Vec::new();
+        let mut nonzero = 0;
+        for i in 0..200 {
+            let u = [0.13, 0.71, 0.37, 0.93].map(|v: f64| (v * (i + 1) as f64).fract());
+            let r = d.ray(&u);
+            assert!(r.kernel.iter().all(|k| k.is_finite() && *k >= 0.0));
+            nonzero += (r.kernel[0] > 0.0) as usize;
+            d.kernel_input(&r, &mut input);
+            assert_eq!(input.len(), 6);
+            assert_eq!(input[3..], r.y.to_array());
+        }
+        assert!(
+            nonzero > 50,
+            "most pairs in a closed box see each other: {nonzero}"
+        );
+        // The gap test: a chord across the box interior spans empty space, one on the floor does not.
+        let floor = scene
+            .faces
+            .iter()
+            .find(|f| f.normal.y > 0.99 && f.emission.is_zero())
+            .unwrap();
+        let (a, b) = (floor.v[0], floor.point(0.5, 0.4));
+        assert!(!d.spans_gap(a, b, floor.normal, 1e-3 * d.diagonal()));
+        let up = a + floor.normal * 0.3 * d.diagonal();
+        assert!(d.spans_gap(a, up + (b - a), floor.normal, 1e-3 * d.diagonal()));
+    }
+
+    #[test]
+    fn flatland_rays_live_in_the_z0_plane_with_4d_inputs() {
+        let AnyScene::Flatland(scene) = builtin("flatland-corner").unwrap() else {
+            panic!()
+        };
+        let d = Domain::Flat(FlatKernelSampler::new(&scene));
+        assert_eq!((d.dim(), d.param_dim(), d.surface_dim()), (2, 2, 1));
+        let r = d.ray(&[0.2, 0.8]);
+        assert_eq!((r.x.z, r.y.z, r.nx.z), (0.0, 0.0, 0.0));
+        let mut input = Vec::new();
+        d.kernel_input(&r, &mut input);
+        assert_eq!(input.len(), 4);
+        assert_eq!(d.elements().len(), scene.segments.len());
+    }
+}

@@ -6,6 +6,7 @@
 
 pub mod domain;
 pub mod element;
+pub mod gather;
 pub mod mesh;
 pub mod metrics;
 pub mod output;

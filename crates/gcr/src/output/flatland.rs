@@ -1,0 +1,124 @@
+//! Flatland pictures: the scene drawn with its radiosity (segments as thick strokes coloured by B),
+//! and a function over the kernel domain (s,t) ∈ [0,1]² as a grey image (figs. 4.1b, 4.6b: bright
+//! = small, dark = large, like the dissertation).
+
+use crate::output::tonemap::Exposure;
+use glam::DVec2;
+
+/// A polyline piece with its radiosity, for [`draw_segments`].
+#[derive(Clone, Copy, Debug)]
+pub struct Stroke {
+    /// Start.
+    pub a: DVec2,
+    /// End.
+    pub b: DVec2,
+    /// Radiosity B (RGB) at the start.
+    pub ba: [f64; 3],
+    /// Radiosity B (RGB) at the end.
+    pub bb: [f64; 3],
+    /// Unit front normal: the stroke is drawn on the front side (a thin dark line marks the back).
+    pub normal: DVec2,
+}
+
+/// Draws strokes into an 8-bit RGB image of `size × size` covering the square view `(lo, hi)`
+/// (grey background). Stroke width is `width_px`.
+pub fn draw_segments(
+    strokes: &[Stroke],
+    lo: DVec2,
+    hi: DVec2,
+    size: u32,
+    width_px: f64,
+    exposure: &Exposure,
+) -> Vec<u8> {
+    let n = size as usize;
+    let mut img = vec![48u8; n * n * 3];
+    let span = (hi - lo).max_element().max(1e-300);
+    let to_px = |p: DVec2| {
+        DVec2::new(
+            (p.x - lo.x) / span * (n as f64 - 1.0),
+            (hi.y - p.y) / span * (n as f64 - 1.0),
+        )
+    };
+    for s in strokes {
+        let (pa, pb) = (to_px(s.a), to_px(s.b));
+        // Screen-space normal (y flips).
+        let nrm = DVec2::new(s.normal.x, -s.normal.y);
+        let steps = ((pb - pa).length() * 2.0).ceil().max(1.0) as usize;
+        for i in 0..=steps {
+            let t = i as f64 / steps as f64;
+            let c: [f64; 3] = [0, 1, 2].map(|k| s.ba[k] + t * (s.bb[k] - s.ba[k]));
+            let rgb = exposure.srgb8(c);
+            let centre = pa + t * (pb - pa);
+            let w = width_px.max(1.0);
+            let mut j = 0.0;
+            while j <= w {
+                let p = centre + nrm * j;
+                let (x, y) = (p.x.round() as i64, p.y.round() as i64);
+                if x >= 0 && y >= 0 && (x as usize) < n && (y as usize) < n {
+                    let o = (y as usize * n + x as usize) * 3;
+                    img[o..o + 3].copy_from_slice(&rgb);
+                }
+                j += 0.5;
+            }
+        }
+    }
+    img
+}
+
+/// Samples `f(s, t)` on a `size × size` grid over [0,1]² (s to the right, t upwards) and maps it to
+/// grey: white for the minimum (0), black for `max` (or the largest value when `max` is `None`).
+pub fn kernel_image(size: u32, max: Option<f64>, f: impl Fn(f64, f64) -> f64 + Sync) -> Vec<u8> {
+    use rayon::prelude::*;
+    let n = size as usize;
+    let values: Vec<f64> = (0..n * n)
+        .into_par_iter()
+        .map(|i| {
+            let (px, py) = (i % n, i / n);
+            let s = (px as f64 + 0.5) / n as f64;
+            let t = 1.0 - (py as f64 + 0.5) / n as f64;
+            f(s, t)
+        })
+        .collect();
+    let top = max.unwrap_or_else(|| {
+        values
+            .iter()
+            .copied()
+            .filter(|v| v.is_finite())
+            .fold(0.0, f64::max)
+    });
+    let top = if top > 0.0 { top } else { 1.0 };
+    values
+        .iter()
+        .map(|v| 255 - ((v / top).clamp(0.0, 1.0) * 255.0).round() as u8)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_horizontal_stroke_is_drawn_above_its_line_and_the_kernel_image_is_oriented() {
+        let s = Stroke {
+            a: DVec2::new(0.0, 0.5),
+            b: DVec2::new(1.0, 0.5),
+            ba: [1e9; 3],
+            bb: [1e9; 3],
+            normal: DVec2::Y,
+        };
+        let img = draw_segments(
+            &[s],
+            DVec2::ZERO,
+            DVec2::ONE,
+            64,
+            4.0,
+            &Exposure { scale: 1.0 },
+        );
+        let px = |x: usize, y: usize| img[(y * 64 + x) * 3];
+        assert_eq!(px(32, 30), 255, "front side (above) is lit");
+        assert_eq!(px(32, 40), 48, "below stays background");
+        let k = kernel_image(8, None, |s, t| s * t);
+        assert_eq!(k[7], 0, "top-right (s = t = 1) is the maximum: black");
+        assert!(k[7 * 8] > 240, "bottom-left is ~0: white");
+    }
+}

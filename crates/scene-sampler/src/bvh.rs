@@ -197,6 +197,13 @@ impl SceneBvh {
         }
     }
 
+    /// A bare obvhs occlusion query, as obvhs's examples make it: no face skipping, no offsets (for
+    /// [`crate::bench`]).
+    pub(crate) fn bare_miss(&self, ray: &Ray) -> bool {
+        self.bvh
+            .ray_traverse_miss(*ray, |r, id| self.tris[id].intersect(r))
+    }
+
     /// Number of BVH primitives (more than the face count when spatial splits duplicated references).
     pub fn primitive_count(&self) -> usize {
         self.tris.len()

@@ -27,6 +27,7 @@
 //! assert!(s.g >= 0.0);
 //! ```
 
+pub mod bench;
 pub mod builtin;
 pub mod bvh;
 pub mod error;

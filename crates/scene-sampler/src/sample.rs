@@ -31,15 +31,22 @@ pub struct FlatPoint {
 
 /// Area-uniform parameterization of a 3-D scene: `[0,1]² → (point, normal, face)`.
 ///
-/// `u.x` selects a face by binary search in the cumulative area table (O(log faces)) and is then rescaled to
+/// `u.x` selects a face in the cumulative area table and is then rescaled to
 /// `[0,1)` within that face; together with `u.y` it is warped to the triangle by the standard square-root map
 /// `b0 = 1 − √u', b1 = u.y·√u'` (pbrt 4, `SampleUniformTriangle`'s classic form), which is area-uniform.
 /// Neighbouring `u` map to neighbouring points within a face, and the map is a bijection up to face
 /// boundaries, so [`SurfaceSampler::inverse`] exists.
+///
+/// The face search uses a guide table (Devroye's indexed search, *Non-Uniform Random Variate Generation*
+/// III.2.4): `guide[k]` is the face containing `u = k/n`, so the search for `u` only scans the faces between
+/// `guide[⌊u·n⌋]` and `guide[⌊u·n⌋ + 1]` — O(1) expected, O(log faces) worst case — and returns exactly the
+/// face a binary search over the whole table would.
 #[derive(Clone, Debug)]
 pub struct SurfaceSampler {
     /// `cdf[i]` = (area of faces `0..i`) / total, `cdf[n] = 1`.
     cdf: Vec<f64>,
+    /// `guide[k]` = face containing `k / guide.len()` (plus a sentinel `n - 1`).
+    guide: Vec<u32>,
     faces: Vec<([DVec3; 3], DVec3)>,
     total_area: f64,
 }
@@ -56,11 +63,31 @@ impl SurfaceSampler {
             cdf.push(acc / total);
         }
         *cdf.last_mut().expect("non-empty") = 1.0;
+        let n = scene.faces.len();
+        let find = |u: f64| (cdf.partition_point(|&c| c <= u).saturating_sub(1)).min(n - 1) as u32;
+        let mut guide: Vec<u32> = (0..n).map(|k| find(k as f64 / n as f64)).collect();
+        guide.push((n - 1) as u32);
         SurfaceSampler {
             cdf,
+            guide,
             faces: scene.faces.iter().map(|f| (f.v, f.normal)).collect(),
             total_area: total,
         }
+    }
+
+    /// The face whose parameter interval `[cdf[i], cdf[i+1])` contains `u` (the last face for `u = 1`).
+    #[inline]
+    pub fn face_of(&self, u: f64) -> usize {
+        let n = self.faces.len();
+        let k = ((u * n as f64) as usize).min(n - 1);
+        let (lo, hi) = (self.guide[k] as usize, self.guide[k + 1] as usize);
+        if self.cdf[lo] > u {
+            // u·n rounded up across a bucket boundary: fall back to the full search
+            return (self.cdf.partition_point(|&c| c <= u).saturating_sub(1)).min(n - 1);
+        }
+        // faces lo..=hi; the first i in there with cdf[i+1] > u
+        let i = lo + self.cdf[lo + 1..=hi + 1].partition_point(|&c| c <= u);
+        i.min(n - 1)
     }
 
     /// Total area; the sampling density is `1 / total_area` per unit area.
@@ -77,9 +104,7 @@ impl SurfaceSampler {
     pub fn sample(&self, u: [f64; 2]) -> SurfacePoint {
         let ux = u[0].clamp(0.0, 1.0);
         let uy = u[1].clamp(0.0, 1.0);
-        // First face with cdf[i+1] > ux (faces of zero area never occur in a validated scene).
-        let n = self.faces.len();
-        let i = (self.cdf.partition_point(|&c| c <= ux).saturating_sub(1)).min(n - 1);
+        let i = self.face_of(ux);
         let (lo, hi) = (self.cdf[i], self.cdf[i + 1]);
         let up = ((ux - lo) / (hi - lo)).clamp(0.0, 1.0);
         let (v, normal) = self.faces[i];

@@ -289,4 +289,11 @@ fn kernel_backfacing_and_reuse() {
     let g = (0.5 / r) * (0.5 / r) / (PI * r * r);
     assert!((s.g - g).abs() < 1e-12);
     assert!((s.k_times_s(Spectrum::grey(2.0)).0[0] - 0.7 * g * 2.0).abs() < 1e-12);
+    // the batch API returns exactly the single-sample results, in order
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let us: Vec<[f64; 4]> = (0..1000).map(|_| rng.random()).collect();
+    let batch = k.sample_batch(&us);
+    for (u, b) in us.iter().zip(&batch) {
+        assert_eq!(*b, k.sample(*u));
+    }
 }

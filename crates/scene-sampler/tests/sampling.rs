@@ -100,6 +100,30 @@ fn flatland_arc_length_uniform() {
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
+    /// The guide-table search returns the face a full binary search returns, for wildly uneven areas.
+    #[test]
+    fn guide_table_matches_binary_search(areas in prop::collection::vec(-6.0f64..1.0, 1..60), us in prop::collection::vec(0.0f64..=1.0, 50)) {
+        let faces: Vec<Face> = areas.iter().enumerate().map(|(i, &a)| {
+            let s = 10f64.powf(a);
+            let o = DVec3::new(i as f64, 0.0, 0.0);
+            Face::new([o, o + DVec3::X * s, o + DVec3::Y], Spectrum::grey(0.5), Spectrum::ONE, 0, i as u32)
+        }).collect();
+        let scene = Scene::new("t", "t", faces, vec![], None).unwrap();
+        let s = SurfaceSampler::new(&scene);
+        let total = scene.total_area();
+        let mut cdf = vec![0.0];
+        let mut acc = 0.0;
+        for f in &scene.faces { acc += f.area; cdf.push(acc / total); }
+        let n = scene.faces.len();
+        *cdf.last_mut().unwrap() = 1.0;
+        let mut edge: Vec<f64> = cdf.clone();
+        edge.extend(cdf.iter().map(|c| c - 1e-17));
+        for &u in us.iter().chain(edge.iter().filter(|u| (0.0..=1.0).contains(*u))) {
+            let want = (cdf.partition_point(|&c| c <= u).saturating_sub(1)).min(n - 1);
+            prop_assert_eq!(s.face_of(u), want, "u = {}", u);
+        }
+    }
+
     #[test]
     fn surface_inverse_roundtrip(u in 0.0f64..1.0, v in 0.001f64..0.999) {
         let scene = cornell();

@@ -323,8 +323,8 @@ pub fn two_blockers() -> Scene {
     b.finish(
         "two-blockers",
         Camera {
-            eye: DVec3::new(1.0, 1.6, 4.2),
-            target: DVec3::new(1.0, 0.4, 0.8),
+            eye: DVec3::new(1.0, 1.2, 4.2),
+            target: DVec3::new(1.0, 0.5, 0.8),
             up: DVec3::Y,
             fov_y_deg: 45.0,
         },

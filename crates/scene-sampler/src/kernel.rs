@@ -109,6 +109,8 @@ pub struct KernelSampler<'a> {
     pub sampler: SurfaceSampler,
     /// Distance clamp of the `r → 0` singularity (module docs).
     pub r_min: f64,
+    /// ρ per face, compact (24 bytes a face instead of a whole `Face`): one cache line per look-up.
+    rho: Vec<Spectrum>,
 }
 
 impl<'a> KernelSampler<'a> {
@@ -119,13 +121,14 @@ impl<'a> KernelSampler<'a> {
             bvh,
             sampler: SurfaceSampler::new(scene),
             r_min: 1e-3 * scene.diagonal(),
+            rho: scene.faces.iter().map(|f| f.rho).collect(),
         }
     }
     /// Evaluates `K` at a given pair (x sender, y receiver). No ray is traced when either cosine is ≤ 0.
     pub fn eval(&self, x: SurfacePoint, y: SurfacePoint) -> KernelSample {
         let d = y.point - x.point;
         let r = d.length();
-        let rho_y = self.scene.faces[y.face as usize].rho;
+        let rho_y = self.rho[y.face as usize];
         let (cos_x, cos_y) = if r > 0.0 {
             (x.normal.dot(d) / r, -y.normal.dot(d) / r)
         } else {

@@ -11,12 +11,13 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     let sizes: &[(usize, usize)] = if ctx.quick {
         &[(20_000, 50_000)]
     } else {
-        &[(100_000, 1_000_000), (1_000_000, 1_000_000)]
+        // 0 = the bare Cornell box (38 triangles)
+        &[(0, 1_000_000), (100_000, 1_000_000), (1_000_000, 1_000_000)]
     };
     let mut md = String::from(
         "# scene-sampler throughput\n\n\
          Command: `cargo xtask bench --only scenes` (release). Scene: `scene_sampler::random_boxes(N, 1)` \
-         (Cornell box plus random boxes). Queries: random area-uniform surface-point pairs that face each other \
+         (Cornell box plus random boxes; N = 0 gives the bare Cornell box). Queries: random area-uniform surface-point pairs that face each other \
          (the ones the kernel traces); best of 3 runs each. *bare obvhs* = prepared f32 rays through \
          `CwBvh::ray_traverse_miss` + `Triangle::intersect`, as obvhs's examples drive it; *visible* = \
          `SceneBvh::visible`; *kernel* = `KernelSampler::sample` (parameterize 4 numbers, cosines, ray, G).\n\n\

@@ -27,6 +27,10 @@ pub struct Throughput {
     pub build_high_s: f64,
     /// Bare obvhs occlusion rays per second.
     pub bare_rays_per_s: f64,
+    /// BVH build time (s) with [`BuildQuality::Medium`].
+    pub build_medium_s: f64,
+    /// Bare obvhs occlusion rays per second through the [`BuildQuality::Medium`] BVH (same rays).
+    pub bare_medium_rays_per_s: f64,
     /// [`SceneBvh::visible`] queries per second.
     pub visible_per_s: f64,
     /// Kernel samples per second, all of them tracing a ray (pairs that face each other).
@@ -95,6 +99,16 @@ pub fn measure(scene: &Scene, queries: usize, threads: usize, seed: u64) -> Thro
             .filter(|r| bvh.bare_miss(r))
             .count()
     });
+    let t = Instant::now();
+    let medium = SceneBvh::with_quality(scene, BuildQuality::Medium);
+    let build_medium_s = t.elapsed().as_secs_f64();
+    let (bare_medium_s, _) = best(&|| {
+        rays.par_iter()
+            .with_min_len(1024)
+            .filter(|r| medium.bare_miss(r))
+            .count()
+    });
+    drop(medium);
     let (vis_s, vis_n) = best(&|| {
         pairs
             .par_iter()
@@ -116,6 +130,8 @@ pub fn measure(scene: &Scene, queries: usize, threads: usize, seed: u64) -> Thro
         queries,
         build_high_s,
         bare_rays_per_s: q / bare_s,
+        build_medium_s,
+        bare_medium_rays_per_s: q / bare_medium_s,
         visible_per_s: q / vis_s,
         kernel_samples_per_s: q / ker_s,
         facing_fraction: q / drawn as f64,

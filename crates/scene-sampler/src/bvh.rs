@@ -22,9 +22,11 @@ use rayon::prelude::*;
 /// How much effort the BVH build spends (a trade between build time and trace speed).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum BuildQuality {
-    /// obvhs `medium_build`: fast build, ~3× slower traversal than `High` on the Cornell box.
+    /// obvhs `medium_build`: builds 4–6× faster than `High`; for occlusion rays between surface points it
+    /// traced as fast as `High` in our benchmark (docs/scene-sampler.md).
     Medium,
-    /// obvhs `very_slow_build` (spatial splits, full reinsertion): the default; ~0.3 s per 100k triangles.
+    /// obvhs `very_slow_build` (spatial splits, full reinsertion): the default; ≈0.45 s per 100k triangles,
+    /// ≈6 s per million.
     #[default]
     High,
 }

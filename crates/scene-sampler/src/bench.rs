@@ -70,13 +70,20 @@ pub fn measure(scene: &Scene, queries: usize, threads: usize, seed: u64) -> Thro
         .map(|u| (sampler.sample([u[0], u[1]]), sampler.sample([u[2], u[3]])))
         .collect();
     let eps = bvh.epsilon() as f32;
+    let back = bvh.backoff() as f32;
     let rays: Vec<Ray> = pairs
         .iter()
         .map(|(x, y)| {
             let o = x.point.as_vec3a();
             let d = (y.point - x.point).as_vec3a();
             let len = d.length();
-            Ray::new(o, d / len.max(f32::MIN_POSITIVE), eps, (len - eps).max(eps))
+            let u = d / len.max(f32::MIN_POSITIVE);
+            Ray::new(
+                o - u * back,
+                u,
+                back + eps,
+                (back + len - eps).max(back + eps),
+            )
         })
         .collect();
     let pool = rayon::ThreadPoolBuilder::new()

@@ -5,7 +5,11 @@
 //! starts exactly on a face can re-hit it or its coplanar neighbour. [`SceneBvh`] therefore
 //! 1. skips the faces the ray starts and ends on (by id), and
 //! 2. moves both ends off their surfaces by `eps` along the normal, toward the side the ray leaves / arrives on,
-//!    and trims `eps` from both ends of the parameter range,
+//!    and trims `eps` from both ends of the parameter range (and [`SceneBvh::trace_from`] also moves the
+//!    origin `eps` toward the face's centroid, away from edges where another wall may meet it),
+//!
+//! 3. starts every BVH ray [`SceneBvh::backoff`] behind its origin (obvhs culls node hits closer than an
+//!    absolute 10⁻⁴ to the ray origin; see there),
 //!
 //! with `eps = 1e-5 · max(diagonal, largest |coordinate|)` ([`SceneBvh::epsilon`]) — about 170 f32 ulps of the
 //! largest coordinate, and 10⁻⁵ of the scene size, far below any feature a radiosity solver resolves. The price
@@ -51,6 +55,8 @@ pub struct SceneBvh {
     face_of: Vec<u32>,
     /// Face normals (f64), by face index.
     normals: Vec<DVec3>,
+    /// Face centroids (f64), by face index: `trace_from` nudges origins toward them, away from edges.
+    centroids: Vec<DVec3>,
     eps: f64,
 }
 
@@ -99,8 +105,19 @@ impl SceneBvh {
             tris,
             face_of,
             normals: scene.faces.iter().map(|f| f.normal).collect(),
+            centroids: scene.faces.iter().map(|f| f.centroid()).collect(),
             eps,
         }
+    }
+
+    /// How far rays start *behind* their true origin (`2·10⁻⁴ + eps`, world units), with `tmin` raised by the
+    /// same amount. obvhs's CWBVH node test clamps the entry distance to an absolute `1e-4`
+    /// (`cwbvh::node::EPSILON`), which silently drops every hit closer than 10⁻⁴ world units to the ray
+    /// origin — a ray leaving a concave corner would escape through the adjoining wall. Starting the ray
+    /// earlier puts all wanted hits beyond that clamp; the primitive test's `tmin` still excludes hits behind
+    /// the true origin.
+    pub fn backoff(&self) -> f64 {
+        2e-4 + self.eps
     }
 
     /// The self-intersection offset (see the module docs).
@@ -128,7 +145,13 @@ impl SceneBvh {
             return true;
         }
         let dir = d / len;
-        let ray = Ray::new(v3a(a), v3a(dir), self.eps as f32, (len - self.eps) as f32);
+        let back = self.backoff();
+        let ray = Ray::new(
+            v3a(a - dir * back),
+            v3a(dir),
+            (back + self.eps) as f32,
+            (back + len - self.eps) as f32,
+        );
         self.bvh.ray_traverse_miss(ray, |r, id| {
             let f = self.face_of[id];
             if f == skip_a || f == skip_b {
@@ -156,12 +179,13 @@ impl SceneBvh {
             return None;
         }
         let u = dir / len;
+        let back = self.backoff();
         let tmax_world = if tmax.is_finite() {
-            (tmax * len) as f32
+            (back + tmax * len) as f32
         } else {
             f32::INFINITY
         };
-        let ray = Ray::new(v3a(origin), v3a(u), 0.0, tmax_world);
+        let ray = Ray::new(v3a(origin - u * back), v3a(u), back as f32, tmax_world);
         let mut hit = obvhs::ray::RayHit::none();
         let found = self.bvh.ray_traverse(ray, &mut hit, |r, id| {
             if self.face_of[id] == skip {
@@ -174,7 +198,7 @@ impl SceneBvh {
             return None;
         }
         let face = self.face_of[hit.primitive_id as usize];
-        let t_world = hit.t as f64;
+        let t_world = (hit.t as f64 - back).max(0.0);
         Some(Hit {
             face,
             t: t_world / len,
@@ -183,10 +207,16 @@ impl SceneBvh {
     }
 
     /// Closest hit of a ray leaving surface point `from` in direction `dir` (which should be on its front
-    /// side): the origin is offset by `eps` along the normal toward `dir` and `from.face` is skipped.
-    /// This is the query a path tracer makes at every bounce.
+    /// side); `from.face` is skipped. This is the query a path tracer makes at every bounce.
+    ///
+    /// The origin is offset by `eps` along the normal toward `dir` *and* by `eps` toward the face's centroid.
+    /// The second offset matters at concave corners: a point within f32 precision of an adjoining wall would
+    /// otherwise start its ray at t ≈ 0 from that wall, where the f32 test can miss it and the ray escapes
+    /// (test `furnace_is_watertight`).
     pub fn trace_from(&self, from: &SurfacePoint, dir: DVec3) -> Option<Hit> {
-        let o = from.point + from.normal * (self.eps * dir.dot(from.normal).signum());
+        let to_c = self.centroids[from.face as usize] - from.point;
+        let inward = to_c.normalize_or_zero() * self.eps.min(to_c.length());
+        let o = from.point + inward + from.normal * (self.eps * dir.dot(from.normal).signum());
         self.closest_hit(o, dir, f64::INFINITY, from.face)
     }
 

@@ -251,3 +251,46 @@ fn flatland_rays() {
             .is_none()
     );
 }
+
+/// A closed box does not leak: cosine-distributed rays from random surface points of the furnace always hit
+/// a front face, including rays leaving near edges and corners (the path tracer's bounce query).
+#[test]
+fn furnace_is_watertight() {
+    let scene = builtin("furnace").unwrap().into_3d().unwrap();
+    let bvh = SceneBvh::new(&scene);
+    let s = SurfaceSampler::new(&scene);
+    let mut rng = ChaCha8Rng::seed_from_u64(12);
+    for i in 0..100_000 {
+        // every 4th point hugs an edge: push u towards the face boundaries
+        let mut u: [f64; 2] = [rng.random(), rng.random()];
+        if i % 4 == 0 {
+            u[1] = 1.0 - 1e-9 * rng.random::<f64>();
+        }
+        let x = s.sample(u);
+        let d = cosine_hemisphere(x.normal, [rng.random(), rng.random()]);
+        let h = bvh
+            .trace_from(&x, d)
+            .unwrap_or_else(|| panic!("ray from {x:?} along {d} escaped"));
+        let n = scene.faces[h.face as usize].normal;
+        assert!(n.dot(d) < 0.0, "hit a back face from inside the box");
+        assert!(
+            h.point.cmpge(DVec3::splat(-1e-6)).all()
+                && h.point.cmple(DVec3::splat(1.0 + 1e-6)).all()
+        );
+    }
+}
+
+/// Hits and occluders closer than obvhs's absolute node epsilon (1e-4) to the ray origin are still found.
+#[test]
+fn near_hits_below_obvhs_epsilon() {
+    let scene = builtin("furnace").unwrap().into_3d().unwrap();
+    let bvh = SceneBvh::new(&scene);
+    for dist in [5e-5, 2e-5] {
+        let o = DVec3::new(0.5, 0.5, 1.0 - dist);
+        let h = bvh
+            .closest_hit(o, DVec3::Z, f64::INFINITY, u32::MAX)
+            .expect("wall just ahead");
+        assert!((h.t - dist).abs() < 1e-6, "t {} vs {dist}", h.t);
+        assert!(!bvh.segment_clear(o, o + DVec3::Z * 1e-3, u32::MAX, u32::MAX));
+    }
+}

@@ -1,1 +1,23 @@
-//! Closed-form Gaussian integrals over segments and triangles, adaptive cubature, Gram matrices and orthonormalization (Bohn 2000, ch. 3).
+//! Closed-form Gaussian integrals over segments and triangles, adaptive cubature, and the
+//! orthonormalization of a Gaussian base (Bohn 2000, ch. 3, with the corrections of MATH.md).
+//!
+//! A Gaussian here is `exp(−a|x − c|²)` with `a = 1/d²` (eq. 2.1; `d` is not the standard
+//! deviation). Everything takes plain `[f64; 3]` points: this crate knows nothing of scenes or
+//! networks.
+//!
+//! ```
+//! use gauss_integrals::{triangle, plane};
+//! // A huge triangle around the centre integrates to the whole-plane value π/a.
+//! let big = [[-1e3, -1e3, 0.0], [1e3, -1e3, 0.0], [0.0, 1e3, 0.0]];
+//! let i = triangle([0.0, 0.0, 0.0], 2.0, big[0], big[1], big[2]);
+//! assert!((i - plane(2.0, 0.0)).abs() < 1e-12);
+//! ```
+
+pub mod closed_form;
+pub mod criteria;
+pub mod cubature;
+pub mod orthonormal;
+
+pub use closed_form::{line, plane, product, segment, triangle, triangle_fast};
+pub use cubature::{Cubature, triangle_cubature};
+pub use orthonormal::{Orthonormal, classical_gram_schmidt};

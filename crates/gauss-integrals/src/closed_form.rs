@@ -1,0 +1,270 @@
+//! Exact integrals of `exp(−a|x − c|²)` (MATH.md §2).
+
+use std::f64::consts::PI;
+
+type V = [f64; 3];
+
+fn sub(a: V, b: V) -> V {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: V, b: V) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: V, b: V) -> V {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+fn scale(a: V, s: f64) -> V {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+fn add(a: V, b: V) -> V {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+/// Product rule: `exp(−a|x−p|²)·exp(−b|x−q|²) = s·exp(−(a+b)|x−c|²)`; returns `(a+b, c, s)` with
+/// `c = (a p + b q)/(a + b)` and `s = exp(−ab/(a+b)·|p−q|²)`.
+pub fn product(a: f64, p: V, b: f64, q: V) -> (f64, V, f64) {
+    let ab = a + b;
+    let c = scale(add(scale(p, a), scale(q, b)), 1.0 / ab);
+    let d = sub(p, q);
+    (ab, c, (-(a * b / ab) * dot(d, d)).exp())
+}
+
+/// Whole plane in 3-D at distance `h` from the centre: `(π/a)·exp(−a h²)`.
+pub fn plane(a: f64, h: f64) -> f64 {
+    PI / a * (-a * h * h).exp()
+}
+
+/// Whole line in 2-D at distance `h`: `√(π/a)·exp(−a h²)`.
+pub fn line(a: f64, h: f64) -> f64 {
+    (PI / a).sqrt() * (-a * h * h).exp()
+}
+
+/// ∫ over the segment p–q of `exp(−a|x − c|²)` ds (any dimension; erf form of MATH.md §2).
+/// Zero-length segments give 0.
+pub fn segment(c: V, a: f64, p: V, q: V) -> f64 {
+    let d = sub(q, p);
+    let len = dot(d, d).sqrt();
+    if len == 0.0 || a <= 0.0 || !len.is_finite() {
+        return 0.0;
+    }
+    let u = scale(d, 1.0 / len);
+    let tc = dot(sub(c, p), u);
+    let foot = add(p, scale(u, tc));
+    let hv = sub(c, foot);
+    let h2 = dot(hv, hv);
+    let sa = a.sqrt();
+    let (x0, x1) = (sa * (0.0 - tc), sa * (len - tc));
+    // erf(x1) − erf(x0) without cancellation when both are far on the same side.
+    let diff = if x0 > 0.0 {
+        libm::erfc(x0) - libm::erfc(x1)
+    } else if x1 < 0.0 {
+        libm::erfc(-x1) - libm::erfc(-x0)
+    } else {
+        libm::erf(x1) - libm::erf(x0)
+    };
+    0.5 * (PI / a).sqrt() * diff * (-a * h2).exp()
+}
+
+/// ∫ over the triangle (p, q, r) of `exp(−a|x − c|²)` dA, exactly: the centre is projected onto
+/// the plane (distance h, foot c'), the triangle is split into three signed triangles
+/// (c', v_i, v_{i+1}), and each is integrated in polar coordinates around c' with Owen's T:
+/// `∫ = (φ1 − φ0)/(2a) − (1/2a)·2π·[T(√(2a e²), t1/e) − T(√(2a e²), t0/e)]` (MATH.md §2).
+/// Degenerate triangles give 0.
+pub fn triangle(c: V, a: f64, p: V, q: V, r: V) -> f64 {
+    triangle_impl(c, a, p, q, r, true)
+}
+
+/// [`triangle`] without the cubature fallback: the signed decomposition everywhere (cheap), with
+/// absolute error ~1e-16·π/a but no relative guarantee when the centre lies far outside. What a
+/// FEM step needs: its sums are dominated by the near elements.
+pub fn triangle_fast(c: V, a: f64, p: V, q: V, r: V) -> f64 {
+    triangle_impl(c, a, p, q, r, false)
+}
+
+fn triangle_impl(c: V, a: f64, p: V, q: V, r: V, accurate: bool) -> f64 {
+    let n = cross(sub(q, p), sub(r, p));
+    let n2 = dot(n, n);
+    if n2 == 0.0 || a <= 0.0 || !n2.is_finite() {
+        return 0.0;
+    }
+    let nn = n2.sqrt();
+    let unit = scale(n, 1.0 / nn);
+    let h = dot(sub(c, p), unit);
+    let foot = sub(c, scale(unit, h));
+    let damp = (-a * h * h).exp();
+    if damp == 0.0 {
+        return 0.0;
+    }
+    let verts = [p, q, r];
+    // Far field: when the foot lies outside the triangle the signed decomposition cancels
+    // (absolute error ~3e-17·π/a). Bound the integral by area × the Gaussian's in-plane maximum;
+    // below 1e-15·π/a return 0, and where cancellation would cost relative accuracy use the
+    // adaptive cubature instead (MATH.md §2).
+    let dmin2 = in_plane_distance2(foot, verts);
+    if dmin2 > 0.0 {
+        let bound = 0.5 * nn * (-a * dmin2).exp() * damp;
+        if bound <= 1e-15 * PI / a {
+            return 0.0;
+        }
+        if accurate && bound < 1e-5 * PI / a {
+            let f = |x: V| {
+                let d = sub(x, c);
+                (-a * dot(d, d)).exp()
+            };
+            return crate::cubature::triangle_cubature(f, [p, q, r], 1e-13 * bound).value;
+        }
+    }
+    let mut sum = 0.0;
+    for i in 0..3 {
+        sum += signed_wedge(foot, verts[i], verts[(i + 1) % 3], unit, a);
+    }
+    (sum * damp).max(0.0)
+}
+
+/// Squared distance from `o` (in the triangle's plane) to the triangle; 0 inside.
+fn in_plane_distance2(o: V, t: [V; 3]) -> f64 {
+    let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
+    let inside = (0..3).all(|i| dot(cross(sub(t[(i + 1) % 3], t[i]), sub(o, t[i])), n) >= 0.0);
+    if inside {
+        return 0.0;
+    }
+    (0..3)
+        .map(|i| {
+            let (a, b) = (t[i], t[(i + 1) % 3]);
+            let e = sub(b, a);
+            let s = (dot(sub(o, a), e) / dot(e, e)).clamp(0.0, 1.0);
+            let d = sub(o, add(a, scale(e, s)));
+            dot(d, d)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Signed integral over the triangle (o, p, q) in the plane with unit normal `n`, of exp(−a|x−o|²).
+fn signed_wedge(o: V, p: V, q: V, n: V, a: f64) -> f64 {
+    let e_vec = sub(q, p);
+    let len = dot(e_vec, e_vec).sqrt();
+    if len == 0.0 {
+        return 0.0;
+    }
+    let u = scale(e_vec, 1.0 / len);
+    let t0 = dot(sub(p, o), u);
+    let t1 = t0 + len;
+    let perp = sub(sub(p, o), scale(u, t0));
+    let e = dot(perp, perp).sqrt();
+    if e == 0.0 {
+        return 0.0;
+    }
+    // Orientation of (o, p, q) against the plane normal.
+    let sign = dot(cross(sub(p, o), sub(q, o)), n).signum();
+    let (phi0, phi1) = ((t0 / e).atan(), (t1 / e).atan());
+    let hh = (2.0 * a * e * e).sqrt();
+    let tt = owens_t::owens_t(hh, t1 / e) - owens_t::owens_t(hh, t0 / e);
+    sign * ((phi1 - phi0) / (2.0 * a) - PI / a * tt)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cubature::triangle_cubature;
+    use proptest::prelude::*;
+
+    #[test]
+    fn whole_plane_line_and_segment_limits() {
+        let big = [[-50.0, -50.0, 0.0], [50.0, -50.0, 0.0], [0.0, 80.0, 0.0]];
+        let i = triangle([0.3, 0.2, 0.7], 1.5, big[0], big[1], big[2]);
+        assert!((i - plane(1.5, 0.7)).abs() < 1e-13);
+        let s = segment([0.0, 0.4, 0.0], 2.0, [-40.0, 0.0, 0.0], [40.0, 0.0, 0.0]);
+        assert!((s - line(2.0, 0.4)).abs() < 1e-14);
+        assert_eq!(segment([0.0; 3], 1.0, [1.0; 3], [1.0; 3]), 0.0);
+        assert_eq!(
+            triangle([0.0; 3], 1.0, [0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]),
+            0.0
+        );
+    }
+
+    #[test]
+    fn far_outside_centres_keep_relative_accuracy() {
+        let t = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let c = [3.0, 0.4, 0.2];
+        let a = 2.0;
+        let exact = triangle(c, a, t[0], t[1], t[2]);
+        let f = |x: V| {
+            let d = sub(x, c);
+            (-a * dot(d, d)).exp()
+        };
+        let reference = triangle_cubature(f, t, 1e-16 * exact);
+        assert!(exact > 1e-12 * PI / a);
+        assert!(
+            (exact - reference.value).abs() <= 1e-10 * exact,
+            "{exact} vs {reference:?}"
+        );
+    }
+
+    #[test]
+    fn far_centres_underflow_to_zero_never_nan() {
+        let t = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        for c in [[1e3, 1e3, 0.0], [0.0, 0.0, 1e6], [1e300, 0.0, 0.0]] {
+            let v = triangle(c, 1.0, t[0], t[1], t[2]);
+            assert!((0.0..1e-300).contains(&v));
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        #[test]
+        fn triangle_matches_adaptive_cubature(
+            v in prop::array::uniform9(-2.0f64..2.0),
+            c in prop::array::uniform3(-2.5f64..2.5),
+            a in 0.2f64..20.0,
+        ) {
+            let (p, q, r) = ([v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]]);
+            let n = cross(sub(q, p), sub(r, p));
+            prop_assume!(dot(n, n).sqrt() > 1e-2);
+            let exact = triangle(c, a, p, q, r);
+            let reference = triangle_cubature(|x| (-a * dot(sub(x, c), sub(x, c))).exp(), [p, q, r], 1e-12);
+            let tol = 1e-9 * (PI / a) + 1e-8 * reference.value;
+            prop_assert!((exact - reference.value).abs() <= tol, "{} vs {} ± {}", exact, reference.value, reference.error);
+        }
+
+        #[test]
+        fn triangle_split_in_four_sums_to_the_whole(
+            v in prop::array::uniform9(-2.0f64..2.0),
+            c in prop::array::uniform3(-2.0f64..2.0),
+            a in 0.2f64..10.0,
+        ) {
+            let (p, q, r) = ([v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]]);
+            let m = |x: V, y: V| scale(add(x, y), 0.5);
+            let (pq, qr, rp) = (m(p, q), m(q, r), m(r, p));
+            let whole = triangle(c, a, p, q, r);
+            let parts = triangle(c, a, p, pq, rp) + triangle(c, a, pq, q, qr) + triangle(c, a, rp, qr, r) + triangle(c, a, pq, qr, rp);
+            prop_assert!((whole - parts).abs() <= 1e-12 * (PI / a));
+        }
+
+        #[test]
+        fn segment_matches_cubature_and_scales(
+            p in prop::array::uniform3(-2.0f64..2.0),
+            q in prop::array::uniform3(-2.0f64..2.0),
+            c in prop::array::uniform3(-2.0f64..2.0),
+            a in 0.1f64..30.0,
+            k in 0.01f64..100.0,
+        ) {
+            let exact = segment(c, a, p, q);
+            // 2000-point Gauss-free midpoint reference with Richardson would be slow; use the
+            // scaling law instead: lengths ×k, a ÷k² ⇒ integral ×k.
+            let scaled = segment(scale(c, k), a / (k * k), scale(p, k), scale(q, k));
+            prop_assert!((scaled - k * exact).abs() <= 1e-12 * k * (PI / a).sqrt());
+            let len = dot(sub(q, p), sub(q, p)).sqrt();
+            let nmid = 20000;
+            let mid: f64 = (0..nmid).map(|i| {
+                let t = (i as f64 + 0.5) / nmid as f64;
+                let x = add(p, scale(sub(q, p), t));
+                (-a * dot(sub(x, c), sub(x, c))).exp()
+            }).sum::<f64>() * len / nmid as f64;
+            prop_assert!((exact - mid).abs() <= 1e-6 * (PI / a).sqrt());
+        }
+    }
+}

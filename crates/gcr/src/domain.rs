@@ -32,6 +32,32 @@ pub struct Ray {
     pub emission_x: Bands,
 }
 
+/// The two end points of a ray, before the kernel is evaluated.
+#[derive(Clone, Copy, Debug)]
+pub enum Endpoints {
+    /// Sender and receiver on a 3-D scene.
+    ThreeD(SurfacePoint, SurfacePoint),
+    /// Sender and receiver on a Flatland scene.
+    Flat(FlatPoint, FlatPoint),
+}
+
+impl Endpoints {
+    /// The kernel network's input (x, y) for these end points: 6 or 4 numbers.
+    pub fn input(&self, out: &mut Vec<f64>) {
+        out.clear();
+        match self {
+            Endpoints::ThreeD(x, y) => {
+                out.extend_from_slice(&x.point.to_array());
+                out.extend_from_slice(&y.point.to_array());
+            }
+            Endpoints::Flat(x, y) => {
+                out.extend_from_slice(&x.point.to_array());
+                out.extend_from_slice(&y.point.to_array());
+            }
+        }
+    }
+}
+
 /// A scene of either dimension with its kernel evaluator.
 pub enum Domain<'a> {
     /// A 3-D triangle scene.
@@ -89,9 +115,26 @@ impl Domain<'_> {
 
     /// Draws the ray with parameters `u ∈ [0,1]^param_dim` and evaluates the kernel on it.
     pub fn ray(&self, u: &[f64]) -> Ray {
+        self.evaluate(&self.endpoints(u))
+    }
+
+    /// The end points of the ray with parameters `u`, without evaluating the kernel (no ray is
+    /// traced): cheap enough to test candidates for resampling (sec. 2.5).
+    pub fn endpoints(&self, u: &[f64]) -> Endpoints {
         match self {
-            Domain::ThreeD(k) => {
-                let s = k.sample([u[0], u[1], u[2], u[3]]);
+            Domain::ThreeD(k) => Endpoints::ThreeD(
+                k.sampler.sample([u[0], u[1]]),
+                k.sampler.sample([u[2], u[3]]),
+            ),
+            Domain::Flat(k) => Endpoints::Flat(k.sampler.sample(u[0]), k.sampler.sample(u[1])),
+        }
+    }
+
+    /// Evaluates the kernel (tracing visibility) between the end points.
+    pub fn evaluate(&self, e: &Endpoints) -> Ray {
+        match (self, e) {
+            (Domain::ThreeD(k), Endpoints::ThreeD(x, y)) => {
+                let s = k.eval(*x, *y);
                 Ray {
                     x: s.x.point,
                     nx: s.x.normal,
@@ -103,8 +146,8 @@ impl Domain<'_> {
                     emission_x: k.scene.faces[s.x.face as usize].emission.0,
                 }
             }
-            Domain::Flat(k) => {
-                let s = k.sample(u[0], u[1]);
+            (Domain::Flat(k), Endpoints::Flat(x, y)) => {
+                let s = k.eval(*x, *y);
                 Ray {
                     x: d3(s.x.point),
                     nx: d3(s.x.normal),
@@ -116,6 +159,7 @@ impl Domain<'_> {
                     emission_x: k.scene.segments[s.x.segment as usize].emission.0,
                 }
             }
+            _ => unreachable!("end points come from the same domain"),
         }
     }
 

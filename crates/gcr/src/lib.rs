@@ -4,12 +4,17 @@
 //! *kernel network*, [`isgcs`]), meshes the surfaces with a second one (the *shading network*),
 //! and integrates between them in closed form ([`gauss_integrals`]).
 
+pub mod config;
 pub mod domain;
 pub mod element;
+pub mod fem;
 pub mod gather;
 pub mod mesh;
 pub mod metrics;
+pub mod network;
 pub mod output;
+pub mod pipeline;
 pub mod retriangulate;
 pub mod shading;
+pub mod solver;
 pub mod spatial;

@@ -1,0 +1,191 @@
+//! Settings of a solve, with the dissertation's defaults (fig. 4.17, sec. 4.4.1) and validation.
+
+use crate::fem::Transfer;
+use crate::gather::GatherSamples;
+use crate::shading::Breaking;
+use thiserror::Error;
+
+/// How the output radiosity at the vertices is computed (sec. 4.3.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum GatherMode {
+    /// From the shading network's base (fig. 4.13a/b).
+    Base,
+    /// A final collection through the kernel network (fig. 4.13c, the dissertation's choice).
+    Kernel,
+    /// Ray-traced: exact direct light with shadow rays plus one-bounce indirect light from the
+    /// networks (beyond the dissertation).
+    #[default]
+    Rays,
+}
+
+impl GatherMode {
+    /// The name used on the command line and in metrics.
+    pub fn name(self) -> &'static str {
+        match self {
+            GatherMode::Base => "base",
+            GatherMode::Kernel => "kernel",
+            GatherMode::Rays => "rays",
+        }
+    }
+}
+
+impl std::str::FromStr for GatherMode {
+    type Err = ConfigError;
+    fn from_str(s: &str) -> Result<Self, ConfigError> {
+        match s {
+            "base" => Ok(GatherMode::Base),
+            "kernel" => Ok(GatherMode::Kernel),
+            "rays" => Ok(GatherMode::Rays),
+            other => Err(ConfigError::Invalid(format!(
+                "unknown gather mode `{other}` (expected base, kernel or rays)"
+            ))),
+        }
+    }
+}
+
+/// A setting outside its valid range.
+#[derive(Debug, Error, PartialEq)]
+pub enum ConfigError {
+    /// The message names the setting, its value and the valid range.
+    #[error("invalid setting: {0}")]
+    Invalid(String),
+}
+
+/// Everything that steers a solve.
+#[derive(Clone, Debug)]
+pub struct SolveConfig {
+    /// Kernel network cell budget ("links"): the main termination condition (sec. 4.4.1).
+    pub kernel_cells: usize,
+    /// Shading network cell budget.
+    pub shading_cells: usize,
+    /// Optional wall-time budget for training, in seconds.
+    pub time_budget: Option<f64>,
+    /// Seed of every random choice.
+    pub seed: u64,
+    /// Training samples (rays) kept per kernel cell (sec. 4.1: "a ratio of 10 ... is sufficient").
+    pub samples_per_cell: usize,
+    /// A FEM step after every this many kernel insertions (sec. 4.4.1: 20 to 50; default 30).
+    pub fem_every: usize,
+    /// FEM steps run after training stops, to let the last kernel propagate (each one bounce).
+    pub final_fem_steps: usize,
+    /// Insertion period λ of both networks (fig. 4.17: 300–600).
+    pub lambda: usize,
+    /// Sender integral variant of the FEM step.
+    pub transfer: Transfer,
+    /// Flat closed forms where the criterion allows (off: exact element sums everywhere).
+    pub closed_forms: bool,
+    /// The breaking operator of the shading network.
+    pub breaking: Breaking,
+    /// Output gather.
+    pub gather: GatherMode,
+    /// Sample counts of the ray-traced gather.
+    pub gather_samples: GatherSamples,
+    /// Fraction of new samples drawn in critical regions (the rest uniformly), sec. 2.5.
+    pub resample_critical_fraction: f64,
+}
+
+impl Default for SolveConfig {
+    fn default() -> Self {
+        Self {
+            kernel_cells: 600,
+            shading_cells: 300,
+            time_budget: None,
+            seed: 1,
+            samples_per_cell: 10,
+            fem_every: 30,
+            final_fem_steps: 3,
+            lambda: 300,
+            transfer: Transfer::Direct,
+            closed_forms: true,
+            breaking: Breaking::default(),
+            gather: GatherMode::Rays,
+            gather_samples: GatherSamples::default(),
+            resample_critical_fraction: 0.5,
+        }
+    }
+}
+
+impl SolveConfig {
+    /// Checks every setting; the error names the first one out of range.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let bad = |m: String| Err(ConfigError::Invalid(m));
+        if !(10..=200_000).contains(&self.kernel_cells) {
+            return bad(format!(
+                "kernel cells {} (expected 10 to 200000)",
+                self.kernel_cells
+            ));
+        }
+        if !(3..=100_000).contains(&self.shading_cells) {
+            return bad(format!(
+                "shading cells {} (expected 3 to 100000)",
+                self.shading_cells
+            ));
+        }
+        if let Some(t) = self.time_budget {
+            if !(t.is_finite() && t > 0.0) {
+                return bad(format!(
+                    "time budget {t} s (expected a positive number of seconds)"
+                ));
+            }
+        }
+        if !(1..=10_000).contains(&self.samples_per_cell) {
+            return bad(format!(
+                "samples per cell {} (expected 1 to 10000)",
+                self.samples_per_cell
+            ));
+        }
+        if self.fem_every == 0 {
+            return bad("FEM period 0 (expected at least 1 insertion)".into());
+        }
+        if !(10..=100_000).contains(&self.lambda) {
+            return bad(format!(
+                "insertion period λ = {} (expected 10 to 100000)",
+                self.lambda
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.resample_critical_fraction) {
+            return bad(format!(
+                "critical resampling fraction {} (expected 0 to 1)",
+                self.resample_critical_fraction
+            ));
+        }
+        if self.gather_samples.direct + self.gather_samples.indirect > 1_000_000 {
+            return bad("gather samples per point above 1000000".into());
+        }
+        if !(self.breaking.max_normal_angle > 0.0
+            && self.breaking.max_normal_angle <= std::f64::consts::PI)
+        {
+            return bad(format!(
+                "breaking angle {} rad (expected in (0, π])",
+                self.breaking.max_normal_angle
+            ));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_absurd_values_are_named() {
+        SolveConfig::default().validate().unwrap();
+        let e = SolveConfig {
+            kernel_cells: 0,
+            ..Default::default()
+        }
+        .validate()
+        .unwrap_err();
+        assert!(e.to_string().contains("kernel cells 0"));
+        let e = SolveConfig {
+            time_budget: Some(f64::NAN),
+            ..Default::default()
+        }
+        .validate()
+        .unwrap_err();
+        assert!(e.to_string().contains("time budget"));
+        assert_eq!("rays".parse::<GatherMode>().unwrap(), GatherMode::Rays);
+        assert!("photons".parse::<GatherMode>().is_err());
+    }
+}

@@ -1,0 +1,36 @@
+//! What the solver needs from a growing-cell-structures network, as a small trait.
+//!
+//! The kernel network and the shading network are both [`isgcs`] networks; the solver talks to
+//! them through this trait so that the orchestration reads as the dissertation's main loop
+//! (fig. B.1) and does not depend on the approximator's internals.
+
+/// A growing-cell-structures network as the radiosity solver drives it.
+pub trait GrowingNetwork {
+    /// Presents one training sample (unsupervised step on `input`, supervised step towards
+    /// `target`), including the periodic insertion and deletion of cells. `hint` is the sample's
+    /// cached best-matching unit (sec. 2.6). Returns the new best-matching unit.
+    fn train(&mut self, input: &[f64], target: &[f64], hint: Option<usize>) -> usize;
+    /// Number of cells.
+    fn cell_count(&self) -> usize;
+    /// Counts every insertion since the network was created.
+    fn insertions(&self) -> u64;
+    /// Changes whenever cell indices may have been renumbered (after deletions): cached
+    /// best-matching units from an older epoch must be dropped.
+    fn epoch(&self) -> u64;
+    /// Centre w_i of cell `i`.
+    fn centre(&self, i: usize) -> &[f64];
+    /// Width d_i of cell `i` (eq. 2.10).
+    fn width(&self, i: usize) -> f64;
+    /// Output weights v_i of cell `i`.
+    fn output(&self, i: usize) -> &[f64];
+    /// The k-simplices, as cell indices (k + 1 used; unused slots are `usize::MAX`).
+    fn simplices(&self) -> Vec<[usize; 3]>;
+    /// Whether `input` lies in a critical region (definition 7, eq. 2.23): near high-resource
+    /// cells or outside the network.
+    fn is_critical(&self, input: &[f64]) -> bool;
+    /// The network output Ψ(input).
+    fn predict(&self, input: &[f64], out: &mut [f64]);
+    /// Switches insertion and deletion of cells on or off (training of the existing cells goes
+    /// on either way): the solver freezes a network's size once its budget is reached.
+    fn set_growing(&mut self, on: bool);
+}

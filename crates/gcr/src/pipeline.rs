@@ -1,0 +1,171 @@
+//! From a trained solution to outputs: radiosity at arbitrary surface points by the three gathers,
+//! the re-triangulated output mesh, and probe values.
+
+use crate::config::{GatherMode, SolveConfig};
+use crate::domain::Domain;
+use crate::element::{Bands, MAX_BANDS};
+use crate::gather::{Emitters, Gathered, gather};
+use crate::mesh::ShadedMesh;
+use crate::retriangulate::{RetriangulateLimits, retriangulate};
+use crate::solver::Trained;
+use crate::spatial::BoxGrid;
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// Radiosity at surface point (y, n, face) by the configured gather; `seed` makes the ray gather
+/// deterministic per point.
+pub fn radiosity_at(
+    domain: &Domain,
+    trained: &Trained,
+    emitters: &Emitters,
+    config: &SolveConfig,
+    y: DVec3,
+    n: DVec3,
+    face: u32,
+    seed: u64,
+    scratch: &mut Vec<u32>,
+) -> Gathered {
+    let e = domain.emission(face);
+    let reflected = |b: Bands| {
+        let mut out = Gathered::default();
+        for k in 0..MAX_BANDS {
+            out.from_networks[k] = b[k].max(0.0);
+            out.radiosity[k] = e[k] + out.from_networks[k];
+        }
+        out
+    };
+    match config.gather {
+        GatherMode::Base => reflected(trained.fem.reflected_from_base(y, scratch)),
+        GatherMode::Kernel => reflected(trained.reflected_kernel(y)),
+        GatherMode::Rays => gather(
+            domain,
+            emitters,
+            y,
+            n,
+            face,
+            config.gather_samples,
+            seed,
+            &|x, _, _| trained.reflected_kernel(x),
+        ),
+    }
+}
+
+/// The local edge length the shading network asks for near `p`: the width (mean edge length,
+/// eq. 2.10) of the nearest shading cell.
+pub struct LocalEdge {
+    centres: Vec<DVec3>,
+    widths: Vec<f64>,
+    grid: BoxGrid,
+    reach: f64,
+}
+
+impl LocalEdge {
+    /// Indexes the shading cells of the last FEM step.
+    pub fn new(trained: &Trained) -> Self {
+        let geo = &trained.fem.base.geo;
+        let mean = geo.widths.iter().sum::<f64>() / geo.len().max(1) as f64;
+        let reach = 2.0 * mean.max(1e-300);
+        Self {
+            centres: geo.centres.clone(),
+            widths: geo.widths.clone(),
+            grid: BoxGrid::new(geo.centres.iter().map(|c| (*c, *c)).collect(), reach),
+            reach,
+        }
+    }
+
+    /// Width of the nearest cell to `p` (infinite when there are no cells).
+    pub fn at(&self, p: DVec3) -> f64 {
+        let mut near = Vec::new();
+        let mut r = self.reach;
+        for _ in 0..6 {
+            self.grid.query_ball(p, r, &mut near);
+            if !near.is_empty() {
+                break;
+            }
+            r *= 4.0;
+        }
+        let pick = |it: &mut dyn Iterator<Item = usize>| {
+            it.min_by(|&a, &b| {
+                self.centres[a]
+                    .distance_squared(p)
+                    .total_cmp(&self.centres[b].distance_squared(p))
+            })
+        };
+        let best = if near.is_empty() {
+            pick(&mut (0..self.centres.len()))
+        } else {
+            pick(&mut near.iter().map(|&i| i as usize))
+        };
+        best.map_or(f64::INFINITY, |i| self.widths[i])
+    }
+}
+
+/// Re-triangulates the scene to the shading network's resolution (sec. 4.3.1) and gathers B at
+/// every vertex. Returns the mesh and the area-weighted share of B that came from the networks.
+pub fn output_mesh(
+    domain: &Domain,
+    trained: &Trained,
+    config: &SolveConfig,
+    limits: RetriangulateLimits,
+) -> (ShadedMesh, f64) {
+    let Some(scene) = domain.scene_3d() else {
+        return (ShadedMesh::default(), 0.0);
+    };
+    let faces: Vec<[DVec3; 3]> = scene.faces.iter().map(|f| f.v).collect();
+    let local = LocalEdge::new(trained);
+    let tri = retriangulate(&faces, |p| local.at(p), limits);
+    let mut vertex_face = vec![0u32; tri.positions.len()];
+    for (t, f) in tri.triangles.iter().zip(&tri.face_of_triangle) {
+        for &v in t {
+            vertex_face[v as usize] = *f;
+        }
+    }
+    let emitters = Emitters::new(domain);
+    let gathered: Vec<Gathered> = (0..tri.positions.len())
+        .into_par_iter()
+        .map_init(Vec::new, |scratch, v| {
+            let face = vertex_face[v];
+            let n = scene.faces[face as usize].normal;
+            let seed = config.seed ^ (v as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            radiosity_at(
+                domain,
+                trained,
+                &emitters,
+                config,
+                tri.positions[v],
+                n,
+                face,
+                seed,
+                scratch,
+            )
+        })
+        .collect();
+    // Network share: area-weighted over triangles, all bands.
+    let (mut total, mut net) = (0.0, 0.0);
+    for t in &tri.triangles {
+        let [a, b, c] = t.map(|i| tri.positions[i as usize]);
+        let area = 0.5 * (b - a).cross(c - a).length();
+        for &v in t {
+            let g = &gathered[v as usize];
+            total += area * g.radiosity.iter().sum::<f64>();
+            net += area * g.from_networks.iter().sum::<f64>();
+        }
+    }
+    let grey = domain.bands() == 1;
+    let mesh = ShadedMesh {
+        positions: tri.positions,
+        triangles: tri.triangles,
+        face_of_triangle: tri.face_of_triangle,
+        radiosity: gathered
+            .iter()
+            .map(|g| {
+                if grey {
+                    [g.radiosity[0]; 3]
+                } else {
+                    g.radiosity
+                }
+            })
+            .collect(),
+    };
+    (mesh, if total > 0.0 { net / total } else { 0.0 })
+}

@@ -1,1 +1,26 @@
-//! Incremental supervised growing cell structures: a generic function approximator (Bohn 2000, ch. 2).
+//! Incremental supervised growing cell structures (ISGCS): a generic function approximator
+//! (Bohn 2000, ch. 2; Fritzke's growing cell structures with an RBF output layer).
+//!
+//! A network of z cells with centres w_i ∈ Rⁿ, widths d_i (mean incident edge length, eq. 2.10)
+//! and outputs v_i ∈ Rᵐ computes Ψ(ξ) = Σ v_i exp(−|ξ − w_i|²/d_i²) (eq. 2.1–2.5). The cells form a
+//! pure k-dimensional simplicial complex (sec. 2.3) that grows by splitting the longest edge of the
+//! cell with the highest resource every λ steps (sec. 2.3.2, 2.4.1).
+//!
+//! ```
+//! use isgcs::{Isgcs, Params};
+//! let mut net = Isgcs::new(Params::default(), 1, 1, 1, vec![vec![0.0], vec![1.0]]).unwrap();
+//! for step in 0..20_000 {
+//!     let x = (step as f64 * 0.618_033_988_7).fract();
+//!     net.train(&[x], &[2.0 * x], None);
+//! }
+//! assert!(net.len() > 2);
+//! let mut y = [0.0];
+//! net.predict(&[0.5], &mut y);
+//! assert!((y[0] - 1.0).abs() < 0.1);
+//! ```
+
+mod network;
+mod params;
+
+pub use network::{Isgcs, IsgcsError};
+pub use params::Params;

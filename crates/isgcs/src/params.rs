@@ -1,0 +1,46 @@
+//! Training parameters with the dissertation's recommended values (fig. 4.17).
+
+use serde::{Deserialize, Serialize};
+
+/// Training parameters (fig. 4.17 gives the recommended ranges).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Params {
+    /// ε_BMU: adaption strength of the best-matching unit (eq. 2.6; 0.01–0.05).
+    pub eps_bmu: f64,
+    /// ε_N: adaption strength of its neighbours (eq. 2.9 as corrected in MATH.md; 0.001–0.009).
+    pub eps_neighbour: f64,
+    /// α: decay rate of the resource terms (eq. 2.15–2.18; 0.01–0.05).
+    pub alpha: f64,
+    /// η: learning rate of the output layer (eq. 2.8; 0.01–0.1).
+    pub eta: f64,
+    /// λ: steps between insertions (300–600).
+    pub lambda: usize,
+    /// φ: activation threshold of the inside test (definition 5; 0.4–0.6).
+    pub phi: f64,
+    /// ω: a cell is critical when its resource is at least ω times the mean (definition 6).
+    pub omega: f64,
+    /// Weight of the unsupervised (quantization) resource in the combined resource τ (sec. 2.4);
+    /// 0 is the pure supervised resource.
+    pub usl_weight: f64,
+    /// Multiplier on the widths d_i (1 is the dissertation's eq. 2.10).
+    pub width_multiplier: f64,
+    /// Topological depth of [`crate::Isgcs::neighbourhood`] queries (sec. 2.6).
+    pub locality_depth: usize,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self {
+            eps_bmu: 0.03,
+            eps_neighbour: 0.005,
+            alpha: 0.03,
+            eta: 0.05,
+            lambda: 300,
+            phi: 0.5,
+            omega: 1.5,
+            usl_weight: 0.0,
+            width_multiplier: 1.0,
+            locality_depth: 2,
+        }
+    }
+}

@@ -304,6 +304,8 @@ pub struct FemSolution {
     pub sender: Vec<f64>,
     /// Base components rejected as nearly dependent.
     pub rejected: usize,
+    /// The kernel network this step integrated.
+    pub kernel: KernelCells,
 }
 
 impl FemSolution {
@@ -434,6 +436,7 @@ pub fn fem_step(base: Base, kernel: &KernelCells, scene: &SceneSurface) -> FemSo
         base,
         gamma,
         sender,
+        kernel: kernel.clone(),
     }
 }
 
@@ -540,7 +543,11 @@ mod tests {
         ]);
         let scene = SceneSurface::new(vec![sender_plane], 2.0);
         let sol = fem_step(base, &kernel, &scene);
-        assert!(sol.rejected < 256 / 8, "wide Gaussians are nearly dependent; few are dropped: {}", sol.rejected);
+        assert!(
+            sol.rejected < 256 / 8,
+            "wide Gaussians are nearly dependent; few are dropped: {}",
+            sol.rejected
+        );
         // c_o for a centre on the sender plane is the whole-plane value π d².
         assert!((sol.sender[0] - std::f64::consts::PI * 2.25).abs() < 1e-9);
         let mut scratch = Vec::new();

@@ -16,5 +16,6 @@ pub mod output;
 pub mod pipeline;
 pub mod retriangulate;
 pub mod shading;
+pub mod solve;
 pub mod solver;
 pub mod spatial;

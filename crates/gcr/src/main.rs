@@ -1,5 +1,360 @@
-//! The `gcr` command-line program.
+//! The `gcr` command-line program: `gcr scenes`, `gcr solve`.
 
-fn main() -> anyhow::Result<()> {
-    anyhow::bail!("gcr: the solver is not implemented yet")
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand};
+use gcr::config::{GatherMode, SolveConfig};
+use gcr::domain::Domain;
+use gcr::gather::Emitters;
+use gcr::output::tonemap::Exposure;
+use gcr::pipeline::{output_mesh, radiosity_at};
+use gcr::retriangulate::RetriangulateLimits;
+use scene_sampler::{AnyScene, FlatKernelSampler, KernelSampler, SceneBvh};
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Parser)]
+#[command(
+    name = "gcr",
+    version,
+    about = "Growing Cells Radiosity: radiosity on evolving networks (Bohn 2000)"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+#[allow(clippy::large_enum_variant)] // parsed once; boxing would only obscure the clap derive
+enum Command {
+    /// List the built-in scenes.
+    Scenes,
+    /// Solve a scene (a file: .obj, .gltf, .glb, Flatland .json; or a built-in name).
+    Solve {
+        /// Scene file or built-in name.
+        scene: String,
+        /// Kernel network cell budget ("links").
+        #[arg(long, default_value_t = SolveConfig::default().kernel_cells)]
+        cells: usize,
+        /// Shading network cell budget.
+        #[arg(long)]
+        shading_cells: Option<usize>,
+        /// Training time budget in seconds.
+        #[arg(long)]
+        time_budget: Option<f64>,
+        /// Seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Output gather: base, kernel or rays.
+        #[arg(long, default_value = "rays")]
+        gather: GatherMode,
+        /// PNG image from the scene's camera.
+        #[arg(long)]
+        image: Option<PathBuf>,
+        /// Binary glTF mesh with vertex colours.
+        #[arg(long)]
+        mesh: Option<PathBuf>,
+        /// PLY mesh with radiosity per vertex.
+        #[arg(long)]
+        ply: Option<PathBuf>,
+        /// Probe points (`x y z nx ny nz` per line; Flatland `x y nx ny`).
+        #[arg(long, requires = "probe_out")]
+        probes: Option<PathBuf>,
+        /// Where to write radiosity at the probes (`r g b` per line).
+        #[arg(long, requires = "probes")]
+        probe_out: Option<PathBuf>,
+        /// JSON metrics.
+        #[arg(long)]
+        metrics: Option<PathBuf>,
+        /// No progress output.
+        #[arg(long)]
+        quiet: bool,
+    },
+}
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run() -> Result<()> {
+    match Cli::parse().command {
+        Command::Scenes => {
+            for name in scene_sampler::BUILTIN_NAMES {
+                println!("{name}");
+            }
+            Ok(())
+        }
+        Command::Solve {
+            scene,
+            cells,
+            shading_cells,
+            time_budget,
+            seed,
+            gather,
+            image,
+            mesh,
+            ply,
+            probes,
+            probe_out,
+            metrics,
+            quiet,
+        } => {
+            let config = SolveConfig {
+                kernel_cells: cells,
+                shading_cells: shading_cells.unwrap_or((cells / 2).max(3)),
+                time_budget,
+                seed,
+                gather,
+                ..SolveConfig::default()
+            };
+            config.validate()?;
+            let start = Instant::now();
+            let loaded = scene_sampler::load_or_builtin(&scene)
+                .with_context(|| format!("loading scene `{scene}`"))?;
+            for w in loaded.warnings() {
+                eprintln!("warning: {w}");
+            }
+            match loaded {
+                AnyScene::ThreeD(s) => {
+                    let bvh = SceneBvh::new(&s);
+                    let domain = Domain::ThreeD(KernelSampler::new(&s, &bvh));
+                    solve_and_write(
+                        &domain, &scene, &config, image, mesh, ply, probes, probe_out, metrics,
+                        quiet, start,
+                    )
+                }
+                AnyScene::Flatland(s) => {
+                    if mesh.is_some() || ply.is_some() {
+                        bail!("--mesh and --ply need a 3-D scene; `{scene}` is a Flatland scene");
+                    }
+                    let domain = Domain::Flat(FlatKernelSampler::new(&s));
+                    solve_and_write(
+                        &domain, &scene, &config, image, None, None, probes, probe_out, metrics,
+                        quiet, start,
+                    )
+                }
+            }
+        }
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn solve_and_write(
+    domain: &Domain,
+    scene_name: &str,
+    config: &SolveConfig,
+    image: Option<PathBuf>,
+    mesh_path: Option<PathBuf>,
+    ply: Option<PathBuf>,
+    probes: Option<PathBuf>,
+    probe_out: Option<PathBuf>,
+    metrics_path: Option<PathBuf>,
+    quiet: bool,
+    start: Instant,
+) -> Result<()> {
+    let mut observer = |p: &gcr::solver::Progress| {
+        if !quiet {
+            eprint!(
+                "\r{:>8} kernel {:>5}/{} cells  shading {:>4}  samples {:>6}  FEM {:>3}  {:>6.1} s",
+                p.phase,
+                p.kernel_cells,
+                p.kernel_budget,
+                p.shading_cells,
+                p.samples,
+                p.fem_steps,
+                p.elapsed
+            );
+        }
+    };
+    let trained = gcr::solve::solve(domain, config, &mut observer)?;
+    if !quiet {
+        eprintln!();
+    }
+    let mut metrics = trained.metrics.clone();
+    metrics.scene = scene_name.to_string();
+    metrics.gather = config.gather.name().to_string();
+    metrics.scene_elements = domain.elements().len();
+    let tg = Instant::now();
+    let emitters = Emitters::new(domain);
+    if let (Some(input), Some(output)) = (probes, probe_out) {
+        let text = probe_values(domain, &trained, &emitters, config, &input)?;
+        std::fs::write(&output, text).with_context(|| format!("writing {}", output.display()))?;
+    }
+    if let Some(scene) = domain.scene_3d() {
+        if image.is_some() || mesh_path.is_some() || ply.is_some() {
+            let (mesh, share) =
+                output_mesh(domain, &trained, config, RetriangulateLimits::default());
+            metrics.network_share = share;
+            metrics.output_vertices = mesh.vertex_count();
+            metrics.output_triangles = mesh.triangle_count();
+            metrics.seconds.gather += tg.elapsed().as_secs_f64();
+            let to = Instant::now();
+            let lit: Vec<[f64; 3]> = mesh
+                .triangles
+                .iter()
+                .zip(&mesh.face_of_triangle)
+                .filter(|(_, f)| scene.faces[**f as usize].emission.is_zero())
+                .map(|(t, _)| mesh.radiosity[t[0] as usize])
+                .collect();
+            let exposure = Exposure::auto(lit);
+            if let Some(path) = image {
+                let cam = gcr::output::raster::PinholeCamera {
+                    eye: scene.camera.eye,
+                    target: scene.camera.target,
+                    up: scene.camera.up,
+                    fov_y_degrees: scene.camera.fov_y_deg,
+                };
+                let (w, h) = (512, 512);
+                let px = gcr::output::raster::render(&mesh, &cam, &exposure, w, h, 2);
+                image::RgbImage::from_raw(w, h, px)
+                    .context("image buffer")?
+                    .save(&path)
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
+            if let Some(path) = mesh_path {
+                let f = std::fs::File::create(&path)
+                    .with_context(|| format!("creating {}", path.display()))?;
+                gcr::output::glb::write_glb(&mesh, &exposure, std::io::BufWriter::new(f))?;
+            }
+            if let Some(path) = ply {
+                let f = std::fs::File::create(&path)
+                    .with_context(|| format!("creating {}", path.display()))?;
+                gcr::output::ply::write_ply(&mesh, &exposure, std::io::BufWriter::new(f))?;
+            }
+            metrics.seconds.output += to.elapsed().as_secs_f64();
+        }
+    } else if let (Some(path), Some(flat)) = (image, domain.scene_flat()) {
+        flatland_image(domain, &trained, &emitters, config, flat, &path)?;
+    }
+    metrics.seconds.total = start.elapsed().as_secs_f64();
+    metrics.peak_memory_bytes = gcr::metrics::peak_memory_bytes();
+    if let Some(path) = metrics_path {
+        std::fs::write(&path, serde_json::to_string_pretty(&metrics)?)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    if !quiet {
+        eprintln!(
+            "done: {} kernel cells, {} shading cells, {} FEM steps, {:.1} s",
+            metrics.kernel_cells, metrics.shading_cells, metrics.fem_steps, metrics.seconds.total
+        );
+    }
+    Ok(())
+}
+
+fn probe_values(
+    domain: &Domain,
+    trained: &gcr::solver::Trained,
+    emitters: &Emitters,
+    config: &SolveConfig,
+    path: &PathBuf,
+) -> Result<String> {
+    let mut out = String::new();
+    let mut scratch = Vec::new();
+    let grey = domain.bands() == 1;
+    let mut line = |i: usize, b: [f64; 3]| {
+        if grey && domain.dim() == 2 {
+            out.push_str(&format!("{}\n", b[0]));
+        } else {
+            out.push_str(&format!("{} {} {}\n", b[0], b[1], b[2]));
+        }
+        let _ = i;
+    };
+    match domain {
+        Domain::ThreeD(k) => {
+            let probes = scene_sampler::read_probes(path)?;
+            let points = k.scene.snap_probes(&probes, &path.display().to_string())?;
+            for (i, p) in points.iter().enumerate() {
+                let g = radiosity_at(
+                    domain,
+                    trained,
+                    emitters,
+                    config,
+                    p.point,
+                    p.normal,
+                    p.face,
+                    config.seed ^ i as u64,
+                    &mut scratch,
+                );
+                line(i, g.radiosity);
+            }
+        }
+        Domain::Flat(k) => {
+            let probes = scene_sampler::read_flat_probes(path)?;
+            let points = k.scene.snap_probes(&probes, &path.display().to_string())?;
+            for (i, p) in points.iter().enumerate() {
+                let y = glam::DVec3::new(p.point.x, p.point.y, 0.0);
+                let n = glam::DVec3::new(p.normal.x, p.normal.y, 0.0);
+                let g = radiosity_at(
+                    domain,
+                    trained,
+                    emitters,
+                    config,
+                    y,
+                    n,
+                    p.segment,
+                    config.seed ^ i as u64,
+                    &mut scratch,
+                );
+                line(i, g.radiosity);
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn flatland_image(
+    domain: &Domain,
+    trained: &gcr::solver::Trained,
+    emitters: &Emitters,
+    config: &SolveConfig,
+    flat: &scene_sampler::FlatlandScene,
+    path: &PathBuf,
+) -> Result<()> {
+    use gcr::output::flatland::{Stroke, draw_segments};
+    let mut strokes = Vec::new();
+    let mut scratch = Vec::new();
+    for (si, s) in flat.segments.iter().enumerate() {
+        let pieces = 64;
+        let at = |t: f64, scratch: &mut Vec<u32>| {
+            let p = s.point(t);
+            let y = glam::DVec3::new(p.x, p.y, 0.0);
+            let n = glam::DVec3::new(s.normal.x, s.normal.y, 0.0);
+            radiosity_at(
+                domain,
+                trained,
+                emitters,
+                config,
+                y,
+                n,
+                si as u32,
+                config.seed ^ (si * 1000) as u64 ^ (t * 1e6) as u64,
+                scratch,
+            )
+            .radiosity
+        };
+        let mut prev = at(0.0, &mut scratch);
+        for j in 0..pieces {
+            let (t0, t1) = (j as f64 / pieces as f64, (j + 1) as f64 / pieces as f64);
+            let next = at(t1, &mut scratch);
+            strokes.push(Stroke {
+                a: s.point(t0),
+                b: s.point(t1),
+                ba: prev,
+                bb: next,
+                normal: s.normal,
+            });
+            prev = next;
+        }
+    }
+    let lit: Vec<[f64; 3]> = strokes.iter().map(|s| s.ba).collect();
+    let exposure = Exposure::auto(lit);
+    let size = 512;
+    let px = draw_segments(&strokes, flat.view.min, flat.view.max, size, 4.0, &exposure);
+    image::RgbImage::from_raw(size, size, px)
+        .context("image buffer")?
+        .save(path)
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
 }

@@ -34,3 +34,49 @@ pub trait GrowingNetwork {
     /// on either way): the solver freezes a network's size once its budget is reached.
     fn set_growing(&mut self, on: bool);
 }
+
+impl GrowingNetwork for isgcs::Isgcs {
+    fn train(&mut self, input: &[f64], target: &[f64], hint: Option<usize>) -> usize {
+        isgcs::Isgcs::train(self, input, target, hint)
+    }
+    fn cell_count(&self) -> usize {
+        self.len()
+    }
+    fn insertions(&self) -> u64 {
+        isgcs::Isgcs::insertions(self)
+    }
+    fn epoch(&self) -> u64 {
+        // Cells are never renumbered (no deletion yet).
+        0
+    }
+    fn centre(&self, i: usize) -> &[f64] {
+        isgcs::Isgcs::centre(self, i)
+    }
+    fn width(&self, i: usize) -> f64 {
+        isgcs::Isgcs::width(self, i)
+    }
+    fn output(&self, i: usize) -> &[f64] {
+        isgcs::Isgcs::output(self, i)
+    }
+    fn simplices(&self) -> Vec<[usize; 3]> {
+        isgcs::Isgcs::simplices(self)
+            .iter()
+            .map(|s| {
+                let mut out = [usize::MAX; 3];
+                for (o, v) in out.iter_mut().zip(s) {
+                    *o = *v as usize;
+                }
+                out
+            })
+            .collect()
+    }
+    fn is_critical(&self, input: &[f64]) -> bool {
+        isgcs::Isgcs::is_critical(self, input)
+    }
+    fn predict(&self, input: &[f64], out: &mut [f64]) {
+        isgcs::Isgcs::predict(self, input, out)
+    }
+    fn set_growing(&mut self, on: bool) {
+        isgcs::Isgcs::set_growing(self, on)
+    }
+}

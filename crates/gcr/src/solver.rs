@@ -2,7 +2,7 @@
 //! shading network on the receivers, run a FEM step every N kernel insertions and update every
 //! sample's emitting strength, resample critical regions, stop at the budget.
 
-use crate::config::SolveConfig;
+use crate::config::{SolveConfig, StrengthFrom};
 use crate::domain::{Domain, Ray};
 use crate::element::{Bands, MAX_BANDS};
 use crate::fem::{
@@ -281,7 +281,12 @@ pub fn train(
                 .par_iter()
                 .map_init(Vec::new, |scratch, u| {
                     let ray = domain.ray(u);
-                    let s = strength(&ray, current, scratch);
+                    let s = match (config.strength_from, current) {
+                        (StrengthFrom::Kernel, Some(f)) => {
+                            kernel_strength(&ray, &f.kernel, &f.sender)
+                        }
+                        _ => strength(&ray, current, scratch),
+                    };
                     Sample {
                         ray,
                         s,
@@ -304,7 +309,7 @@ pub fn train(
             let frozen = freeze_kernel(kernel, dim, bands);
             let base = Base::new(freeze_shading(shading, domain, config), fem_settings);
             let sol = fem_step(base, &frozen, &scene_surface);
-            update_strengths(&mut samples, &sol);
+            update_strengths(&mut samples, &sol, &frozen, config.strength_from);
             fem = Some(sol);
             metrics.fem_steps += 1;
             metrics.seconds.fem += tf.elapsed().as_secs_f64();
@@ -330,7 +335,7 @@ pub fn train(
         let frozen = freeze_kernel(kernel, dim, bands);
         let base = Base::new(freeze_shading(shading, domain, config), fem_settings);
         let sol = fem_step(base, &frozen, &scene_surface);
-        update_strengths(&mut samples, &sol);
+        update_strengths(&mut samples, &sol, &frozen, config.strength_from);
         fem = Some(sol);
         metrics.fem_steps += 1;
         // Re-learn the new targets without growing: a sweep over the samples.
@@ -382,10 +387,28 @@ fn strength(ray: &Ray, fem: Option<&FemSolution>, scratch: &mut Vec<u32>) -> Ban
     s
 }
 
-fn update_strengths(samples: &mut [Sample], fem: &FemSolution) {
+/// s = E(x) + B_refl(x) with B_refl from the kernel collection (fig. 4.13c) at the sender.
+fn kernel_strength(ray: &Ray, kernel: &KernelCells, sender: &[f64]) -> Bands {
+    let b = reflected_from_kernel(kernel, sender, ray.x);
+    let mut s = ray.emission_x;
+    for k in 0..MAX_BANDS {
+        s[k] += b[k].max(0.0);
+    }
+    s
+}
+
+fn update_strengths(
+    samples: &mut [Sample],
+    fem: &FemSolution,
+    kernel: &KernelCells,
+    from: StrengthFrom,
+) {
     samples
         .par_iter_mut()
         .for_each_init(Vec::new, |scratch, smp| {
-            smp.s = strength(&smp.ray, Some(fem), scratch);
+            smp.s = match from {
+                StrengthFrom::Base => strength(&smp.ray, Some(fem), scratch),
+                StrengthFrom::Kernel => kernel_strength(&smp.ray, kernel, &fem.sender),
+            };
         });
 }

@@ -76,6 +76,27 @@ fn kernel_target(ray: &Ray, s: &Bands, bands: usize, out: &mut Vec<f64>) {
     out.extend((0..bands).map(|b| ray.kernel[b] * s[b]));
 }
 
+/// One kernel training step on a sample: input (x, y), target K·s, cached BMU (sec. 2.6).
+fn train_kernel_on(
+    kernel: &mut impl GrowingNetwork,
+    smp: &mut Sample,
+    dim: usize,
+    bands: usize,
+    input: &mut Vec<f64>,
+    target: &mut Vec<f64>,
+) {
+    input.clear();
+    input.extend_from_slice(&smp.ray.x.to_array()[..dim]);
+    input.extend_from_slice(&smp.ray.y.to_array()[..dim]);
+    kernel_target(&smp.ray, &smp.s, bands, target);
+    let hint = smp
+        .kernel_bmu
+        .filter(|(_, e)| *e == kernel.epoch())
+        .map(|(b, _)| b);
+    let bmu = kernel.train(input, target, hint);
+    smp.kernel_bmu = Some((bmu, kernel.epoch()));
+}
+
 /// Freezes the kernel network into per-cell sender/receiver halves (MATH.md §3).
 pub fn freeze_kernel(net: &impl GrowingNetwork, dim: usize, bands: usize) -> KernelCells {
     let n = net.cell_count();
@@ -218,17 +239,7 @@ pub fn train(
         let mut shading_batch = Vec::with_capacity(batch);
         for _ in 0..batch {
             let i = rng.random_range(0..samples.len());
-            let smp = &mut samples[i];
-            input.clear();
-            input.extend_from_slice(&smp.ray.x.to_array()[..dim]);
-            input.extend_from_slice(&smp.ray.y.to_array()[..dim]);
-            kernel_target(&smp.ray, &smp.s, bands, &mut target);
-            let hint = smp
-                .kernel_bmu
-                .filter(|(_, e)| *e == kernel.epoch())
-                .map(|(b, _)| b);
-            let bmu = kernel.train(&input, &target, hint);
-            smp.kernel_bmu = Some((bmu, kernel.epoch()));
+            train_kernel_on(kernel, &mut samples[i], dim, bands, &mut input, &mut target);
             shading_batch.push(i);
         }
         t_kernel += tk.elapsed().as_secs_f64();
@@ -341,17 +352,7 @@ pub fn train(
         // Re-learn the new targets without growing: a sweep over the samples.
         for _ in 0..samples.len() {
             let i = rng.random_range(0..samples.len());
-            let smp = &mut samples[i];
-            input.clear();
-            input.extend_from_slice(&smp.ray.x.to_array()[..dim]);
-            input.extend_from_slice(&smp.ray.y.to_array()[..dim]);
-            kernel_target(&smp.ray, &smp.s, bands, &mut target);
-            let hint = smp
-                .kernel_bmu
-                .filter(|(_, e)| *e == kernel.epoch())
-                .map(|(b, _)| b);
-            let bmu = kernel.train(&input, &target, hint);
-            smp.kernel_bmu = Some((bmu, kernel.epoch()));
+            train_kernel_on(kernel, &mut samples[i], dim, bands, &mut input, &mut target);
         }
     }
     let frozen = freeze_kernel(kernel, dim, bands);

@@ -22,7 +22,12 @@ fn main() -> anyhow::Result<()> {
     let t_ref = t.elapsed().as_secs_f64();
     let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
     for gather in [GatherMode::Base, GatherMode::Kernel, GatherMode::Rays] {
-        let config = SolveConfig { kernel_cells: cells, shading_cells: cells / 2, gather, ..SolveConfig::default() };
+        let config = SolveConfig {
+            kernel_cells: cells,
+            shading_cells: cells / 2,
+            gather,
+            ..SolveConfig::default()
+        };
         let t = std::time::Instant::now();
         let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
         let emitters = Emitters::new(&domain);
@@ -33,7 +38,17 @@ fn main() -> anyhow::Result<()> {
             if !scene.faces[p.face as usize].emission.is_zero() {
                 continue;
             }
-            let g = radiosity_at(&domain, &trained, &emitters, &config, p.point, p.normal, p.face, i as u64, &mut scratch);
+            let g = radiosity_at(
+                &domain,
+                &trained,
+                &emitters,
+                &config,
+                p.point,
+                p.normal,
+                p.face,
+                i as u64,
+                &mut scratch,
+            );
             for b in 0..3 {
                 num += (g.radiosity[b] - r.mean[b]).powi(2);
                 den += r.mean[b].powi(2);

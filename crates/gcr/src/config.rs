@@ -56,6 +56,42 @@ pub enum StrengthFrom {
     Kernel,
 }
 
+/// How the kernel network's output weights are obtained.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum OutputFit {
+    /// The dissertation: the delta rule (eq. 2.8) on area-uniform ray samples (fig. B.2), with
+    /// resampling of critical regions (sec. 2.5).
+    DeltaRule,
+    /// Shot rays ([`crate::shooting`]) and, at every FEM step, the output weights replaced by the
+    /// L2 projection of K·s onto the cells' Gaussians ([`crate::projection`]). Default: measured
+    /// far more accurate (docs/gcr-algorithm.md).
+    #[default]
+    Projection,
+}
+
+impl OutputFit {
+    /// The name used on the command line and in metrics.
+    pub fn name(self) -> &'static str {
+        match self {
+            OutputFit::DeltaRule => "delta-rule",
+            OutputFit::Projection => "projection",
+        }
+    }
+}
+
+impl std::str::FromStr for OutputFit {
+    type Err = ConfigError;
+    fn from_str(s: &str) -> Result<Self, ConfigError> {
+        match s {
+            "delta-rule" => Ok(OutputFit::DeltaRule),
+            "projection" => Ok(OutputFit::Projection),
+            other => Err(ConfigError::Invalid(format!(
+                "unknown output fit `{other}` (expected delta-rule or projection)"
+            ))),
+        }
+    }
+}
+
 /// A setting outside its valid range.
 #[derive(Debug, Error, PartialEq)]
 pub enum ConfigError {
@@ -97,6 +133,10 @@ pub struct SolveConfig {
     pub gather_samples: GatherSamples,
     /// Fraction of new samples drawn in critical regions (the rest uniformly), sec. 2.5.
     pub resample_critical_fraction: f64,
+    /// How the kernel network's output weights are obtained.
+    pub output_fit: OutputFit,
+    /// Relative pivot below which the projection rejects a kernel cell as nearly dependent.
+    pub projection_rejection: f64,
 }
 
 impl Default for SolveConfig {
@@ -117,6 +157,8 @@ impl Default for SolveConfig {
             gather: GatherMode::Rays,
             gather_samples: GatherSamples::default(),
             resample_critical_fraction: 0.5,
+            output_fit: OutputFit::default(),
+            projection_rejection: 1e-6,
         }
     }
 }
@@ -163,6 +205,12 @@ impl SolveConfig {
             return bad(format!(
                 "critical resampling fraction {} (expected 0 to 1)",
                 self.resample_critical_fraction
+            ));
+        }
+        if !(self.projection_rejection > 0.0 && self.projection_rejection < 1.0) {
+            return bad(format!(
+                "projection rejection {} (expected in (0, 1))",
+                self.projection_rejection
             ));
         }
         if self.gather_samples.direct + self.gather_samples.indirect > 1_000_000 {

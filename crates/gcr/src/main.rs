@@ -2,7 +2,7 @@
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
-use gcr::config::{GatherMode, SolveConfig};
+use gcr::config::{GatherMode, OutputFit, SolveConfig};
 use gcr::domain::Domain;
 use gcr::gather::Emitters;
 use gcr::output::tonemap::Exposure;
@@ -47,6 +47,10 @@ enum Command {
         /// Output gather: base, kernel or rays.
         #[arg(long, default_value = "rays")]
         gather: GatherMode,
+        /// Kernel output layer: `projection` (Galerkin projection of K·s on shot rays) or
+        /// `delta-rule` (the dissertation's eq. 2.8).
+        #[arg(long, default_value = "projection")]
+        output_fit: OutputFit,
         /// PNG image from the scene's camera.
         #[arg(long)]
         image: Option<PathBuf>,
@@ -93,6 +97,7 @@ fn run() -> Result<()> {
             time_budget,
             seed,
             gather,
+            output_fit,
             image,
             mesh,
             ply,
@@ -107,6 +112,7 @@ fn run() -> Result<()> {
                 time_budget,
                 seed,
                 gather,
+                output_fit,
                 ..SolveConfig::default()
             };
             config.validate()?;

@@ -48,6 +48,10 @@ pub struct Metrics {
     pub rays_traced: u64,
     /// FEM steps executed.
     pub fem_steps: usize,
+    /// Light bounces propagated through projected kernels (`--output-fit projection`).
+    pub bounces: usize,
+    /// Kernel output layer: `delta-rule` or `projection`.
+    pub output_fit: String,
     /// Kernel training steps executed.
     pub training_steps: u64,
     /// Base components rejected as nearly dependent in the last FEM step.

@@ -2,7 +2,7 @@
 //! shading network on the receivers, run a FEM step every N kernel insertions and update every
 //! sample's emitting strength, resample critical regions, stop at the budget.
 
-use crate::config::{SolveConfig, StrengthFrom};
+use crate::config::{OutputFit, SolveConfig, StrengthFrom};
 use crate::domain::{Domain, Ray};
 use crate::element::{Bands, MAX_BANDS};
 use crate::fem::{
@@ -11,7 +11,9 @@ use crate::fem::{
 };
 use crate::metrics::Metrics;
 use crate::network::GrowingNetwork;
+use crate::projection::KernelProjection;
 use crate::shading::ShadingGeometry;
+use crate::shooting::SenderDensity;
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -29,6 +31,8 @@ pub struct Sample {
     pub kernel_bmu: Option<(usize, u64)>,
     /// Cached best-matching unit in the shading network.
     pub shading_bmu: Option<(usize, u64)>,
+    /// `1/p_x(x)` of a shot ray ([`crate::shooting`]); 0 for area-uniform samples.
+    pub inv_px: f64,
 }
 
 /// What the observer sees during a solve.
@@ -170,6 +174,7 @@ pub fn train(
         bands: domain.bands(),
         seed: config.seed,
         threads: rayon::current_num_threads(),
+        output_fit: config.output_fit.name().into(),
         ..Default::default()
     };
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
@@ -184,25 +189,24 @@ pub fn train(
     };
     let scene_surface = SceneSurface::new(domain.elements(), 0.05 * domain.diagonal());
 
-    // Initial sample set: uniform over the ray domain, s = E (the first shot, fig. 3.1).
+    // Initial sample set, s = E (the first shot, fig. 3.1): area-uniform over the ray domain
+    // (fig. B.2) for the delta rule, shot rays for the projection.
     let t0 = Instant::now();
     let initial = (config.samples_per_cell * 20).max(500);
-    let params: Vec<Vec<f64>> = (0..initial)
-        .map(|_| (0..pd).map(|_| rng.random::<f64>()).collect())
-        .collect();
-    let mut samples: Vec<Sample> = params
-        .par_iter()
-        .map(|u| {
-            let ray = domain.ray(u);
-            Sample {
-                s: ray.emission_x,
-                ray,
-                kernel_bmu: None,
-                shading_bmu: None,
-            }
-        })
-        .collect();
-    metrics.rays_traced += initial as u64;
+    let density = SenderDensity::new(domain);
+    let mut shots = 0u64;
+    let mut samples: Vec<Sample> = Vec::new();
+    add_samples(
+        domain,
+        config,
+        &density,
+        &mut rng,
+        initial,
+        None,
+        &mut samples,
+        &mut shots,
+    );
+    metrics.rays_traced += shots.max(initial as u64);
     metrics.seconds.sampling += t0.elapsed().as_secs_f64();
 
     let mut input = Vec::with_capacity(2 * dim);
@@ -210,6 +214,7 @@ pub fn train(
     let mut shading_in = Vec::with_capacity(dim);
     let mut shading_target = Vec::with_capacity(dim);
     let mut last_fem_insertions = 0u64;
+    let mut last_projected_cells = 0usize;
     let mut fem: Option<FemSolution> = None;
     let mut steps = 0u64;
     let mut progress = Progress {
@@ -265,62 +270,96 @@ pub fn train(
         t_shading += ts.elapsed().as_secs_f64();
         steps += batch as u64;
 
-        // Grow the sample set with the network: resample critical regions (sec. 2.5).
+        // Grow the sample set with the network: resample critical regions (sec. 2.5) or shoot.
         let wanted = config.samples_per_cell * kernel.cell_count().max(1);
         if samples.len() < wanted.max(initial) {
-            let tr = Instant::now();
             let add = (wanted.max(initial) - samples.len()).min(512);
-            let mut accepted: Vec<Vec<f64>> = Vec::with_capacity(add);
-            let mut tries = 0;
-            let critical_wanted = (add as f64 * config.resample_critical_fraction) as usize;
-            while accepted.len() < critical_wanted && tries < 20 * add {
-                tries += 1;
-                let u: Vec<f64> = (0..pd).map(|_| rng.random::<f64>()).collect();
-                domain.endpoints(&u).input(&mut input);
-                input.truncate(2 * dim);
-                if kernel.is_critical(&input[..]) {
-                    accepted.push(u);
-                }
-            }
-            while accepted.len() < add {
-                accepted.push((0..pd).map(|_| rng.random::<f64>()).collect());
-            }
-            metrics.seconds.resampling += tr.elapsed().as_secs_f64();
-            let t0 = Instant::now();
             let current = fem.as_ref();
-            let new: Vec<Sample> = accepted
-                .par_iter()
-                .map_init(Vec::new, |scratch, u| {
-                    let ray = domain.ray(u);
-                    let s = match (config.strength_from, current) {
-                        (StrengthFrom::Kernel, Some(f)) => {
-                            kernel_strength(&ray, &f.kernel, &f.sender)
-                        }
-                        _ => strength(&ray, current, scratch),
-                    };
-                    Sample {
-                        ray,
-                        s,
-                        kernel_bmu: None,
-                        shading_bmu: None,
+            if config.output_fit == OutputFit::Projection {
+                let t0 = Instant::now();
+                let before = shots;
+                add_samples(
+                    domain,
+                    config,
+                    &density,
+                    &mut rng,
+                    add,
+                    current,
+                    &mut samples,
+                    &mut shots,
+                );
+                metrics.rays_traced += shots - before;
+                metrics.seconds.sampling += t0.elapsed().as_secs_f64();
+            } else {
+                let tr = Instant::now();
+                let mut accepted: Vec<Vec<f64>> = Vec::with_capacity(add);
+                let mut tries = 0;
+                let critical_wanted = (add as f64 * config.resample_critical_fraction) as usize;
+                while accepted.len() < critical_wanted && tries < 20 * add {
+                    tries += 1;
+                    let u: Vec<f64> = (0..pd).map(|_| rng.random::<f64>()).collect();
+                    domain.endpoints(&u).input(&mut input);
+                    input.truncate(2 * dim);
+                    if kernel.is_critical(&input[..]) {
+                        accepted.push(u);
                     }
-                })
-                .collect();
-            metrics.rays_traced += new.len() as u64;
-            samples.extend(new);
-            metrics.seconds.sampling += t0.elapsed().as_secs_f64();
+                }
+                while accepted.len() < add {
+                    accepted.push((0..pd).map(|_| rng.random::<f64>()).collect());
+                }
+                metrics.seconds.resampling += tr.elapsed().as_secs_f64();
+                let t0 = Instant::now();
+                let new: Vec<Sample> = accepted
+                    .par_iter()
+                    .map_init(Vec::new, |scratch, u| {
+                        let ray = domain.ray(u);
+                        Sample {
+                            s: initial_strength(&ray, config, current, scratch),
+                            ray,
+                            kernel_bmu: None,
+                            shading_bmu: None,
+                            inv_px: 0.0,
+                        }
+                    })
+                    .collect();
+                metrics.rays_traced += new.len() as u64;
+                samples.extend(new);
+                metrics.seconds.sampling += t0.elapsed().as_secs_f64();
+            }
         }
 
-        // FEM step every `fem_every` kernel insertions (sec. 4.4.1).
+        // FEM step every `fem_every` kernel insertions (sec. 4.4.1). With the projected output
+        // layer a step also needs the kernel to have grown by a quarter since the last one: its
+        // Gram matrix costs O(cells²), so the steps thin out geometrically and their total cost
+        // stays a small multiple of the last one.
+        let projection = config.output_fit == OutputFit::Projection;
         if kernel.insertions() - last_fem_insertions >= config.fem_every as u64
             && shading.cell_count() >= 3
+            && (!projection || kernel.cell_count() * 4 >= last_projected_cells * 5)
         {
             last_fem_insertions = kernel.insertions();
+            last_projected_cells = kernel.cell_count();
             let tf = Instant::now();
-            let frozen = freeze_kernel(kernel, dim, bands);
+            let frozen = if projection {
+                let (frozen, _, bounces) = propagate(
+                    kernel,
+                    domain,
+                    config,
+                    &mut samples,
+                    shots,
+                    &scene_surface,
+                    TRAINING_BOUNCES,
+                );
+                metrics.bounces += bounces;
+                frozen
+            } else {
+                freeze_kernel(kernel, dim, bands)
+            };
             let base = Base::new(freeze_shading(shading, domain, config), fem_settings);
             let sol = fem_step(base, &frozen, &scene_surface);
-            update_strengths(&mut samples, &sol, &frozen, config.strength_from);
+            if !projection || config.strength_from == StrengthFrom::Base {
+                update_strengths(&mut samples, &sol, &frozen, config.strength_from);
+            }
             fem = Some(sol);
             metrics.fem_steps += 1;
             metrics.seconds.fem += tf.elapsed().as_secs_f64();
@@ -342,21 +381,40 @@ pub fn train(
     kernel.set_growing(false);
     shading.set_growing(false);
     let tf = Instant::now();
-    for _ in 0..config.final_fem_steps.max(1) {
-        let frozen = freeze_kernel(kernel, dim, bands);
+    let (frozen, sender) = if config.output_fit == OutputFit::Projection {
+        // One Gram matrix, then bounces until the strengths settle (each bounce is cheap).
+        let (frozen, sender, bounces) = propagate(
+            kernel,
+            domain,
+            config,
+            &mut samples,
+            shots,
+            &scene_surface,
+            FINAL_BOUNCES,
+        );
+        metrics.bounces += bounces;
         let base = Base::new(freeze_shading(shading, domain, config), fem_settings);
-        let sol = fem_step(base, &frozen, &scene_surface);
-        update_strengths(&mut samples, &sol, &frozen, config.strength_from);
-        fem = Some(sol);
+        fem = Some(fem_step(base, &frozen, &scene_surface));
         metrics.fem_steps += 1;
-        // Re-learn the new targets without growing: a sweep over the samples.
-        for _ in 0..samples.len() {
-            let i = rng.random_range(0..samples.len());
-            train_kernel_on(kernel, &mut samples[i], dim, bands, &mut input, &mut target);
+        (frozen, sender)
+    } else {
+        for _ in 0..config.final_fem_steps.max(1) {
+            let frozen = freeze_kernel(kernel, dim, bands);
+            let base = Base::new(freeze_shading(shading, domain, config), fem_settings);
+            let sol = fem_step(base, &frozen, &scene_surface);
+            update_strengths(&mut samples, &sol, &frozen, config.strength_from);
+            fem = Some(sol);
+            metrics.fem_steps += 1;
+            // Re-learn the new targets without growing: a sweep over the samples.
+            for _ in 0..samples.len() {
+                let i = rng.random_range(0..samples.len());
+                train_kernel_on(kernel, &mut samples[i], dim, bands, &mut input, &mut target);
+            }
         }
-    }
-    let frozen = freeze_kernel(kernel, dim, bands);
-    let sender = sender_integrals(&frozen, &scene_surface, fem_settings.support_tolerance);
+        let frozen = freeze_kernel(kernel, dim, bands);
+        let sender = sender_integrals(&frozen, &scene_surface, fem_settings.support_tolerance);
+        (frozen, sender)
+    };
     metrics.seconds.fem += tf.elapsed().as_secs_f64();
     metrics.seconds.kernel_training = t_kernel;
     metrics.seconds.shading_training = t_shading;
@@ -373,6 +431,128 @@ pub fn train(
         fem,
         samples,
         metrics,
+    }
+}
+
+/// Bounces per projection during training.
+const TRAINING_BOUNCES: usize = 4;
+/// Bounce cap after training (reached only when ρ is close to 1).
+const FINAL_BOUNCES: usize = 200;
+/// Relative change of the total strength below which the bounces stop.
+const BOUNCE_TOLERANCE: f64 = 1e-5;
+
+/// Freezes the kernel network, projects K·s onto its Gaussians ([`crate::projection`]) and
+/// iterates `s ← E + B_refl(s)` with the kernel collection (one light bounce per iteration) until
+/// the total strength changes by less than [`BOUNCE_TOLERANCE`] or `max_bounces` is reached.
+/// Returns the projected kernel, its sender integrals and the bounces run.
+fn propagate(
+    kernel: &impl GrowingNetwork,
+    domain: &Domain,
+    config: &SolveConfig,
+    samples: &mut [Sample],
+    shots: u64,
+    scene: &SceneSurface,
+    max_bounces: usize,
+) -> (KernelCells, Vec<f64>, usize) {
+    let mut frozen = freeze_kernel(kernel, domain.dim(), domain.bands());
+    let sender = sender_integrals(&frozen, scene, PROJECTION_TOLERANCE);
+    let projection = KernelProjection::new(
+        &frozen,
+        scene,
+        PROJECTION_TOLERANCE,
+        config.projection_rejection,
+    );
+    let reflectance = |f| domain.reflectance(f);
+    let total =
+        |samples: &[Sample]| -> f64 { samples.iter().map(|s| s.s.iter().sum::<f64>()).sum() };
+    let mut before = total(samples);
+    let mut bounces = 0;
+    while bounces < max_bounces {
+        projection.fit(&mut frozen, samples, shots, &reflectance);
+        samples.par_iter_mut().for_each(|smp| {
+            smp.s = kernel_strength(&smp.ray, &frozen, &sender);
+        });
+        bounces += 1;
+        let after = total(samples);
+        let change = (after - before).abs() / after.abs().max(1e-300);
+        before = after;
+        if change < BOUNCE_TOLERANCE {
+            break;
+        }
+    }
+    // The weights that go with the final strengths.
+    projection.fit(&mut frozen, samples, shots, &reflectance);
+    (frozen, sender, bounces)
+}
+
+/// Support cut-off of the projection's Gaussians.
+const PROJECTION_TOLERANCE: f64 = 1e-9;
+
+/// A new sample's strength s = E + B_refl from the current solution.
+fn initial_strength(
+    ray: &Ray,
+    config: &SolveConfig,
+    current: Option<&FemSolution>,
+    scratch: &mut Vec<u32>,
+) -> Bands {
+    match (config.strength_from, current) {
+        (StrengthFrom::Kernel, Some(f)) => kernel_strength(ray, &f.kernel, &f.sender),
+        _ => strength(ray, current, scratch),
+    }
+}
+
+/// Appends `count` samples: shot rays for the projection (every shot counted in `shots`, also
+/// those that leave the scene), area-uniform rays for the delta rule.
+fn add_samples(
+    domain: &Domain,
+    config: &SolveConfig,
+    density: &SenderDensity,
+    rng: &mut ChaCha8Rng,
+    count: usize,
+    current: Option<&FemSolution>,
+    samples: &mut Vec<Sample>,
+    shots: &mut u64,
+) {
+    let seeds: Vec<u64> = (0..count).map(|_| rng.random()).collect();
+    let new: Vec<(u64, Option<Sample>)> = seeds
+        .par_iter()
+        .map_init(Vec::new, |scratch, &seed| {
+            let mut r = ChaCha8Rng::seed_from_u64(seed);
+            match config.output_fit {
+                OutputFit::Projection => {
+                    // Shoot until a ray lands (open scenes lose some).
+                    for tries in 1..=64u64 {
+                        if let Some(shot) = density.shoot(domain, &mut r) {
+                            let smp = Sample {
+                                s: initial_strength(&shot.ray, config, current, scratch),
+                                ray: shot.ray,
+                                kernel_bmu: None,
+                                shading_bmu: None,
+                                inv_px: shot.inv_px,
+                            };
+                            return (tries, Some(smp));
+                        }
+                    }
+                    (64, None)
+                }
+                OutputFit::DeltaRule => {
+                    let u: Vec<f64> = (0..domain.param_dim()).map(|_| r.random()).collect();
+                    let ray = domain.ray(&u);
+                    let smp = Sample {
+                        s: initial_strength(&ray, config, current, scratch),
+                        ray,
+                        kernel_bmu: None,
+                        shading_bmu: None,
+                        inv_px: 0.0,
+                    };
+                    (1, Some(smp))
+                }
+            }
+        })
+        .collect();
+    for (tries, smp) in new {
+        *shots += tries;
+        samples.extend(smp);
     }
 }
 

@@ -1,6 +1,6 @@
 //! Settings of a solve, with the dissertation's defaults (fig. 4.17, sec. 4.4.1) and validation.
 
-use crate::fem::Transfer;
+use crate::fem::{BaseDomain, Transfer};
 use crate::gather::GatherSamples;
 use crate::shading::Breaking;
 use thiserror::Error;
@@ -123,6 +123,9 @@ pub struct SolveConfig {
     pub transfer: Transfer,
     /// Flat closed forms where the criterion allows (off: exact element sums everywhere).
     pub closed_forms: bool,
+    /// Where the base Gaussians are integrated: the scene S (default) or the shading
+    /// network's triangles Ŝ (the dissertation).
+    pub base_domain: BaseDomain,
     /// The breaking operator of the shading network.
     pub breaking: Breaking,
     /// Source of the sample strengths after each FEM step.
@@ -152,6 +155,7 @@ impl Default for SolveConfig {
             lambda: 300,
             transfer: Transfer::Direct,
             closed_forms: true,
+            base_domain: BaseDomain::Scene,
             breaking: Breaking::default(),
             strength_from: StrengthFrom::Kernel,
             gather: GatherMode::Rays,

@@ -190,6 +190,29 @@ impl Domain<'_> {
         }
     }
 
+    /// Unit normals of [`Domain::elements`], in the same order (Flatland normals in z = 0).
+    pub fn element_normals(&self) -> Vec<DVec3> {
+        match self {
+            Domain::ThreeD(k) => k
+                .scene
+                .faces
+                .iter()
+                .filter(|f| f.area > 0.0)
+                .map(|f| f.normal)
+                .collect(),
+            Domain::Flat(k) => k.scene.segments.iter().map(|s| d3(s.normal)).collect(),
+        }
+    }
+
+    /// The scene surface S indexed for Gaussian integrals (cells of 5 % of the diagonal).
+    pub fn scene_surface(&self) -> crate::fem::SceneSurface {
+        crate::fem::SceneSurface::new(
+            self.elements(),
+            self.element_normals(),
+            0.05 * self.diagonal(),
+        )
+    }
+
     /// Emission of face (segment) `face`.
     pub fn emission(&self, face: u32) -> Bands {
         match self {

@@ -27,6 +27,7 @@ use crate::shading::ShadingGeometry;
 use crate::spatial::{BoxGrid, support_radius};
 use glam::DVec3;
 use rayon::prelude::*;
+use std::sync::Arc;
 
 impl Element {
     /// ∫_element exp(−a|x − c|²) dx, exactly (erf for segments, Owen's T for triangles).
@@ -64,30 +65,72 @@ impl KernelCells {
     }
 }
 
-/// The true scene surface S, indexed for support queries (the sender integral c_o).
+/// The true scene surface S, indexed for support queries (the sender integral c_o, and the
+/// base's integrals when it lives on S, [`BaseDomain::Scene`]).
 #[derive(Clone, Debug)]
 pub struct SceneSurface {
     /// Elements of S.
     pub elements: Vec<Element>,
+    /// Unit normal of each element.
+    pub normals: Vec<DVec3>,
     grid: BoxGrid,
 }
 
 impl SceneSurface {
-    /// Indexes `elements` with buckets of about `cell` (typically a kernel width).
-    pub fn new(elements: Vec<Element>, cell: f64) -> Self {
+    /// Indexes `elements` (with their unit `normals`) with buckets of about `cell` (typically
+    /// a kernel width).
+    pub fn new(elements: Vec<Element>, normals: Vec<DVec3>, cell: f64) -> Self {
+        assert_eq!(elements.len(), normals.len(), "one normal per element");
         let grid = BoxGrid::new(elements.iter().map(Element::bounds).collect(), cell);
-        Self { elements, grid }
+        Self {
+            elements,
+            normals,
+            grid,
+        }
     }
 
     /// ∫_S exp(−a|x − c|²) dx over the elements within the support (relative cut-off `tol`).
     pub fn gaussian_integral(&self, c: DVec3, a: f64, tol: f64, scratch: &mut Vec<u32>) -> f64 {
+        self.masked_gaussian_integral(c, a, tol, &[], 0.0, scratch)
+    }
+
+    /// ∫ exp(−a|x − c|²) dx over the elements of S that face like every normal in `facing`
+    /// (element normal · n > `cos_min`; a zero n accepts every element).
+    pub fn masked_gaussian_integral(
+        &self,
+        c: DVec3,
+        a: f64,
+        tol: f64,
+        facing: &[DVec3],
+        cos_min: f64,
+        scratch: &mut Vec<u32>,
+    ) -> f64 {
         let r = support_radius(1.0 / a.sqrt(), tol);
         self.grid.query_ball(c, r, scratch);
         scratch
             .iter()
+            .filter(|&&e| {
+                let ne = self.normals[e as usize];
+                facing
+                    .iter()
+                    .all(|n| *n == DVec3::ZERO || ne.dot(*n) > cos_min)
+            })
             .map(|&e| self.elements[e as usize].gaussian_integral(c, a))
             .sum()
     }
+}
+
+/// Where the base Gaussians Λ_k are integrated (and where they live).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BaseDomain {
+    /// On the scene's own elements S, each Λ_k restricted to the elements that face like its
+    /// cell's learned normal (within the breaking angle). Beyond the dissertation: a single
+    /// shading sheet cannot follow a closed scene (sec. 4.4.2, fig. 4.18), but the scene is
+    /// there to integrate over, exactly.
+    #[default]
+    Scene,
+    /// On the shading network's own triangles Ŝ (the dissertation, sec. 3.2).
+    Shading,
 }
 
 /// Which sender integral multiplies each kernel cell (module docs).
@@ -118,6 +161,10 @@ pub struct FemSettings {
     pub transfer: Transfer,
     /// Use the flat closed forms at all (off: always the exact element sums).
     pub closed_forms: bool,
+    /// Where the base is integrated.
+    pub base_domain: BaseDomain,
+    /// With [`BaseDomain::Scene`]: Λ_k lives on the elements whose normal · n_k exceeds this.
+    pub facing_cos: f64,
 }
 
 impl Default for FemSettings {
@@ -127,9 +174,11 @@ impl Default for FemSettings {
             roughness_threshold: 0.4,
             depth_threshold: 1,
             support_tolerance: 1e-9,
-            rejection: 1e-9,
+            rejection: 1e-6,
             transfer: Transfer::Direct,
             closed_forms: true,
+            base_domain: BaseDomain::Scene,
+            facing_cos: 50f64.to_radians().cos(),
         }
     }
 }
@@ -151,18 +200,43 @@ pub struct Base {
     centre_grid: BoxGrid,
     max_reach: f64,
     settings: FemSettings,
+    surface: Arc<SceneSurface>,
 }
 
 impl Base {
-    /// Prepares the base of `geo` under `settings`.
-    pub fn new(geo: ShadingGeometry, settings: FemSettings) -> Self {
+    /// Prepares the base of `geo` under `settings`; `surface` is the scene S (used with
+    /// [`BaseDomain::Scene`]).
+    pub fn new(geo: ShadingGeometry, settings: FemSettings, surface: Arc<SceneSurface>) -> Self {
         let a: Vec<f64> = geo.widths.iter().map(|d| 1.0 / (d * d)).collect();
         let flat = (0..geo.len())
-            .map(|k| {
-                settings.closed_forms
-                    && geo.fuzzy_roughness[k] < settings.roughness_threshold
-                    && geo.depth[k] >= settings.depth_threshold
-                    && geo.normals[k] != DVec3::ZERO
+            .into_par_iter()
+            .map_init(Vec::new, |scratch, k| {
+                if !settings.closed_forms || geo.normals[k] == DVec3::ZERO {
+                    return false;
+                }
+                match settings.base_domain {
+                    // The criterion of sec. 3.9.4 on the shading network's own geometry.
+                    BaseDomain::Shading => {
+                        geo.fuzzy_roughness[k] < settings.roughness_threshold
+                            && geo.depth[k] >= settings.depth_threshold
+                    }
+                    // On S the question "does Λ_k see a whole plane?" has an exact answer: its
+                    // norm over its faces equals the plane value. Only then is the closed form
+                    // consistent with the exact integrals of its neighbours.
+                    BaseDomain::Scene => {
+                        let a2 = 2.0 * a[k];
+                        let exact = surface.masked_gaussian_integral(
+                            geo.centres[k],
+                            a2,
+                            settings.support_tolerance,
+                            &[geo.normals[k]],
+                            settings.facing_cos,
+                            scratch,
+                        );
+                        let plane = integrals::flat(a2, 0.0, settings.surface_dim);
+                        (exact - plane).abs() <= FLAT_AGREEMENT * plane
+                    }
+                }
             })
             .collect();
         let elements: Vec<Element> = (0..geo.simplices.len())
@@ -193,6 +267,7 @@ impl Base {
             centre_grid,
             max_reach,
             settings,
+            surface,
         }
     }
 
@@ -206,9 +281,23 @@ impl Base {
         self.geo.is_empty()
     }
 
-    /// ∫_Ŝ Λ_k(x) · s·exp(−b|x − w|²) dx: the product rule (MATH.md §2) turns the integrand into
-    /// one Gaussian, integrated over k's tangent plane when k is flat, else over Ŝ exactly.
+    /// ∫ Λ_k(x) · exp(−b|x − w|²) dx over k's domain: the product rule (MATH.md §2) turns the
+    /// integrand into one Gaussian, integrated over k's tangent plane when k is flat, else
+    /// exactly over Ŝ or over the part of S that faces like k ([`BaseDomain`]).
     pub fn product_integral(&self, k: usize, w: DVec3, b: f64, scratch: &mut Vec<u32>) -> f64 {
+        self.product_integral_on(k, None, w, b, scratch)
+    }
+
+    /// [`Base::product_integral`] on the common domain of cells k and `other` (the Gram entry
+    /// ⟨Λ_k|Λ_other⟩ when w, b are other's centre and inverse squared width).
+    fn product_integral_on(
+        &self,
+        k: usize,
+        other: Option<usize>,
+        w: DVec3,
+        b: f64,
+        scratch: &mut Vec<u32>,
+    ) -> f64 {
         let (a, p) = (self.a[k], self.geo.centres[k]);
         let ab = a + b;
         let scale = (-(a * b / ab) * p.distance_squared(w)).exp();
@@ -216,17 +305,37 @@ impl Base {
             return 0.0;
         }
         let c = (a * p + b * w) / ab;
-        if self.flat[k] {
+        if self.flat[k] && other.is_none_or(|q| self.flat[q]) {
             let h = (c - p).dot(self.geo.normals[k]);
-            scale * integrals::flat(ab, h, self.settings.surface_dim)
-        } else {
-            let r = support_radius(1.0 / ab.sqrt(), self.settings.support_tolerance);
-            self.element_grid.query_ball(c, r, scratch);
-            scale
-                * scratch
-                    .iter()
-                    .map(|&e| self.elements[e as usize].gaussian_integral(c, ab))
-                    .sum::<f64>()
+            return scale * integrals::flat(ab, h, self.settings.surface_dim);
+        }
+        let tol = self.settings.support_tolerance;
+        match self.settings.base_domain {
+            BaseDomain::Scene => {
+                let nk = self.geo.normals[k];
+                let facing = match other {
+                    Some(q) => [nk, self.geo.normals[q]],
+                    None => [nk, DVec3::ZERO],
+                };
+                scale
+                    * self.surface.masked_gaussian_integral(
+                        c,
+                        ab,
+                        tol,
+                        &facing,
+                        self.settings.facing_cos,
+                        scratch,
+                    )
+            }
+            BaseDomain::Shading => {
+                let r = support_radius(1.0 / ab.sqrt(), tol);
+                self.element_grid.query_ball(c, r, scratch);
+                scale
+                    * scratch
+                        .iter()
+                        .map(|&e| self.elements[e as usize].gaussian_integral(c, ab))
+                        .sum::<f64>()
+            }
         }
     }
 
@@ -253,7 +362,13 @@ impl Base {
                         .map(|q| {
                             (
                                 q,
-                                self.product_integral(p, self.geo.centres[q], self.a[q], scratch),
+                                self.product_integral_on(
+                                    p,
+                                    Some(q),
+                                    self.geo.centres[q],
+                                    self.a[q],
+                                    scratch,
+                                ),
                             )
                         })
                         .filter(|(_, g)| *g != 0.0)
@@ -272,17 +387,43 @@ impl Base {
     }
 
     fn may_overlap(&self, p: usize, q: usize) -> bool {
+        let facing = self.geo.normals[p].dot(self.geo.normals[q]) > 0.0;
         p == q
-            || (self.geo.component[p] == self.geo.component[q]
-                && self.geo.normals[p].dot(self.geo.normals[q]) > 0.0)
+            || match self.settings.base_domain {
+                // Two cells whose normals differ by up to twice the facing angle (100° by
+                // default, so even opposed-ish blends at corners) can share a face: only the
+                // masked integral knows. Zeroing such entries made G inconsistent with u.
+                BaseDomain::Scene => true,
+                BaseDomain::Shading => self.geo.component[p] == self.geo.component[q] && facing,
+            }
     }
 
-    /// Evaluates Σ_k coeff_k Λ_k(x) with the support cut-off.
-    pub fn evaluate(&self, coeff: &[Bands], x: DVec3, scratch: &mut Vec<u32>) -> Bands {
+    /// Whether Λ_k is defined at a surface point with unit normal `normal`.
+    fn lives_on(&self, k: usize, normal: DVec3) -> bool {
+        let nk = self.geo.normals[k];
+        self.settings.base_domain == BaseDomain::Shading
+            || nk == DVec3::ZERO
+            || normal == DVec3::ZERO
+            || nk.dot(normal) > self.settings.facing_cos
+    }
+
+    /// Evaluates Σ_k coeff_k Λ_k(x) with the support cut-off at a surface point x with unit
+    /// normal `normal` (with [`BaseDomain::Scene`] only the Gaussians that live on surfaces
+    /// facing like `normal` contribute).
+    pub fn evaluate(
+        &self,
+        coeff: &[Bands],
+        x: DVec3,
+        normal: DVec3,
+        scratch: &mut Vec<u32>,
+    ) -> Bands {
         self.cells_near(x, 0.0, scratch);
         let mut out = [0.0; MAX_BANDS];
         for &k in scratch.iter() {
             let k = k as usize;
+            if !self.lives_on(k, normal) {
+                continue;
+            }
             let g = (-self.a[k] * self.geo.centres[k].distance_squared(x)).exp();
             for band in 0..MAX_BANDS {
                 out[band] += coeff[k][band] * g;
@@ -309,9 +450,9 @@ pub struct FemSolution {
 }
 
 impl FemSolution {
-    /// B_refl(x) from the base (fig. 4.13a/b).
-    pub fn reflected_from_base(&self, x: DVec3, scratch: &mut Vec<u32>) -> Bands {
-        self.base.evaluate(&self.gamma, x, scratch)
+    /// B_refl(x) from the base (fig. 4.13a/b) at a surface point with unit normal `normal`.
+    pub fn reflected_from_base(&self, x: DVec3, normal: DVec3, scratch: &mut Vec<u32>) -> Bands {
+        self.base.evaluate(&self.gamma, x, normal, scratch)
     }
 }
 
@@ -343,12 +484,30 @@ pub fn reflected_from_kernel(kernel: &KernelCells, sender: &[f64], y: DVec3) -> 
     out
 }
 
+/// With [`BaseDomain::Scene`], a cell is integrated in closed form when its exact norm over its
+/// faces agrees with the whole-plane value to this relative tolerance.
+const FLAT_AGREEMENT: f64 = 1e-9;
+
+/// Smallest ‖Λ_k‖² on its domain, as a fraction of its whole-plane value, for a base Gaussian
+/// to be kept.
+const MIN_MASS_FRACTION: f64 = 0.01;
+
 /// Runs one FEM step: Gram matrix, orthonormalization, sender integrals, receiver projections,
 /// and the coefficients γ of the reflected radiosity in the base.
 pub fn fem_step(base: Base, kernel: &KernelCells, scene: &SceneSurface) -> FemSolution {
     let settings = base.settings;
     let n = base.len();
-    let gram = base.gram();
+    let mut gram = base.gram();
+    // A Gaussian with almost none of its mass on its domain (a shading cell far from Ŝ, say) has
+    // a tiny diagonal that the relative pivot test cannot see; its coefficient would be huge and
+    // it is evaluated where it has no support. Drop it: ‖Λ_k‖² below 1 % of the plane value.
+    for k in 0..n {
+        let plane = integrals::flat(2.0 * base.a[k], 0.0, settings.surface_dim);
+        if gram[(k, k)] < MIN_MASS_FRACTION * plane {
+            gram.row_mut(k).fill(0.0);
+            gram.column_mut(k).fill(0.0);
+        }
+    }
     let ortho = integrals::Orthonormal::new(&gram, settings.rejection);
 
     let sender = match settings.transfer {
@@ -402,10 +561,10 @@ pub fn fem_step(base: Base, kernel: &KernelCells, scene: &SceneSurface) -> FemSo
                 base.cells_near(kernel.wy[o], reach, &mut near);
                 for &q in &near {
                     let q = q as usize;
-                    // Zero rule of fig. 3.6: the sender lies behind the receiver's surface.
-                    if (kernel.wx[o] - base.geo.centres[q]).dot(base.geo.normals[q]) <= 0.0 {
-                        continue;
-                    }
+                    // No zero rule of fig. 3.6 (sender behind the receiver) here: the kernel
+                    // collection B_refl(y) = Σ_o v_o c_o g_o(y) sums every cell, and projected
+                    // weights cancel each other, so dropping cells made u inconsistent with G
+                    // (on wall-floor the base then missed B_refl by 135 %, and by 7 % without it).
                     let beta = base.product_integral(q, kernel.wy[o], b, &mut scratch);
                     for band in 0..MAX_BANDS {
                         acc[q][band] += kernel.v[o][band] * sender[o] * beta;
@@ -497,7 +656,17 @@ mod tests {
             Breaking::default(),
             |_, _, _| false,
         );
-        Base::new(geo, settings)
+        // The scene: the grid's plane (a big triangle under it).
+        let floor = Element::Triangle([
+            DVec3::new(-100.0, -100.0, 0.0),
+            DVec3::new(100.0, -100.0, 0.0),
+            DVec3::new(0.0, 150.0, 0.0),
+        ]);
+        Base::new(
+            geo,
+            settings,
+            Arc::new(SceneSurface::new(vec![floor], vec![DVec3::Z], 2.0)),
+        )
     }
 
     #[test]
@@ -541,7 +710,7 @@ mod tests {
             DVec3::new(50.0, -50.0, 4.0),
             DVec3::new(0.0, 80.0, 4.0),
         ]);
-        let scene = SceneSurface::new(vec![sender_plane], 2.0);
+        let scene = SceneSurface::new(vec![sender_plane], vec![DVec3::NEG_Z], 2.0);
         let sol = fem_step(base, &kernel, &scene);
         assert!(
             sol.rejected < 256 / 8,
@@ -556,7 +725,7 @@ mod tests {
             DVec3::new(3.0, 4.5, 0.0),
             DVec3::new(5.0, 3.0, 0.0),
         ] {
-            let from_base = sol.reflected_from_base(p, &mut scratch);
+            let from_base = sol.reflected_from_base(p, DVec3::Z, &mut scratch);
             let direct = reflected_from_kernel(&kernel, &sol.sender, p);
             for b in 0..3 {
                 assert!(

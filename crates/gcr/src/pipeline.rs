@@ -35,7 +35,7 @@ pub fn radiosity_at(
         out
     };
     match config.gather {
-        GatherMode::Base => reflected(trained.fem.reflected_from_base(y, scratch)),
+        GatherMode::Base => reflected(trained.fem.reflected_from_base(y, n, scratch)),
         GatherMode::Kernel => reflected(trained.reflected_kernel(y)),
         GatherMode::Rays => gather(
             domain,

@@ -234,7 +234,7 @@ mod tests {
         let bvh = SceneBvh::new(&scene);
         let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
         let elements = domain.elements();
-        let surface = SceneSurface::new(elements.clone(), 0.05 * domain.diagonal());
+        let surface = domain.scene_surface();
         let diag = domain.diagonal();
         // Cells near the surfaces: centres on face centroids, widths from narrow to wide.
         let centroid = |i: usize| match elements[i] {

@@ -18,6 +18,7 @@ use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// One training sample: a ray with its current emitting strength s = E(x) + B_refl(x).
@@ -137,13 +138,17 @@ pub fn freeze_shading(
     let mut centres = Vec::with_capacity(n);
     let mut widths = Vec::with_capacity(n);
     let mut normals = Vec::with_capacity(n);
+    let mut out = vec![0.0; dim];
     for i in 0..n {
-        let (c, o) = (net.centre(i), net.output(i));
+        // The learned normal at a cell is the network's output Ψ(ŵ_i) there, not the cell's
+        // weight v_i: the Gaussians overlap, so the weights of a smooth field oscillate.
+        let c = net.centre(i);
+        net.predict(c, &mut out);
         let mut p = DVec3::ZERO;
         let mut nrm = DVec3::ZERO;
         for a in 0..dim {
             p[a] = c[a];
-            nrm[a] = o[a];
+            nrm[a] = out[a];
         }
         centres.push(p);
         widths.push(net.width(i));
@@ -185,9 +190,10 @@ pub fn train(
         surface_dim: domain.surface_dim(),
         transfer: config.transfer,
         closed_forms: config.closed_forms,
+        base_domain: config.base_domain,
         ..FemSettings::default()
     };
-    let scene_surface = SceneSurface::new(domain.elements(), 0.05 * domain.diagonal());
+    let scene_surface = Arc::new(domain.scene_surface());
 
     // Initial sample set, s = E (the first shot, fig. 3.1): area-uniform over the ray domain
     // (fig. B.2) for the delta rule, shot rays for the projection.
@@ -355,7 +361,11 @@ pub fn train(
             } else {
                 freeze_kernel(kernel, dim, bands)
             };
-            let base = Base::new(freeze_shading(shading, domain, config), fem_settings);
+            let base = Base::new(
+                freeze_shading(shading, domain, config),
+                fem_settings,
+                scene_surface.clone(),
+            );
             let sol = fem_step(base, &frozen, &scene_surface);
             if !projection || config.strength_from == StrengthFrom::Base {
                 update_strengths(&mut samples, &sol, &frozen, config.strength_from);
@@ -393,14 +403,22 @@ pub fn train(
             FINAL_BOUNCES,
         );
         metrics.bounces += bounces;
-        let base = Base::new(freeze_shading(shading, domain, config), fem_settings);
+        let base = Base::new(
+            freeze_shading(shading, domain, config),
+            fem_settings,
+            scene_surface.clone(),
+        );
         fem = Some(fem_step(base, &frozen, &scene_surface));
         metrics.fem_steps += 1;
         (frozen, sender)
     } else {
         for _ in 0..config.final_fem_steps.max(1) {
             let frozen = freeze_kernel(kernel, dim, bands);
-            let base = Base::new(freeze_shading(shading, domain, config), fem_settings);
+            let base = Base::new(
+                freeze_shading(shading, domain, config),
+                fem_settings,
+                scene_surface.clone(),
+            );
             let sol = fem_step(base, &frozen, &scene_surface);
             update_strengths(&mut samples, &sol, &frozen, config.strength_from);
             fem = Some(sol);
@@ -560,7 +578,7 @@ fn add_samples(
 fn strength(ray: &Ray, fem: Option<&FemSolution>, scratch: &mut Vec<u32>) -> Bands {
     let mut s = ray.emission_x;
     if let Some(f) = fem {
-        let b = f.reflected_from_base(ray.x, scratch);
+        let b = f.reflected_from_base(ray.x, ray.nx, scratch);
         for k in 0..MAX_BANDS {
             s[k] += b[k].max(0.0);
         }

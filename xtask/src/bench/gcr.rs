@@ -1,9 +1,327 @@
-//! Benchmarks of the `gcr` group (filled in as the crates land).
+//! Benchmarks of the `gcr` group: time against error of `gcr solve` (every gather, several kernel
+//! budgets) beside the pointwise path tracer at several path counts, on the same probes of the
+//! same scenes against one high-accuracy reference, in one run. Writes `benchmarks-gcr.md` and one
+//! log-log plot per scene (`benchmarks-gcr-<scene>.png`).
 
 use crate::Ctx;
 use anyhow::Result;
+use gcr::config::{GatherMode, SolveConfig};
+use gcr::domain::Domain;
+use gcr::gather::Emitters;
+use gcr::pipeline::radiosity_at;
+use scene_sampler::{KernelSampler, Scene, SceneBvh, SurfacePoint};
+use std::fmt::Write;
+use std::time::Instant;
+
+/// One measured run: wall-clock seconds and relative L2 error at the probes.
+#[derive(Clone, Copy, Debug)]
+pub struct Point {
+    /// Budget label (cells or paths).
+    pub budget: usize,
+    /// Seconds, solve plus gather at the probes.
+    pub seconds: f64,
+    /// Relative L2 error of B at the non-emitting probes.
+    pub error: f64,
+}
+
+/// A solver's curve on one scene.
+#[derive(Clone, Debug)]
+pub struct Curve {
+    /// Solver label.
+    pub name: String,
+    /// Runs, by increasing budget.
+    pub points: Vec<Point>,
+}
+
+impl Curve {
+    /// Seconds to reach `target` error, interpolated log-log between the first run at or below
+    /// it and the run before; `None` when no run reaches it.
+    pub fn time_to(&self, target: f64) -> Option<f64> {
+        let i = self.points.iter().position(|p| p.error <= target)?;
+        if i == 0 {
+            return Some(self.points[0].seconds);
+        }
+        let (a, b) = (self.points[i - 1], self.points[i]);
+        if a.error <= b.error {
+            return Some(b.seconds);
+        }
+        let t = (a.error.ln() - target.ln()) / (a.error.ln() - b.error.ln());
+        Some((a.seconds.ln() + t * (b.seconds.ln() - a.seconds.ln())).exp())
+    }
+}
+
+/// Relative L2 error of `values` against `reference` over the probes that do not emit.
+pub fn relative_l2(
+    scene: &Scene,
+    points: &[SurfacePoint],
+    values: &[[f64; 3]],
+    reference: &[[f64; 3]],
+) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for ((p, v), r) in points.iter().zip(values).zip(reference) {
+        if !scene.faces[p.face as usize].emission.is_zero() {
+            continue;
+        }
+        for b in 0..3 {
+            num += (v[b] - r[b]).powi(2);
+            den += r[b].powi(2);
+        }
+    }
+    (num / den.max(1e-300)).sqrt()
+}
+
+/// Loads a built-in 3-D scene and its probe points.
+pub fn scene_and_probes(name: &str) -> Result<(Scene, Vec<SurfacePoint>)> {
+    let scene = scene_sampler::builtin(name)?.into_3d()?;
+    let probes = scene_sampler::read_probes(format!("scenes/{name}.probes.txt"))?;
+    let points = scene.snap_probes(&probes, name)?;
+    Ok((scene, points))
+}
+
+/// The reference B at the probes: the path tracer with many paths (its own seed).
+pub fn reference(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    points: &[SurfacePoint],
+    paths: usize,
+) -> Vec<[f64; 3]> {
+    baselines::pointwise::radiosity_at(scene, bvh, points, paths, 0x5EED)
+        .into_iter()
+        .map(|e| e.mean)
+        .collect()
+}
+
+/// GCR curves (one per gather) on one scene at the given kernel budgets.
+pub fn gcr_curves(
+    scene: &Scene,
+    points: &[SurfacePoint],
+    reference: &[[f64; 3]],
+    budgets: &[usize],
+) -> Result<Vec<Curve>> {
+    let bvh = SceneBvh::new(scene);
+    let domain = Domain::ThreeD(KernelSampler::new(scene, &bvh));
+    let emitters = Emitters::new(&domain);
+    let gathers = [GatherMode::Base, GatherMode::Kernel, GatherMode::Rays];
+    let mut curves: Vec<Curve> = gathers
+        .iter()
+        .map(|g| Curve {
+            name: format!("gcr {}", g.name()),
+            points: Vec::new(),
+        })
+        .collect();
+    for &cells in budgets {
+        let config = SolveConfig {
+            kernel_cells: cells,
+            shading_cells: cells / 2,
+            ..SolveConfig::default()
+        };
+        let t = Instant::now();
+        let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+        let solve_seconds = t.elapsed().as_secs_f64();
+        for (curve, &gather) in curves.iter_mut().zip(&gathers) {
+            let config = SolveConfig { gather, ..config };
+            let t = Instant::now();
+            let mut scratch = Vec::new();
+            let values: Vec<[f64; 3]> = points
+                .iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    radiosity_at(
+                        &domain,
+                        &trained,
+                        &emitters,
+                        &config,
+                        p.point,
+                        p.normal,
+                        p.face,
+                        i as u64,
+                        &mut scratch,
+                    )
+                    .radiosity
+                })
+                .collect();
+            let seconds = solve_seconds + t.elapsed().as_secs_f64();
+            let error = relative_l2(scene, points, &values, reference);
+            println!(
+                "gcr: {} cells={cells} {:.2} s error {:.4}",
+                curve.name, seconds, error
+            );
+            curve.points.push(Point {
+                budget: cells,
+                seconds,
+                error,
+            });
+        }
+    }
+    Ok(curves)
+}
+
+/// The path tracer's curve at the given path counts (a different seed from the reference's).
+pub fn path_tracer_curve(
+    scene: &Scene,
+    points: &[SurfacePoint],
+    reference: &[[f64; 3]],
+    paths: &[usize],
+) -> Curve {
+    let bvh = SceneBvh::new(scene);
+    let points_out = paths
+        .iter()
+        .map(|&n| {
+            let t = Instant::now();
+            let values: Vec<[f64; 3]> =
+                baselines::pointwise::radiosity_at(scene, &bvh, points, n, 11)
+                    .into_iter()
+                    .map(|e| e.mean)
+                    .collect();
+            let seconds = t.elapsed().as_secs_f64();
+            let error = relative_l2(scene, points, &values, reference);
+            println!("gcr: path tracer paths={n} {seconds:.3} s error {error:.4}");
+            Point {
+                budget: n,
+                seconds,
+                error,
+            }
+        })
+        .collect();
+    Curve {
+        name: "path tracer".into(),
+        points: points_out,
+    }
+}
+
+/// Writes one log-log plot of error against seconds.
+pub fn plot_curves(path: &std::path::Path, title: &str, curves: &[Curve]) -> Result<()> {
+    use plotters::prelude::*;
+    let all: Vec<Point> = curves
+        .iter()
+        .flat_map(|c| c.points.iter().copied())
+        .collect();
+    let (tmin, tmax) = all.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
+        (a.min(p.seconds), b.max(p.seconds))
+    });
+    let (emin, emax) = all.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
+        (a.min(p.error), b.max(p.error))
+    });
+    let colours = [RED, BLUE, GREEN, BLACK, MAGENTA, CYAN];
+    crate::plot::png(path, 900, 600, |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 22))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(
+                (tmin.max(1e-4) * 0.7..tmax * 1.4).log_scale(),
+                (emin.max(1e-4) * 0.7..emax.min(100.0) * 1.4).log_scale(),
+            )
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc("seconds (2 threads)")
+            .y_desc("relative L2 error of B at the probes")
+            .draw()
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        for (curve, colour) in curves.iter().zip(colours.iter().cycle()) {
+            let pts: Vec<(f64, f64)> = curve
+                .points
+                .iter()
+                .map(|p| (p.seconds.max(1e-4), p.error.clamp(1e-4, 100.0)))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))
+                .map_err(|e| anyhow::anyhow!("{e}"))?
+                .label(curve.name.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+                });
+            chart
+                .draw_series(pts.into_iter().map(|p| Circle::new(p, 4, colour.filled())))
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        Ok(())
+    })
+}
+
+/// Markdown: every run, then the time to reach 10 %, 5 % and 2 %.
+pub fn markdown(scene: &str, curves: &[Curve]) -> String {
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "### {scene}\n\n| solver | budget | seconds | rel. L2 error |\n|---|---:|---:|---:|"
+    );
+    for c in curves {
+        for p in &c.points {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {:.3} | {:.4} |",
+                c.name, p.budget, p.seconds, p.error
+            );
+        }
+    }
+    let _ = writeln!(
+        md,
+        "\n| solver | to 10 % (s) | to 5 % (s) | to 2 % (s) |\n|---|---:|---:|---:|"
+    );
+    for c in curves {
+        let cell = |t: f64| c.time_to(t).map_or("—".to_string(), |s| format!("{s:.3}"));
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} |",
+            c.name,
+            cell(0.10),
+            cell(0.05),
+            cell(0.02)
+        );
+    }
+    md
+}
 
 /// Runs this group's benchmarks and writes its report into `ctx.out`.
-pub fn run(_ctx: &Ctx) -> Result<()> {
+pub fn run(ctx: &Ctx) -> Result<()> {
+    let (scenes, budgets, paths, reference_paths): (&[&str], &[usize], &[usize], usize) =
+        if ctx.quick {
+            (&["wall-floor"], &[40], &[100, 1000], 20_000)
+        } else {
+            (
+                &["cornell-box", "wall-floor", "two-blockers"],
+                &[50, 100, 200, 300, 400],
+                &[30, 100, 300, 1000, 3000, 10_000],
+                400_000,
+            )
+        };
+    let mut md = format!(
+        "# `gcr` against the path tracer: time and error\n\n\
+         Command: `cargo xtask bench --only gcr{}` (release, {} threads). Error: relative L2 of B at \
+         the non-emitting probes of `scenes/<scene>.probes.txt` against the path tracer with {reference_paths} \
+         paths per probe (a different seed from the path tracer's own runs). GCR seconds are solve plus \
+         gather at the probes; GCR budgets are kernel cells (shading cells = half), the path tracer's are \
+         paths per probe. The path tracer computes only the probes, GCR the whole solution: the \
+         comparison flatters the path tracer for a handful of probes.\n\n",
+        if ctx.quick { " --quick" } else { "" },
+        rayon::current_num_threads()
+    );
+    for &name in scenes {
+        let (scene, points) = scene_and_probes(name)?;
+        let bvh = SceneBvh::new(&scene);
+        let t = Instant::now();
+        let reference = reference(&scene, &bvh, &points, reference_paths);
+        println!("gcr: {name} reference {:.1} s", t.elapsed().as_secs_f64());
+        let mut curves = gcr_curves(&scene, &points, &reference, budgets)?;
+        curves.push(path_tracer_curve(&scene, &points, &reference, paths));
+        let png = format!("benchmarks-gcr-{name}.png");
+        plot_curves(
+            &ctx.out.join(&png),
+            &format!("{name}: error against time"),
+            &curves,
+        )?;
+        md.push_str(&markdown(name, &curves));
+        let _ = writeln!(md, "\n![{name}]({png})\n");
+    }
+    std::fs::write(ctx.out.join("benchmarks-gcr.md"), md)?;
     Ok(())
 }

@@ -187,18 +187,32 @@ impl SceneBvh {
         };
         let ray = Ray::new(v3a(origin - u * back), v3a(u), back as f32, tmax_world);
         let mut hit = obvhs::ray::RayHit::none();
+        // Two-sided thin geometry is two coincident faces with opposite normals, and a ray meets
+        // both at the same t. The one facing the ray must win (the other one's back is not a
+        // surface the ray can reach), so back faces are pushed back by a tie margin.
+        let tie = self.eps as f32;
         let found = self.bvh.ray_traverse(ray, &mut hit, |r, id| {
-            if self.face_of[id] == skip {
-                f32::INFINITY
+            let face = self.face_of[id];
+            if face == skip {
+                return f32::INFINITY;
+            }
+            let t = self.tris[id].intersect(r);
+            if t.is_finite() && self.normals[face as usize].dot(u) > 0.0 {
+                t + tie
             } else {
-                self.tris[id].intersect(r)
+                t
             }
         });
         if !found {
             return None;
         }
         let face = self.face_of[hit.primitive_id as usize];
-        let t_world = (hit.t as f64 - back).max(0.0);
+        let t_hit = if self.normals[face as usize].dot(u) > 0.0 {
+            hit.t - tie
+        } else {
+            hit.t
+        };
+        let t_world = (t_hit as f64 - back).max(0.0);
         Some(Hit {
             face,
             t: t_world / len,
@@ -322,18 +336,25 @@ impl FlatVisibility {
             return None;
         }
         let u = dir / len;
-        let mut best: Option<(u32, f64)> = None;
+        let mut best: Option<(u32, f64, f64)> = None;
         for (i, &(a, b, _)) in self.segs.iter().enumerate() {
             if i as u32 == skip {
                 continue;
             }
             if let Some(t) = seg_intersect(origin, u, a, b) {
-                if t > self.eps && best.is_none_or(|(_, bt)| t < bt) {
-                    best = Some((i as u32, t));
+                // Coincident segments with opposite normals (a two-sided edge): the one facing
+                // the ray wins the tie.
+                let key = if self.segs[i].2.dot(u) > 0.0 {
+                    t + self.eps
+                } else {
+                    t
+                };
+                if t > self.eps && best.is_none_or(|(_, bk, _)| key < bk) {
+                    best = Some((i as u32, key, t));
                 }
             }
         }
-        best.map(|(segment, t)| FlatHit {
+        best.map(|(segment, _, t)| FlatHit {
             segment,
             t: t / len,
             point: origin + u * t,

@@ -294,3 +294,73 @@ fn near_hits_below_obvhs_epsilon() {
         assert!(!bvh.segment_clear(o, o + DVec3::Z * 1e-3, u32::MAX, u32::MAX));
     }
 }
+
+/// A two-sided thin wall is two coincident faces with opposite normals; a ray must land on the
+/// one that faces it, from either side (else light onto thin geometry is lost: the back face
+/// has a zero kernel).
+#[test]
+fn coincident_two_sided_faces_report_the_front_face() {
+    let (a, b, c) = (
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(1.0, 0.0, 0.0),
+        DVec3::new(0.0, 1.0, 0.0),
+    );
+    let grey = Spectrum::grey(0.5);
+    let lamp = Face::new(
+        [
+            DVec3::new(0.0, 0.0, 5.0),
+            DVec3::new(0.1, 0.0, 5.0),
+            DVec3::new(0.0, 0.1, 5.0),
+        ],
+        grey,
+        Spectrum::grey(1.0),
+        1,
+        2,
+    );
+    for order in [false, true] {
+        let up = Face::new([a, b, c], grey, Spectrum::grey(0.0), 0, 0);
+        let down = Face::new([a, c, b], grey, Spectrum::grey(0.0), 0, 1);
+        let faces = if order {
+            vec![down, up, lamp]
+        } else {
+            vec![up, down, lamp]
+        };
+        let (up_index, down_index) = if order { (1, 0) } else { (0, 1) };
+        let scene = Scene::new("thin", "thin", faces, vec![], None).unwrap();
+        let bvh = SceneBvh::new(&scene);
+        let from_above = bvh
+            .closest_hit(
+                DVec3::new(0.2, 0.2, 1.0),
+                DVec3::NEG_Z,
+                f64::INFINITY,
+                u32::MAX,
+            )
+            .unwrap();
+        assert_eq!(from_above.face, up_index);
+        assert!((from_above.t - 1.0).abs() < 1e-6);
+        let from_below = bvh
+            .closest_hit(
+                DVec3::new(0.2, 0.2, -1.0),
+                DVec3::Z,
+                f64::INFINITY,
+                u32::MAX,
+            )
+            .unwrap();
+        assert_eq!(from_below.face, down_index);
+        assert!((from_below.t - 1.0).abs() < 1e-6);
+    }
+    // Flatland: the built-in blocker is such a pair (segments 1 facing down, 2 facing up).
+    let flat = builtin("flatland-blocker")
+        .unwrap()
+        .into_flatland()
+        .unwrap();
+    let vis = FlatVisibility::new(&flat);
+    let down = vis
+        .closest_hit(DVec2::new(0.5, 0.9), DVec2::new(0.0, -1.0), u32::MAX)
+        .unwrap();
+    assert_eq!(down.segment, 2, "from above: the up-facing top");
+    let up = vis
+        .closest_hit(DVec2::new(0.5, 0.1), DVec2::new(0.0, 1.0), u32::MAX)
+        .unwrap();
+    assert_eq!(up.segment, 1, "from below: the down-facing underside");
+}

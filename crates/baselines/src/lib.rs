@@ -8,6 +8,7 @@
 //! Every solver reports radiosity B (exitance) per colour band as `[f64; 3]`; grey scenes carry the same value
 //! in all three bands. Bad parameters give a [`BaselineError`].
 
+pub mod classical;
 pub mod error;
 pub mod flatland;
 pub mod pointwise;

@@ -1,5 +1,18 @@
 //! Reference radiosity solvers that share no code with the growing-cells networks.
 //!
-//! So far: [`pointwise`], the path-traced pointwise reference of MATH.md §8 for 3-D scenes.
+//! * [`pointwise`] — the path-traced pointwise reference of MATH.md §8 for 3-D scenes, fixed-count or adaptive
+//!   (to a relative standard error).
+//! * [`flatland`] — the same path tracer in Flatland, and the converged fine-mesh solver with crossed-strings
+//!   form factors and exact visibility ([`flatland::ExactSolver`]).
+//!
+//! Every solver reports radiosity B (exitance) per colour band as `[f64; 3]`; grey scenes carry the same value
+//! in all three bands. Bad parameters give a [`BaselineError`].
 
+pub mod classical;
+pub mod error;
+pub mod flatland;
 pub mod pointwise;
+mod stats;
+
+pub use error::BaselineError;
+pub use stats::{Adaptive, Estimate};

@@ -2,22 +2,15 @@
 //! cosine-weighted directions ω_k, recursively with Russian roulette. Unbiased and independent
 //! of any mesh; every probe reports its standard error.
 
+use crate::error::BaselineError;
+use crate::stats::{point_rng, run_fixed};
 use glam::DVec3;
-use rand::{Rng, SeedableRng};
+use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use scene_sampler::{Scene, SceneBvh, SurfacePoint, cosine_hemisphere};
 
-/// Radiosity estimate at one point.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Estimate {
-    /// Mean B per band.
-    pub mean: [f64; 3],
-    /// Standard error of the mean per band.
-    pub std_error: [f64; 3],
-    /// Paths used.
-    pub paths: usize,
-}
+pub use crate::stats::{Adaptive, Estimate};
 
 /// One path's radiosity contribution leaving `p` (emission included).
 fn path(scene: &Scene, bvh: &SceneBvh, p: SurfacePoint, rng: &mut ChaCha8Rng) -> [f64; 3] {
@@ -55,7 +48,7 @@ fn path(scene: &Scene, bvh: &SceneBvh, p: SurfacePoint, rng: &mut ChaCha8Rng) ->
     out
 }
 
-/// Estimates B at each point with `paths` paths, in parallel; deterministic per `seed`
+/// Estimates B at each point with `paths` paths (at least 2), in parallel; deterministic per `seed`
 /// (each point has its own random stream, so the thread count does not matter).
 pub fn radiosity_at(
     scene: &Scene,
@@ -68,27 +61,50 @@ pub fn radiosity_at(
         .par_iter()
         .enumerate()
         .map(|(i, &p)| {
-            let mut rng =
-                ChaCha8Rng::seed_from_u64(seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
-            let (mut sum, mut sq) = ([0.0; 3], [0.0; 3]);
-            for _ in 0..paths.max(2) {
-                let v = path(scene, bvh, p, &mut rng);
-                for b in 0..3 {
-                    sum[b] += v[b];
-                    sq[b] += v[b] * v[b];
-                }
-            }
-            let n = paths.max(2) as f64;
-            let mean = sum.map(|s| s / n);
-            let std_error =
-                [0, 1, 2].map(|b| ((sq[b] / n - mean[b] * mean[b]).max(0.0) / (n - 1.0)).sqrt());
-            Estimate {
-                mean,
-                std_error,
-                paths: paths.max(2),
-            }
+            let mut rng = point_rng(seed, i);
+            run_fixed(paths, || path(scene, bvh, p, &mut rng))
         })
         .collect()
+}
+
+/// Adaptive mode: per point, batches of paths until the relative standard error of every band with a positive
+/// mean is at most `adaptive.rel_error`, or `adaptive.max_paths` (see [`Adaptive`]). Parallel over points,
+/// deterministic per seed. The first `k·batch` paths of a point are exactly those [`radiosity_at`] traces with
+/// `k·batch` paths and the same seed.
+///
+/// # Errors
+/// Invalid [`Adaptive`] parameters, or a point whose face index is not in the scene.
+pub fn radiosity_adaptive(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    points: &[SurfacePoint],
+    adaptive: &Adaptive,
+) -> Result<Vec<Estimate>, BaselineError> {
+    adaptive.validate()?;
+    check_faces(scene, points)?;
+    Ok(points
+        .par_iter()
+        .enumerate()
+        .map(|(i, &p)| {
+            let mut rng = point_rng(adaptive.seed, i);
+            adaptive.run(|| path(scene, bvh, p, &mut rng))
+        })
+        .collect())
+}
+
+/// Error unless every point's face exists.
+fn check_faces(scene: &Scene, points: &[SurfacePoint]) -> Result<(), BaselineError> {
+    for (index, p) in points.iter().enumerate() {
+        if p.face as usize >= scene.faces.len() {
+            return Err(BaselineError::NoSuchElement {
+                index,
+                what: "face",
+                id: p.face,
+                count: scene.faces.len(),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Convenience: the point on `face` at `position`.
@@ -124,5 +140,37 @@ mod tests {
             );
             assert!(est.std_error[0] < 0.05 * want);
         }
+    }
+
+    #[test]
+    fn adaptive_reaches_the_target_and_is_deterministic() {
+        let AnyScene::ThreeD(scene) = builtin("cornell-box").unwrap() else {
+            panic!()
+        };
+        let bvh = SceneBvh::new(&scene);
+        let floor = scene
+            .faces
+            .iter()
+            .position(|f| f.normal.y > 0.9 && f.centroid().y < 0.01)
+            .unwrap() as u32;
+        let p = surface_point(&scene, floor, scene.faces[floor as usize].centroid());
+        let a = Adaptive {
+            rel_error: 0.03,
+            batch: 200,
+            max_paths: 200_000,
+            seed: 3,
+        };
+        let e = radiosity_adaptive(&scene, &bvh, &[p, p], &a).unwrap();
+        assert!(e[0].rel_error() <= 0.03, "{:?}", e[0]);
+        assert!(e[0].paths < 200_000 && e[0].paths % 200 == 0);
+        // same seed, same numbers; the fixed-count mode with as many paths agrees bit for bit
+        let again = radiosity_adaptive(&scene, &bvh, &[p], &a).unwrap();
+        assert_eq!(e[0], again[0]);
+        let fixed = radiosity_at(&scene, &bvh, &[p], e[0].paths, 3);
+        assert_eq!(fixed[0], e[0]);
+        // a bad face index is an error, not a panic
+        let bad = SurfacePoint { face: 9999, ..p };
+        assert!(radiosity_adaptive(&scene, &bvh, &[bad], &a).is_err());
+        assert!(radiosity_adaptive(&scene, &bvh, &[p], &Adaptive { batch: 0, ..a }).is_err());
     }
 }

@@ -73,6 +73,27 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// The pointwise path-traced reference (`baselines`) at probe points: B per probe with its
+    /// standard error on stderr.
+    Reference {
+        /// Scene file or built-in name.
+        scene: String,
+        /// Probe points (`x y z nx ny nz` per line; Flatland `x y nx ny`).
+        #[arg(long)]
+        probes: PathBuf,
+        /// Where to write B at the probes (`r g b` per line; Flatland grey: `b`).
+        #[arg(long)]
+        probe_out: PathBuf,
+        /// Target relative standard error per probe and band.
+        #[arg(long, default_value_t = 0.01)]
+        rel_error: f64,
+        /// Path cap per probe.
+        #[arg(long, default_value_t = 1_000_000)]
+        max_paths: usize,
+        /// Seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
 }
 
 fn main() {
@@ -90,6 +111,14 @@ fn run() -> Result<()> {
             }
             Ok(())
         }
+        Command::Reference {
+            scene,
+            probes,
+            probe_out,
+            rel_error,
+            max_paths,
+            seed,
+        } => reference(&scene, &probes, &probe_out, rel_error, max_paths, seed),
         Command::Solve {
             scene,
             cells,
@@ -362,5 +391,66 @@ fn flatland_image(
         .context("image buffer")?
         .save(path)
         .with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
+
+/// `gcr reference`: adaptive path tracing at the probes until `rel_error` (or `max_paths`).
+fn reference(
+    scene: &str,
+    probes: &PathBuf,
+    probe_out: &PathBuf,
+    rel_error: f64,
+    max_paths: usize,
+    seed: u64,
+) -> Result<()> {
+    let start = Instant::now();
+    let adaptive = baselines::Adaptive {
+        rel_error,
+        max_paths,
+        seed,
+        ..baselines::Adaptive::default()
+    };
+    let loaded = scene_sampler::load_or_builtin(scene)
+        .with_context(|| format!("loading scene `{scene}`"))?;
+    for w in loaded.warnings() {
+        eprintln!("warning: {w}");
+    }
+    let source = probes.display().to_string();
+    let (estimates, grey) = match loaded {
+        AnyScene::ThreeD(s) => {
+            let points = s.snap_probes(&scene_sampler::read_probes(probes)?, &source)?;
+            let bvh = SceneBvh::new(&s);
+            let est = baselines::pointwise::radiosity_adaptive(&s, &bvh, &points, &adaptive)?;
+            (est, false)
+        }
+        AnyScene::Flatland(s) => {
+            let points = s.snap_probes(&scene_sampler::read_flat_probes(probes)?, &source)?;
+            let vis = scene_sampler::FlatVisibility::new(&s);
+            let est = baselines::flatland::path_trace_adaptive(&s, &vis, &points, &adaptive)?;
+            (est, s.bands == 1)
+        }
+    };
+    let mut out = String::new();
+    let (mut paths, mut worst) = (0usize, 0.0f64);
+    for e in &estimates {
+        if grey {
+            out.push_str(&format!("{}\n", e.mean[0]));
+        } else {
+            out.push_str(&format!("{} {} {}\n", e.mean[0], e.mean[1], e.mean[2]));
+        }
+        paths += e.paths;
+        for b in 0..3 {
+            if e.mean[b] > 0.0 {
+                worst = worst.max(e.std_error[b] / e.mean[b]);
+            }
+        }
+    }
+    std::fs::write(probe_out, out).with_context(|| format!("writing {}", probe_out.display()))?;
+    eprintln!(
+        "reference: {} probes, {paths} paths, worst relative standard error {:.4}, {:.1} s",
+        estimates.len(),
+        worst,
+        start.elapsed().as_secs_f64()
+    );
     Ok(())
 }

@@ -13,16 +13,62 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             AnyScene::ThreeD(s) => {
                 let p = scene_sampler::write_obj(&s, &dir)?;
                 let g = scene_sampler::write_gltf(&s, &dir)?;
-                // one probe per input surface (the centroid of its first triangle), on the front side
+                // One probe per input surface: the first triangle centroid of that surface, or
+                // else the first point of a barycentric grid over its triangles, that is not
+                // buried inside a solid (e.g. floor under a block). A point is buried when every
+                // ray over its hemisphere hits the back of a face.
+                let bvh = scene_sampler::SceneBvh::new(&s);
+                let buried = |point: glam::DVec3, normal: glam::DVec3, face: u32| {
+                    let from = scene_sampler::SurfacePoint {
+                        point,
+                        normal,
+                        face,
+                    };
+                    (0..16).all(|k| {
+                        let u = [(k as f64 + 0.5) / 16.0, (k as f64 * 0.618_034).fract()];
+                        let dir = scene_sampler::cosine_hemisphere(normal, u);
+                        bvh.trace_from(&from, dir)
+                            .is_some_and(|h| s.faces[h.face as usize].normal.dot(dir) > 0.0)
+                    })
+                };
                 let mut seen = std::collections::HashSet::new();
-                let probes: Vec<Probe> = s
+                let surfaces: Vec<u32> = s
                     .faces
                     .iter()
-                    .filter(|f| seen.insert(f.surface))
-                    .map(|f| Probe {
-                        point: f.centroid(),
-                        normal: f.normal,
-                        line: 0,
+                    .map(|f| f.surface)
+                    .filter(|x| seen.insert(*x))
+                    .collect();
+                let probes: Vec<Probe> = surfaces
+                    .iter()
+                    .map(|&surface| {
+                        let faces: Vec<(usize, &scene_sampler::Face)> = s
+                            .faces
+                            .iter()
+                            .enumerate()
+                            .filter(|(_, f)| f.surface == surface)
+                            .collect();
+                        let grid = (1..8).flat_map(|i| (1..8 - i).map(move |j| (i, j)));
+                        let candidates = faces
+                            .iter()
+                            .map(|(i, f)| (*i, f.centroid(), f.normal))
+                            .chain(faces.iter().flat_map(|(i, f)| {
+                                grid.clone().map(move |(a, b)| {
+                                    let (a, b) = (a as f64 / 8.0, b as f64 / 8.0);
+                                    let p = f.v[0] * (1.0 - a - b) + f.v[1] * a + f.v[2] * b;
+                                    (*i, p, f.normal)
+                                })
+                            }));
+                        let (_, point, normal) = candidates
+                            .clone()
+                            .find(|(i, p, n)| !buried(*p, *n, *i as u32))
+                            .unwrap_or_else(|| {
+                                (faces[0].0, faces[0].1.centroid(), faces[0].1.normal)
+                            });
+                        Probe {
+                            point,
+                            normal,
+                            line: 0,
+                        }
                     })
                     .collect();
                 std::fs::write(

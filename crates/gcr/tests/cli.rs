@@ -1,0 +1,115 @@
+//! The `gcr` program end to end: output formats and clear errors with a non-zero exit.
+
+use std::process::Command;
+
+fn gcr(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_gcr"))
+        .args(args)
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+        .output()
+        .expect("gcr runs")
+}
+
+fn tmp(name: &str) -> String {
+    let dir = std::env::temp_dir().join(format!("gcr-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name).display().to_string()
+}
+
+#[test]
+fn reference_writes_one_line_per_probe_and_reaches_its_target() {
+    let out = tmp("ref.txt");
+    let o = gcr(&[
+        "reference",
+        "flatland-corner",
+        "--probes",
+        "scenes/flatland-corner.probes.txt",
+        "--probe-out",
+        &out,
+        "--rel-error",
+        "0.02",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    let probes = std::fs::read_to_string("../../scenes/flatland-corner.probes.txt").unwrap();
+    assert_eq!(text.lines().count(), probes.lines().count());
+    for line in text.lines() {
+        // Flatland grey: one number per probe, finite and non-negative.
+        let v: f64 = line.trim().parse().unwrap();
+        assert!(v.is_finite() && v >= 0.0);
+    }
+}
+
+#[test]
+fn solve_writes_probe_values_for_a_3d_scene() {
+    let out = tmp("solve.txt");
+    let o = gcr(&[
+        "solve",
+        "cornell-box",
+        "--cells",
+        "40",
+        "--quiet",
+        "--probes",
+        "scenes/cornell-box.probes.txt",
+        "--probe-out",
+        &out,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(text.lines().count(), 19);
+    for line in text.lines() {
+        let v: Vec<f64> = line
+            .split_whitespace()
+            .map(|x| x.parse().unwrap())
+            .collect();
+        assert_eq!(v.len(), 3);
+        assert!(v.iter().all(|x| x.is_finite() && *x >= 0.0));
+    }
+}
+
+#[test]
+fn bad_input_gives_a_message_and_a_non_zero_exit() {
+    let missing = tmp("missing.obj");
+    let bad_obj = tmp("bad.obj");
+    std::fs::write(&bad_obj, "v 0 0 0\nv 1 0 0\nf 1 2 9\n").unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["solve", &missing], "missing"),
+        (vec!["solve", &bad_obj], "bad.obj"),
+        (vec!["solve", "cornell-box", "--cells", "0"], "cell"),
+        (vec!["solve", "furnace", "--time-budget=-1"], "budget"),
+        (
+            vec![
+                "reference",
+                "cornell-box",
+                "--probes",
+                &missing,
+                "--probe-out",
+                "x",
+            ],
+            "missing",
+        ),
+        (
+            vec![
+                "reference",
+                "cornell-box",
+                "--probes",
+                "scenes/cornell-box.probes.txt",
+                "--probe-out",
+                "x",
+                "--rel-error",
+                "2",
+            ],
+            "rel_error",
+        ),
+    ];
+    for (args, needle) in cases {
+        let o = gcr(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(
+            err.to_lowercase().contains(needle),
+            "{args:?}: message {err:?} does not mention {needle:?}"
+        );
+        assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+    }
+}

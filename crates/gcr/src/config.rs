@@ -48,10 +48,9 @@ impl std::str::FromStr for GatherMode {
 pub enum StrengthFrom {
     /// The shading network's Gaussian base (the dissertation, fig. 3.1).
     Base,
-    /// The kernel collection B_refl(x) = Σ v_o c_o exp(−|x − w_o^y|²/d_o²). Default: on closed
-    /// scenes a single k = 2 shading sheet cannot follow the walls, the breaking operator removes
-    /// the simplices that straddle edges, and the base left is too sparse to carry B_refl
-    /// (measured on cornell-box at 100 shading cells: every simplex straddled an edge).
+    /// The kernel collection B_refl(x) = Σ v_o c_o exp(−|x − w_o^y|²/d_o²). Default: the base is
+    /// the projection of this same function onto fewer, surface-bound Gaussians, so it can only
+    /// add error (docs/gcr-algorithm.md).
     #[default]
     Kernel,
 }
@@ -123,6 +122,10 @@ pub struct SolveConfig {
     pub transfer: Transfer,
     /// Flat closed forms where the criterion allows (off: exact element sums everywhere).
     pub closed_forms: bool,
+    /// Skip the shading network and the base when nothing reads them (gather ≠ base and strengths
+    /// from the kernel): the kernel's solution is bit-identical, only faster. Off: always train
+    /// them (for figures of the base, or to time the dissertation's full loop).
+    pub skip_unused_base: bool,
     /// Where the base Gaussians are integrated: the scene S (default) or the shading
     /// network's triangles Ŝ (the dissertation).
     pub base_domain: BaseDomain,
@@ -156,6 +159,7 @@ impl Default for SolveConfig {
             transfer: Transfer::Direct,
             closed_forms: true,
             base_domain: BaseDomain::Scene,
+            skip_unused_base: true,
             breaking: Breaking::default(),
             strength_from: StrengthFrom::Kernel,
             gather: GatherMode::Rays,
@@ -168,6 +172,14 @@ impl Default for SolveConfig {
 }
 
 impl SolveConfig {
+    /// Whether anything reads the shading network's base: the base gather, or strengths taken
+    /// from the base; always when [`SolveConfig::skip_unused_base`] is off.
+    pub fn needs_base(&self) -> bool {
+        !self.skip_unused_base
+            || self.gather == GatherMode::Base
+            || self.strength_from == StrengthFrom::Base
+    }
+
     /// Checks every setting; the error names the first one out of range.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let bad = |m: String| Err(ConfigError::Invalid(m));

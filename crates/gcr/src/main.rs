@@ -51,6 +51,10 @@ enum Command {
         /// `delta-rule` (the dissertation's eq. 2.8).
         #[arg(long, default_value = "projection")]
         output_fit: OutputFit,
+        /// Train the shading network and build its base even when the gather does not read it
+        /// (by default they are skipped: same result, less time).
+        #[arg(long)]
+        keep_base: bool,
         /// PNG image from the scene's camera.
         #[arg(long)]
         image: Option<PathBuf>,
@@ -127,6 +131,7 @@ fn run() -> Result<()> {
             seed,
             gather,
             output_fit,
+            keep_base,
             image,
             mesh,
             ply,
@@ -142,6 +147,7 @@ fn run() -> Result<()> {
                 seed,
                 gather,
                 output_fit,
+                skip_unused_base: !keep_base,
                 ..SolveConfig::default()
             };
             config.validate()?;

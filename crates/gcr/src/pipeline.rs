@@ -14,6 +14,10 @@ use rayon::prelude::*;
 
 /// Radiosity at surface point (y, n, face) by the configured gather; `seed` makes the ray gather
 /// deterministic per point.
+///
+/// # Panics
+/// With [`GatherMode::Base`] when `trained` was solved without a base (a config whose
+/// [`SolveConfig::needs_base`] was false): solve and gather with the same config.
 pub fn radiosity_at(
     domain: &Domain,
     trained: &Trained,
@@ -35,7 +39,16 @@ pub fn radiosity_at(
         out
     };
     match config.gather {
-        GatherMode::Base => reflected(trained.fem.reflected_from_base(y, n, scratch)),
+        GatherMode::Base => {
+            // A base skipped at solve time (`skip_unused_base` with a non-base gather) has no
+            // cells; reading it would silently report B = E.
+            assert!(
+                !trained.fem.base.geo.is_empty(),
+                "GatherMode::Base on a solution without a base: solve with a config whose \
+                 needs_base() is true (gather = base, or skip_unused_base = false)"
+            );
+            reflected(trained.fem.reflected_from_base(y, n, scratch))
+        }
         GatherMode::Kernel => reflected(trained.reflected_kernel(y)),
         GatherMode::Rays => gather(
             domain,
@@ -60,15 +73,22 @@ pub struct LocalEdge {
 }
 
 impl LocalEdge {
-    /// Indexes the shading cells of the last FEM step.
+    /// Indexes the shading cells of the last FEM step; when the shading network was skipped
+    /// (`SolveConfig::skip_unused_base`), the kernel cells' receiver halves and widths, which set
+    /// the detail of B_refl.
     pub fn new(trained: &Trained) -> Self {
         let geo = &trained.fem.base.geo;
-        let mean = geo.widths.iter().sum::<f64>() / geo.len().max(1) as f64;
+        let (centres, widths) = if geo.is_empty() {
+            (trained.kernel.wy.clone(), trained.kernel.width.clone())
+        } else {
+            (geo.centres.clone(), geo.widths.clone())
+        };
+        let mean = widths.iter().sum::<f64>() / widths.len().max(1) as f64;
         let reach = 2.0 * mean.max(1e-300);
         Self {
-            centres: geo.centres.clone(),
-            widths: geo.widths.clone(),
-            grid: BoxGrid::new(geo.centres.iter().map(|c| (*c, *c)).collect(), reach),
+            grid: BoxGrid::new(centres.iter().map(|c| (*c, *c)).collect(), reach),
+            centres,
+            widths,
             reach,
         }
     }

@@ -127,6 +127,29 @@ pub fn freeze_kernel(net: &impl GrowingNetwork, dim: usize, bands: usize) -> Ker
     k
 }
 
+/// The shading network frozen for a FEM step, or an empty geometry when nothing downstream
+/// reads the base ([`SolveConfig::needs_base`]): the FEM step then costs nothing.
+fn freeze_base_geometry(
+    net: &impl GrowingNetwork,
+    domain: &Domain,
+    config: &SolveConfig,
+    base_used: bool,
+) -> ShadingGeometry {
+    if base_used {
+        freeze_shading(net, domain, config)
+    } else {
+        ShadingGeometry::new(
+            Vec::new(),
+            Vec::new(),
+            Vec::new(),
+            domain.dim() - 1,
+            &[],
+            config.breaking,
+            |_, _, _| false,
+        )
+    }
+}
+
 /// Freezes the shading network (cells, widths, learned normals, simplices) into the FEM's view.
 pub fn freeze_shading(
     net: &impl GrowingNetwork,
@@ -230,6 +253,7 @@ pub fn train(
     };
     let mut last_report = Instant::now();
     let (mut t_kernel, mut t_shading) = (0.0, 0.0);
+    let base_used = config.needs_base();
 
     loop {
         let stop_cells = kernel.cell_count() >= config.kernel_cells;
@@ -258,7 +282,7 @@ pub fn train(
         if shading.cell_count() >= config.shading_cells {
             shading.set_growing(false);
         }
-        {
+        if base_used {
             for &i in &shading_batch {
                 let smp = &mut samples[i];
                 shading_in.clear();
@@ -340,7 +364,7 @@ pub fn train(
         // stays a small multiple of the last one.
         let projection = config.output_fit == OutputFit::Projection;
         if kernel.insertions() - last_fem_insertions >= config.fem_every as u64
-            && shading.cell_count() >= 3
+            && (shading.cell_count() >= 3 || !base_used)
             && (!projection || kernel.cell_count() * 4 >= last_projected_cells * 5)
         {
             last_fem_insertions = kernel.insertions();
@@ -362,7 +386,7 @@ pub fn train(
                 freeze_kernel(kernel, dim, bands)
             };
             let base = Base::new(
-                freeze_shading(shading, domain, config),
+                freeze_base_geometry(shading, domain, config, base_used),
                 fem_settings,
                 scene_surface.clone(),
             );
@@ -404,7 +428,7 @@ pub fn train(
         );
         metrics.bounces += bounces;
         let base = Base::new(
-            freeze_shading(shading, domain, config),
+            freeze_base_geometry(shading, domain, config, base_used),
             fem_settings,
             scene_surface.clone(),
         );
@@ -415,7 +439,7 @@ pub fn train(
         for _ in 0..config.final_fem_steps.max(1) {
             let frozen = freeze_kernel(kernel, dim, bands);
             let base = Base::new(
-                freeze_shading(shading, domain, config),
+                freeze_base_geometry(shading, domain, config, base_used),
                 fem_settings,
                 scene_surface.clone(),
             );

@@ -54,13 +54,15 @@ impl BoxGrid {
     /// Ids of the items whose boxes intersect the ball (centre, radius), each once, ascending.
     pub fn query_ball(&self, centre: DVec3, radius: f64, out: &mut Vec<u32>) {
         out.clear();
-        if radius.is_nan() || radius < 0.0 || !centre.is_finite() {
+        if self.boxes.is_empty() || radius.is_nan() || radius < 0.0 || !centre.is_finite() {
             return;
         }
         let r = DVec3::splat(radius);
         let (a, b) = (key(centre - r, self.cell), key(centre + r, self.cell));
-        let span = (b[0] - a[0] + 1) * (b[1] - a[1] + 1) * (b[2] - a[2] + 1);
-        if span as usize > self.buckets.len() {
+        // Bucket count of the ball in f64: keys saturate at ±i64::MAX for huge balls or tiny
+        // buckets, where integer spans would overflow.
+        let span: f64 = (0..3).map(|i| (b[i] as f64 - a[i] as f64) + 1.0).product();
+        if span > self.buckets.len() as f64 {
             // The ball covers more buckets than exist: test every item instead.
             out.extend((0..self.boxes.len() as u32).filter(|&i| self.box_hits(i, centre, radius)));
             return;
@@ -149,5 +151,18 @@ mod tests {
         let mut out = vec![7];
         BoxGrid::new(vec![], 1.0).query_ball(DVec3::ZERO, f64::NAN, &mut out);
         assert!(out.is_empty());
+    }
+
+    /// Buckets far smaller than the ball (keys saturate) must neither hang nor overflow.
+    #[test]
+    fn huge_balls_in_tiny_buckets_fall_back_to_a_scan() {
+        let mut out = Vec::new();
+        BoxGrid::new(vec![], 1e-300).query_ball(DVec3::ONE, 1.0, &mut out);
+        assert!(out.is_empty());
+        let grid = BoxGrid::new(vec![(DVec3::ZERO, DVec3::ZERO)], 1e-300);
+        grid.query_ball(DVec3::ONE, 2.0, &mut out);
+        assert_eq!(out, vec![0]);
+        grid.query_ball(DVec3::ONE, f64::INFINITY, &mut out);
+        assert_eq!(out, vec![0]);
     }
 }

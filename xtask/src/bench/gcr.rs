@@ -105,13 +105,13 @@ pub fn reference(
         .collect()
 }
 
-/// GCR curves (one per gather) on one scene at the given kernel budgets.
+/// GCR curves (one per gather) on one scene at the given kernel budgets, and the skip timings.
 pub fn gcr_curves(
     scene: &Scene,
     points: &[SurfacePoint],
     reference: &[[f64; 3]],
     budgets: &[usize],
-) -> Result<Vec<Curve>> {
+) -> Result<(Vec<Curve>, Vec<Skip>)> {
     let bvh = SceneBvh::new(scene);
     let domain = Domain::ThreeD(KernelSampler::new(scene, &bvh));
     let emitters = Emitters::new(&domain);
@@ -123,17 +123,34 @@ pub fn gcr_curves(
             points: Vec::new(),
         })
         .collect();
+    let mut skips = Vec::new();
     for &cells in budgets {
-        let config = SolveConfig {
-            kernel_cells: cells,
-            shading_cells: cells / 2,
-            ..SolveConfig::default()
-        };
-        let t = Instant::now();
-        let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
-        let solve_seconds = t.elapsed().as_secs_f64();
+        // Solved twice: with the shading network and base (the base gather reads them), and
+        // without (the default for the kernel and ray gathers: `skip_unused_base`).
+        let mut solved = Vec::new();
+        for skip in [false, true] {
+            let config = SolveConfig {
+                kernel_cells: cells,
+                shading_cells: cells / 2,
+                skip_unused_base: skip,
+                ..SolveConfig::default()
+            };
+            let t = Instant::now();
+            let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+            solved.push((config, trained, t.elapsed().as_secs_f64()));
+        }
+        let same = solved[0].1.kernel.v == solved[1].1.kernel.v
+            && solved[0].1.sender == solved[1].1.sender;
+        skips.push(Skip {
+            cells,
+            kept: solved[0].2,
+            skipped: solved[1].2,
+            identical: same,
+        });
         for (curve, &gather) in curves.iter_mut().zip(&gathers) {
-            let config = SolveConfig { gather, ..config };
+            let (config, trained, solve_seconds) = &solved[usize::from(gather != GatherMode::Base)];
+            let (trained, solve_seconds) = (trained, *solve_seconds);
+            let config = SolveConfig { gather, ..*config };
             let t = Instant::now();
             let mut scratch = Vec::new();
             let values: Vec<[f64; 3]> = points
@@ -142,7 +159,7 @@ pub fn gcr_curves(
                 .map(|(i, p)| {
                     radiosity_at(
                         &domain,
-                        &trained,
+                        trained,
                         &emitters,
                         &config,
                         p.point,
@@ -167,7 +184,21 @@ pub fn gcr_curves(
             });
         }
     }
-    Ok(curves)
+    Ok((curves, skips))
+}
+
+/// Solve time with and without the shading network and base at one budget
+/// (`SolveConfig::skip_unused_base`), and whether the kernel solution came out identical.
+#[derive(Clone, Copy, Debug)]
+pub struct Skip {
+    /// Kernel cells.
+    pub cells: usize,
+    /// Seconds with the base kept.
+    pub kept: f64,
+    /// Seconds with it skipped.
+    pub skipped: f64,
+    /// Kernel output weights and sender integrals bit-identical.
+    pub identical: bool,
 }
 
 /// The path tracer's curve at the given path counts (a different seed from the reference's).
@@ -321,14 +352,16 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         if ctx.quick { " --quick" } else { "" },
         rayon::current_num_threads()
     );
+    let mut skip_table = Vec::new();
     for &name in scenes {
         let (scene, points) = scene_and_probes(name, probes)?;
         let bvh = SceneBvh::new(&scene);
         let t = Instant::now();
         let reference = reference(&scene, &bvh, &points, reference_paths);
         println!("gcr: {name} reference {:.1} s", t.elapsed().as_secs_f64());
-        let mut curves = gcr_curves(&scene, &points, &reference, budgets)?;
+        let (mut curves, skips) = gcr_curves(&scene, &points, &reference, budgets)?;
         curves.push(path_tracer_curve(&scene, &points, &reference, paths));
+        skip_table.push((name, skips));
         let png = format!("benchmarks-gcr-{name}.png");
         plot_curves(
             &ctx.out.join(&png),
@@ -337,6 +370,27 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         )?;
         md.push_str(&markdown(name, &curves));
         let _ = writeln!(md, "\n![{name}]({png})\n");
+    }
+    md.push_str(
+        "## Skipping the unused shading network and base\n\n\
+         The kernel and ray gathers read neither the shading network nor its base, so by default \
+         `gcr` does not train or build them (`SolveConfig::skip_unused_base`; `gcr solve --keep-base` \
+         turns the skip off). Solve seconds at each budget with the base kept and skipped, and \
+         whether the kernel solution (output weights and sender integrals) came out bit-identical:\n\n\
+         | scene | kernel cells | kept (s) | skipped (s) | speed-up | identical |\n|---|---:|---:|---:|---:|---|\n",
+    );
+    for (name, skips) in &skip_table {
+        for s in skips {
+            let _ = writeln!(
+                md,
+                "| {name} | {} | {:.2} | {:.2} | {:.2}× | {} |",
+                s.cells,
+                s.kept,
+                s.skipped,
+                s.kept / s.skipped.max(1e-9),
+                if s.identical { "yes" } else { "NO" }
+            );
+        }
     }
     std::fs::write(ctx.out.join("benchmarks-gcr.md"), md)?;
     Ok(())

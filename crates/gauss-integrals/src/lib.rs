@@ -17,7 +17,8 @@ pub mod closed_form;
 pub mod criteria;
 pub mod cubature;
 pub mod orthonormal;
+pub mod wedge;
 
-pub use closed_form::{line, plane, product, segment, triangle, triangle_fast};
+pub use closed_form::{line, plane, product, segment, triangle, triangle_fast, triangle_reference};
 pub use cubature::{Cubature, triangle_cubature};
 pub use orthonormal::{Orthonormal, classical_gram_schmidt};

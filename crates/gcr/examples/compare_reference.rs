@@ -33,6 +33,8 @@ fn main() -> anyhow::Result<()> {
             shading_cells: cells / 2,
             output_fit,
             seed,
+            // The base gather below reads the shading network's base: keep it.
+            skip_unused_base: false,
             ..SolveConfig::default()
         };
         let t = std::time::Instant::now();

@@ -143,6 +143,15 @@ pub struct SolveConfig {
     pub output_fit: OutputFit,
     /// Relative pivot below which the projection rejects a kernel cell as nearly dependent.
     pub projection_rejection: f64,
+    /// Support cut-off of the projection's Gaussians: Gram entries, sender integrals and moments
+    /// drop where the Gaussian (product) is below this fraction of its peak. Smaller is more
+    /// exact and slower (the pairs kept grow like the 6-D ball of radius d·√ln(1/tol)); at most
+    /// 1e-4 (looser cuts make the Gram matrix indefinite).
+    pub projection_tolerance: f64,
+    /// Rescale the projected kernel's weights per band so that it reflects exactly the power the
+    /// shot samples carry (`Metrics::energy_balance` reports the factor it corrected). Off: the
+    /// plain Galerkin projection, whose bounce iteration can run away when ρ is close to 1.
+    pub energy_correction: bool,
 }
 
 impl Default for SolveConfig {
@@ -167,6 +176,8 @@ impl Default for SolveConfig {
             resample_critical_fraction: 0.5,
             output_fit: OutputFit::default(),
             projection_rejection: 1e-6,
+            projection_tolerance: 1e-9,
+            energy_correction: true,
         }
     }
 }
@@ -227,6 +238,14 @@ impl SolveConfig {
             return bad(format!(
                 "projection rejection {} (expected in (0, 1))",
                 self.projection_rejection
+            ));
+        }
+        // 1e-3 already drops enough of the Gram matrix to make it indefinite: on cornell-box at
+        // 400 cells B came out at 1e123 (examples/tolerance_sweep.rs).
+        if !(self.projection_tolerance > 0.0 && self.projection_tolerance <= 1e-4) {
+            return bad(format!(
+                "projection tolerance {} (expected in (0, 1e-4])",
+                self.projection_tolerance
             ));
         }
         if self.gather_samples.direct + self.gather_samples.indirect > 1_000_000 {

@@ -468,6 +468,19 @@ pub fn sender_integrals(kernel: &KernelCells, scene: &SceneSurface, tol: f64) ->
         .collect()
 }
 
+/// Receiver integrals ∫_S exp(−|y − w_o^y|²/d_o²) dy for every kernel cell: with the sender
+/// integrals they give the reflected power of the kernel collection,
+/// ∫_S B_refl = Σ_o v_o c_o ∫_S g_o^y.
+pub fn receiver_integrals(kernel: &KernelCells, scene: &SceneSurface, tol: f64) -> Vec<f64> {
+    (0..kernel.len())
+        .into_par_iter()
+        .map_init(Vec::new, |scratch, o| {
+            let a = 1.0 / (kernel.width[o] * kernel.width[o]);
+            scene.gaussian_integral(kernel.wy[o], a, tol, scratch)
+        })
+        .collect()
+}
+
 /// B_refl(y) = Σ_o v_o c_o exp(−|y − w_o^y|²/d_o²): the final collection through the kernel
 /// network (fig. 4.13c), with `sender` from [`sender_integrals`].
 pub fn reflected_from_kernel(kernel: &KernelCells, sender: &[f64], y: DVec3) -> Bands {

@@ -65,9 +65,11 @@ pub struct Metrics {
     /// Share of the output radiosity (area-weighted, all bands) that came from the networks
     /// (indirect light), as opposed to exact emission and, with `rays`, exact direct light.
     pub network_share: f64,
-    /// Energy balance of the last FEM step: total reflected power over the power that the
-    /// emitted-plus-reflected light deposits times the reflectance (1 when consistent).
-    pub energy_balance: f64,
+    /// Energy balance of the final projection: the reflected power of the projected kernel,
+    /// ∫_S B_refl, over the power the shot samples carry (their Monte-Carlo estimate of the same
+    /// integral), before the energy correction rescales it to 1. `None` when not measured
+    /// (delta-rule output layer, or `energy_correction` off).
+    pub energy_balance: Option<f64>,
     /// Time per phase.
     pub seconds: PhaseTimes,
     /// Peak resident memory of the process in bytes (Linux: VmHWM), if known.

@@ -169,6 +169,55 @@ pub fn kernel_moments(
     b
 }
 
+/// Reflected power per band that the samples carry: the Monte-Carlo estimate of
+/// `∫∫ K(x,y)·s(x) dx dy = ∫_S B_refl`, the moments' estimator with g_o replaced by 1.
+pub fn sampled_reflected_power(
+    samples: &[Sample],
+    shots: u64,
+    reflectance: &(impl Fn(u32) -> Bands + Sync),
+) -> Bands {
+    // Fixed chunks summed in order: the result does not depend on the threads (a rayon
+    // `reduce` would, in the last bits).
+    let partial: Vec<Bands> = samples
+        .par_chunks(1024)
+        .map(|part| {
+            let mut w = [0.0; MAX_BANDS];
+            for smp in part.iter().filter(|smp| smp.inv_px != 0.0) {
+                let rho = reflectance(smp.ray.face_y);
+                for k in 0..MAX_BANDS {
+                    if smp.ray.kernel[k] > 0.0 {
+                        w[k] += rho[k] * smp.s[k] * smp.inv_px;
+                    }
+                }
+            }
+            w
+        })
+        .collect();
+    let mut p = [0.0; MAX_BANDS];
+    for w in partial {
+        for k in 0..MAX_BANDS {
+            p[k] += w[k];
+        }
+    }
+    let inv = 1.0 / shots.max(1) as f64;
+    for x in &mut p {
+        *x *= inv;
+    }
+    p
+}
+
+/// Reflected power per band of the kernel collection: `∫_S B_refl = Σ_o v_o·c_o·r_o` with the
+/// sender integrals c_o and receiver integrals r_o ([`crate::fem::receiver_integrals`]).
+pub fn kernel_reflected_power(kernel: &KernelCells, sender: &[f64], receiver: &[f64]) -> Bands {
+    let mut p = [0.0; MAX_BANDS];
+    for o in 0..kernel.len() {
+        for k in 0..MAX_BANDS {
+            p[k] += kernel.v[o][k] * sender[o] * receiver[o];
+        }
+    }
+    p
+}
+
 /// The factored Gram matrix of a frozen kernel network: the expensive half of a projection,
 /// computed once per network state and reused for every bounce (the moments change with s, the
 /// Gram matrix does not).

@@ -6,12 +6,12 @@ use crate::config::{OutputFit, SolveConfig, StrengthFrom};
 use crate::domain::{Domain, Ray};
 use crate::element::{Bands, MAX_BANDS};
 use crate::fem::{
-    Base, FemSettings, FemSolution, KernelCells, SceneSurface, fem_step, reflected_from_kernel,
-    sender_integrals,
+    Base, FemSettings, FemSolution, KernelCells, SceneSurface, fem_step, receiver_integrals,
+    reflected_from_kernel, sender_integrals,
 };
 use crate::metrics::Metrics;
 use crate::network::GrowingNetwork;
-use crate::projection::KernelProjection;
+use crate::projection::{KernelProjection, kernel_reflected_power, sampled_reflected_power};
 use crate::shading::ShadingGeometry;
 use crate::shooting::SenderDensity;
 use glam::DVec3;
@@ -371,7 +371,7 @@ pub fn train(
             last_projected_cells = kernel.cell_count();
             let tf = Instant::now();
             let frozen = if projection {
-                let (frozen, _, bounces) = propagate(
+                let p = propagate(
                     kernel,
                     domain,
                     config,
@@ -380,8 +380,8 @@ pub fn train(
                     &scene_surface,
                     TRAINING_BOUNCES,
                 );
-                metrics.bounces += bounces;
-                frozen
+                metrics.bounces += p.bounces;
+                p.kernel
             } else {
                 freeze_kernel(kernel, dim, bands)
             };
@@ -417,7 +417,7 @@ pub fn train(
     let tf = Instant::now();
     let (frozen, sender) = if config.output_fit == OutputFit::Projection {
         // One Gram matrix, then bounces until the strengths settle (each bounce is cheap).
-        let (frozen, sender, bounces) = propagate(
+        let p = propagate(
             kernel,
             domain,
             config,
@@ -426,7 +426,9 @@ pub fn train(
             &scene_surface,
             FINAL_BOUNCES,
         );
-        metrics.bounces += bounces;
+        metrics.bounces += p.bounces;
+        metrics.energy_balance = config.energy_correction.then_some(p.energy_balance);
+        let (frozen, sender) = (p.kernel, p.sender);
         let base = Base::new(
             freeze_base_geometry(shading, domain, config, base_used),
             fem_settings,
@@ -495,22 +497,53 @@ fn propagate(
     shots: u64,
     scene: &SceneSurface,
     max_bounces: usize,
-) -> (KernelCells, Vec<f64>, usize) {
+) -> Propagated {
     let mut frozen = freeze_kernel(kernel, domain.dim(), domain.bands());
-    let sender = sender_integrals(&frozen, scene, PROJECTION_TOLERANCE);
+    let sender = sender_integrals(&frozen, scene, config.projection_tolerance);
     let projection = KernelProjection::new(
         &frozen,
         scene,
-        PROJECTION_TOLERANCE,
+        config.projection_tolerance,
         config.projection_rejection,
     );
     let reflectance = |f| domain.reflectance(f);
     let total =
         |samples: &[Sample]| -> f64 { samples.iter().map(|s| s.s.iter().sum::<f64>()).sum() };
+    let receiver = if config.energy_correction {
+        receiver_integrals(&frozen, scene, config.projection_tolerance)
+    } else {
+        Vec::new()
+    };
+    let mut balance = 1.0;
+    // The projection conserves energy only up to its fit error and the cells it rejects; with ρ
+    // near 1 the bounce iteration amplifies any excess (a ρ = 0.95 furnace ran away to 15× the
+    // exact B). Rescaling the weights so that the kernel reflects exactly the power the samples
+    // carry makes the iteration's gain that of the scene.
+    let mut fit = |frozen: &mut KernelCells, samples: &[Sample]| {
+        projection.fit(frozen, samples, shots, &reflectance);
+        if config.energy_correction {
+            let sampled = sampled_reflected_power(samples, shots, &reflectance);
+            let model = kernel_reflected_power(frozen, &sender, &receiver);
+            let (mut num, mut den) = (0.0, 0.0);
+            for k in 0..MAX_BANDS {
+                num += model[k];
+                den += sampled[k];
+                let ratio = sampled[k] / model[k];
+                if sampled[k] > 0.0 && model[k] > 0.0 && ratio.is_finite() {
+                    for v in frozen.v.iter_mut() {
+                        v[k] *= ratio;
+                    }
+                }
+            }
+            if den > 0.0 && num.is_finite() {
+                balance = num / den;
+            }
+        }
+    };
     let mut before = total(samples);
     let mut bounces = 0;
     while bounces < max_bounces {
-        projection.fit(&mut frozen, samples, shots, &reflectance);
+        fit(&mut frozen, samples);
         samples.par_iter_mut().for_each(|smp| {
             smp.s = kernel_strength(&smp.ray, &frozen, &sender);
         });
@@ -523,12 +556,28 @@ fn propagate(
         }
     }
     // The weights that go with the final strengths.
-    projection.fit(&mut frozen, samples, shots, &reflectance);
-    (frozen, sender, bounces)
+    fit(&mut frozen, samples);
+    Propagated {
+        kernel: frozen,
+        sender,
+        bounces,
+        energy_balance: balance,
+    }
 }
 
-/// Support cut-off of the projection's Gaussians.
-const PROJECTION_TOLERANCE: f64 = 1e-9;
+/// What [`propagate`] returns.
+struct Propagated {
+    /// The projected kernel.
+    kernel: KernelCells,
+    /// Its sender integrals.
+    sender: Vec<f64>,
+    /// Bounces run.
+    bounces: usize,
+    /// Reflected power of the projected kernel over the power the samples carry, before the
+    /// energy correction, in the last fit (1 when the projection conserves energy; 1 when the
+    /// correction is off and nothing was measured).
+    energy_balance: f64,
+}
 
 /// A new sample's strength s = E + B_refl from the current solution.
 fn initial_strength(

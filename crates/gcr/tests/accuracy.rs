@@ -136,8 +136,11 @@ fn base_reproduces_the_kernel_collection() {
         .unwrap();
     let bvh = SceneBvh::new(&scene);
     let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
-    let trained =
-        gcr::solve::solve(&domain, &config(200, OutputFit::Projection), &mut |_| {}).unwrap();
+    let config = SolveConfig {
+        skip_unused_base: false,
+        ..config(200, OutputFit::Projection)
+    };
+    let trained = gcr::solve::solve(&domain, &config, &mut |_| {}).unwrap();
     let sampler = scene_sampler::SurfaceSampler::new(&scene);
     let (mut num, mut den) = (0.0, 0.0);
     let mut scratch = Vec::new();

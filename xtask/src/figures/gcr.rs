@@ -118,6 +118,8 @@ fn wall_floor_gathers(ctx: &Ctx, cells: usize) -> Result<()> {
     let config = SolveConfig {
         kernel_cells: cells,
         shading_cells: cells / 2,
+        // Fig. 4.13a/b show the base gather: keep the base.
+        skip_unused_base: false,
         ..SolveConfig::default()
     };
     let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;

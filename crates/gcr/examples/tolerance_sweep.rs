@@ -1,0 +1,71 @@
+//! Solve time and error against the projection's support cut-off
+//! (`SolveConfig::projection_tolerance`): how much exactness the Gram matrix needs.
+//!
+//! `cargo run --release -p gcr --example tolerance_sweep -- cornell-box 400`
+//!
+//! Prints, per tolerance, the solve seconds (wall and the FEM share) and the relative L2 error of the kernel and ray gathers at the scene's probes against the
+//! path-traced reference.
+
+use gcr::config::{GatherMode, SolveConfig};
+use gcr::domain::Domain;
+use gcr::gather::Emitters;
+use gcr::pipeline::radiosity_at;
+use scene_sampler::{KernelSampler, SceneBvh};
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    let name = args.get(1).map_or("cornell-box", |s| s.as_str());
+    let cells: usize = args.get(2).map_or(Ok(400), |s| s.parse())?;
+    let scene = scene_sampler::builtin(name)?.into_3d()?;
+    let bvh = SceneBvh::new(&scene);
+    let probes = scene_sampler::read_probes(format!("scenes/{name}.probes.txt"))?;
+    let points = scene.snap_probes(&probes, name)?;
+    let reference = baselines::pointwise::radiosity_at(&scene, &bvh, &points, 20_000, 7);
+    let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+    let emitters = Emitters::new(&domain);
+    println!("| tolerance | seconds | FEM s | kernel error | rays error |");
+    println!("|---:|---:|---:|---:|---:|");
+    for tol in [1e-12, 1e-9, 1e-6, 1e-4] {
+        let config = SolveConfig {
+            kernel_cells: cells,
+            shading_cells: cells / 2,
+            projection_tolerance: tol,
+            ..SolveConfig::default()
+        };
+        let t = std::time::Instant::now();
+        let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+        let seconds = t.elapsed().as_secs_f64();
+        let mut errors = Vec::new();
+        for gather in [GatherMode::Kernel, GatherMode::Rays] {
+            let config = SolveConfig { gather, ..config };
+            let mut scratch = Vec::new();
+            let (mut num, mut den) = (0.0, 0.0);
+            for (i, (p, r)) in points.iter().zip(&reference).enumerate() {
+                if !scene.faces[p.face as usize].emission.is_zero() {
+                    continue;
+                }
+                let g = radiosity_at(
+                    &domain,
+                    &trained,
+                    &emitters,
+                    &config,
+                    p.point,
+                    p.normal,
+                    p.face,
+                    i as u64,
+                    &mut scratch,
+                );
+                for b in 0..3 {
+                    num += (g.radiosity[b] - r.mean[b]).powi(2);
+                    den += r.mean[b].powi(2);
+                }
+            }
+            errors.push((num / den).sqrt());
+        }
+        println!(
+            "| {tol:.0e} | {seconds:.2} | {:.2} | {:.4} | {:.4} |",
+            trained.metrics.seconds.fem, errors[0], errors[1]
+        );
+    }
+    Ok(())
+}

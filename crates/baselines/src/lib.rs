@@ -2,4 +2,5 @@
 //!
 //! So far: [`pointwise`], the path-traced pointwise reference of MATH.md §8 for 3-D scenes.
 
+pub mod hierarchical;
 pub mod pointwise;

@@ -1,0 +1,20 @@
+//! Hierarchical radiosity (HR; Hanrahan, Salzman and Aupperle 1991) with a constant base — the method chapter 4
+//! of the dissertation compares the growing-cells kernel with, at equal numbers of links (sec. 4.1, fig. 4.5).
+//!
+//! * [`strings`] — Flatland form factors by crossed strings (MATH.md §7) and the ray estimate of the visible
+//!   fraction.
+//! * [`flatland`] — [`FlatHr`]: binary patch subdivision, links, the BF refinement oracle with partial
+//!   visibility as a reason to refine, gathering with push-pull, refinement/solution passes to convergence.
+//! * [`budget`] — [`solve_for_links`]: bisects `log ε` until the solution has a requested number of links.
+//!
+//! Shares no code with the growing-cells crates; geometry, visibility and scenes come from [`scene_sampler`].
+//! See `docs/hierarchical.md` for the measured behaviour.
+
+pub mod budget;
+pub mod error;
+pub mod flatland;
+pub mod strings;
+
+pub use budget::{BudgetResult, solve_for_links};
+pub use error::{HrError, Result};
+pub use flatland::{FlatHr, FlatHrConfig, FlatHrStats, Link, Patch};

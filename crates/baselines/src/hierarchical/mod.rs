@@ -6,6 +6,8 @@
 //! * [`flatland`] — [`FlatHr`]: binary patch subdivision, links, the BF refinement oracle with partial
 //!   visibility as a reason to refine, gathering with push-pull, refinement/solution passes to convergence.
 //! * [`budget`] — [`solve_for_links`]: bisects `log ε` until the solution has a requested number of links.
+//! * [`kernel`] — HR's kernel as a piecewise constant over `(s, t) ∈ [0,1]²` (fig. 4.2b), the exact Flatland
+//!   kernel on the same parameterization, and the kernel error measure of issue #6.
 //!
 //! Shares no code with the growing-cells crates; geometry, visibility and scenes come from [`scene_sampler`].
 //! See `docs/hierarchical.md` for the measured behaviour.
@@ -13,8 +15,10 @@
 pub mod budget;
 pub mod error;
 pub mod flatland;
+pub mod kernel;
 pub mod strings;
 
 pub use budget::{BudgetResult, solve_for_links};
 pub use error::{HrError, Result};
 pub use flatland::{FlatHr, FlatHrConfig, FlatHrStats, Link, Patch};
+pub use kernel::{HrKernel, KernelError, Weight, exact_kernel_at, kernel_error};

@@ -287,3 +287,40 @@ fn bad_input_is_an_error() {
     };
     assert!(hr.radiosity_at(&off).is_err());
 }
+
+#[test]
+fn refine_rule_splits_every_partially_visible_link_to_the_floor() {
+    // flatland-blocker: with ε above every transfer only the partial-visibility rule refines
+    let scene = builtin("flatland-blocker")
+        .unwrap()
+        .into_flatland()
+        .unwrap();
+    let min_length = budget::min_length_for(&scene, 100);
+    let run = |partial| {
+        FlatHr::solve(
+            &scene,
+            FlatHrConfig {
+                epsilon: 1e3,
+                min_length,
+                partial,
+                ..FlatHrConfig::default()
+            },
+        )
+        .unwrap()
+    };
+    let splittable = |hr: &FlatHr, p: u32| 0.5 * hr.patches()[p as usize].length >= min_length;
+    let refine = run(PartialVisibility::Refine);
+    let bound = run(PartialVisibility::UnoccludedBound);
+    assert!(refine.links().iter().any(|l| l.partial));
+    for l in refine.links().iter().filter(|l| l.partial) {
+        assert!(!splittable(&refine, l.receiver) && !splittable(&refine, l.sender));
+    }
+    // the default rule judges by ρ·F_u·B, which ε = 1e3 exceeds nowhere: the initial links stay
+    assert!(refine.link_count() > bound.link_count());
+    assert!(
+        bound
+            .links()
+            .iter()
+            .any(|l| l.partial && splittable(&bound, l.receiver))
+    );
+}

@@ -110,4 +110,29 @@ fn bad_parameters_are_errors() {
     let ks = FlatKernelSampler::new(&scene);
     assert!(exact_kernel_at(&ks, -0.1, 0.2).is_err());
     assert!(kernel_error(&hr, 0, Weight::None).is_err());
+    assert!(kernel_error_clamped(&hr, 8, Weight::None, -1.0).is_err());
+    assert!(kernel_error_clamped(&hr, 8, Weight::None, f64::INFINITY).is_err());
+}
+
+#[test]
+fn the_distance_clamp_only_lowers_the_exact_kernel() {
+    let scene = corner();
+    let hr = at_budget(&scene, 100);
+    let n = 256;
+    let raw = kernel_error(&hr, n, Weight::Emission).unwrap();
+    assert_eq!(
+        kernel_error_clamped(&hr, n, Weight::Emission, 0.0).unwrap(),
+        raw
+    );
+    let r_min = 0.05 * scene.diagonal();
+    let c = kernel_error_clamped(&hr, n, Weight::Emission, r_min).unwrap();
+    assert!(c.max_exact < raw.max_exact && c.rms_exact < raw.rms_exact);
+    // off the corner the two kernels agree: K·E is bounded by (1/2)·max E/r_min with ρ ≤ 1, cos ≤ 1
+    let e_max = scene
+        .segments
+        .iter()
+        .map(|s| s.emission.0[0])
+        .fold(0.0, f64::max);
+    assert!(c.max_exact <= 0.5 * e_max / r_min * (1.0 + 1e-12));
+    assert!(c.mean_exact < raw.mean_exact && c.mean_exact > 0.9 * raw.mean_exact);
 }

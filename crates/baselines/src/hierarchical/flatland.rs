@@ -44,6 +44,19 @@ pub struct FlatHrConfig {
     pub max_iterations: usize,
     /// Seed of the visibility rays (results are deterministic per seed).
     pub seed: u64,
+    /// How partial visibility enters the oracle ([`PartialVisibility`]).
+    pub partial: PartialVisibility,
+}
+
+/// How the oracle treats a partially visible link (some of its rays blocked, some not).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PartialVisibility {
+    /// Judge it by the unoccluded transfer `ρ_r · F_u · B_s` (an upper bound of what the visibility estimate
+    /// can get wrong) instead of `ρ_r · F_u · V̄ · B_s`.
+    #[default]
+    UnoccludedBound,
+    /// Always refine it (down to the minimum patch length), whatever ε says.
+    Refine,
 }
 
 impl Default for FlatHrConfig {
@@ -57,6 +70,7 @@ impl Default for FlatHrConfig {
             tolerance: 1e-10,
             max_iterations: 10_000,
             seed: 1,
+            partial: PartialVisibility::UnoccludedBound,
         }
     }
 }
@@ -339,7 +353,12 @@ impl FlatHr {
 
     /// The oracle's estimate of the error a link commits: `max_band ρ_r · F · B_s` with `F = F_u` for a
     /// partially visible link and `F_u·V̄` otherwise (module docs).
+    ///
+    /// With [`PartialVisibility::Refine`] a partially visible link reports `+∞`.
     pub fn oracle(&self, link: &Link) -> f64 {
+        if link.partial && self.config.partial == PartialVisibility::Refine {
+            return f64::INFINITY;
+        }
         let rho = self.scene.segments[self.patches[link.receiver as usize].segment as usize].rho;
         let b = self.patches[link.sender as usize].radiosity;
         let f = if link.partial {

@@ -114,14 +114,15 @@ impl<'a> HrKernel<'a> {
     }
 }
 
-/// The exact Flatland kernel `K(s,t) = ρ(y) cos θx cos θy / (2r) · V(x,y)` (sec. 4.1, MATH.md §7), without
-/// the distance clamp, at x = sample(s), y = sample(t). Use a sampler built from the same scene.
+/// The exact Flatland kernel `K(s,t) = ρ(y) cos θx cos θy / (2 max(r, r_min)) · V(x,y)` (sec. 4.1, MATH.md §7)
+/// at x = sample(s), y = sample(t), with the sampler's distance clamp `r_min` (MATH.md §6; set
+/// `k.r_min = 0` for the unclamped kernel). Use a sampler built from the same scene.
 pub fn exact_kernel_at(k: &FlatKernelSampler, s: f64, t: f64) -> Result<Spectrum> {
     check_param("s", s)?;
     check_param("t", t)?;
     let smp = k.sample(s, t);
     Ok(if smp.visible {
-        smp.rho_y * smp.g_unclamped
+        smp.rho_y * smp.g
     } else {
         Spectrum::ZERO
     })
@@ -153,9 +154,28 @@ pub struct KernelError {
     pub mse_over_mean2: f64,
 }
 
-/// Evaluates HR's kernel and the exact kernel on the `n × n` midpoint grid, weighted by `weight`, and
-/// returns the error statistics (module docs).
+/// Evaluates HR's kernel and the exact, unclamped kernel on the `n × n` midpoint grid, weighted by `weight`,
+/// and returns the error statistics (module docs).
 pub fn kernel_error(hr: &FlatHr, n: usize, weight: Weight) -> Result<KernelError> {
+    kernel_error_clamped(hr, n, weight, 0.0)
+}
+
+/// [`kernel_error`] against the kernel with the distance clamp `r_min` (MATH.md §6) — the goal function the
+/// kernel network is trained on uses `r_min = 10⁻³ · diagonal` ([`FlatKernelSampler`]'s default). The clamp
+/// bounds the corner singularity `G ~ 1/r`, whose square is only logarithmically integrable.
+pub fn kernel_error_clamped(
+    hr: &FlatHr,
+    n: usize,
+    weight: Weight,
+    r_min: f64,
+) -> Result<KernelError> {
+    if !(r_min.is_finite() && r_min >= 0.0) {
+        return Err(HrError::InvalidParameter {
+            name: "r_min",
+            value: r_min,
+            reason: "must be finite and ≥ 0",
+        });
+    }
     if n == 0 {
         return Err(HrError::InvalidParameter {
             name: "grid",
@@ -165,7 +185,7 @@ pub fn kernel_error(hr: &FlatHr, n: usize, weight: Weight) -> Result<KernelError
     }
     let hk = HrKernel::new(hr);
     let mut ks = FlatKernelSampler::new(hr.scene());
-    ks.r_min = 0.0;
+    ks.r_min = r_min;
     let mut emission = Vec::with_capacity(n);
     for i in 0..n {
         let x = ks.sampler.sample((i as f64 + 0.5) / n as f64);

@@ -20,5 +20,7 @@ pub mod strings;
 
 pub use budget::{BudgetResult, solve_for_links};
 pub use error::{HrError, Result};
-pub use flatland::{FlatHr, FlatHrConfig, FlatHrStats, Link, Patch};
-pub use kernel::{HrKernel, KernelError, Weight, exact_kernel_at, kernel_error};
+pub use flatland::{FlatHr, FlatHrConfig, FlatHrStats, Link, PartialVisibility, Patch};
+pub use kernel::{
+    HrKernel, KernelError, Weight, exact_kernel_at, kernel_error, kernel_error_clamped,
+};

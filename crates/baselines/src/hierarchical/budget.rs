@@ -9,7 +9,8 @@
 
 use super::error::{HrError, Result};
 use super::flatland::{FlatHr, FlatHrConfig};
-use scene_sampler::FlatlandScene;
+use super::triangles::{TriHr, TriHrConfig};
+use scene_sampler::{FlatlandScene, Scene};
 
 /// A solution at a link budget.
 #[derive(Clone, Debug)]
@@ -39,6 +40,102 @@ pub fn solve_for_links(
     base: FlatHrConfig,
     rel_tol: f64,
 ) -> Result<BudgetResult> {
+    base.validate()?;
+    let (mut e_max, mut rho_max) = (0.0f64, 0.0f64);
+    for s in &scene.segments {
+        e_max = e_max.max(s.emission.max());
+        rho_max = rho_max.max(s.rho.max());
+    }
+    let (hr, epsilon, solves) = search(
+        target,
+        rel_tol,
+        e_max,
+        rho_max,
+        base.max_links,
+        |eps| {
+            FlatHr::solve(
+                scene,
+                FlatHrConfig {
+                    epsilon: eps,
+                    ..base
+                },
+            )
+        },
+        FlatHr::link_count,
+    )?;
+    Ok(BudgetResult {
+        hr,
+        epsilon,
+        solves,
+    })
+}
+
+/// A 3-D solution at a link budget.
+#[derive(Debug)]
+pub struct TriBudgetResult {
+    /// The solution.
+    pub hr: TriHr,
+    /// The ε that produced it.
+    pub epsilon: f64,
+    /// Number of complete HR solutions the search made.
+    pub solves: usize,
+}
+
+/// The default minimum patch area for a budget of `target` links in 3-D: the total scene area over the
+/// target (no patch finer than a uniform mesh with as many elements as there are links).
+pub fn min_area_for(scene: &Scene, target: usize) -> f64 {
+    scene.total_area() / target.max(1) as f64
+}
+
+/// [`solve_for_links`] for 3-D HR on triangles. The initial linking of all facing triangle pairs sets a
+/// lower bound on the count: smaller budgets are errors ([`HrError::BudgetNotReached`]).
+pub fn solve_tri_for_links(
+    scene: &Scene,
+    target: usize,
+    base: TriHrConfig,
+    rel_tol: f64,
+) -> Result<TriBudgetResult> {
+    base.validate()?;
+    let (mut e_max, mut rho_max) = (0.0f64, 0.0f64);
+    for f in &scene.faces {
+        e_max = e_max.max(f.emission.max());
+        rho_max = rho_max.max(f.rho.max());
+    }
+    let (hr, epsilon, solves) = search(
+        target,
+        rel_tol,
+        e_max,
+        rho_max,
+        base.max_links,
+        |eps| {
+            TriHr::solve(
+                scene,
+                TriHrConfig {
+                    epsilon: eps,
+                    ..base
+                },
+            )
+        },
+        TriHr::link_count,
+    )?;
+    Ok(TriBudgetResult {
+        hr,
+        epsilon,
+        solves,
+    })
+}
+
+/// The search of the module docs, for any solver: `solve(ε)` runs HR, `count` reads its link count. Returns
+/// the solution, its ε and the number of solves.
+fn search<T>(
+    target: usize,
+    rel_tol: f64,
+    e_max: f64,
+    rho_max: f64,
+    max_links: usize,
+    mut solve: impl FnMut(f64) -> Result<T>,
+    count: impl Fn(&T) -> usize,
+) -> Result<(T, f64, usize)> {
     if target == 0 {
         return Err(HrError::InvalidParameter {
             name: "target",
@@ -53,19 +150,14 @@ pub fn solve_for_links(
             reason: "must be finite and ≥ 0",
         });
     }
-    base.validate()?;
     let tol = (rel_tol * target as f64).max(1.0);
     let mut solves = 0usize;
-    let mut best: Option<(usize, f64, FlatHr)> = None;
-    let mut eval = |eps: f64, best: &mut Option<(usize, f64, FlatHr)>| -> Result<usize> {
+    let mut best: Option<(usize, f64, T)> = None;
+    let mut eval = |eps: f64, best: &mut Option<(usize, f64, T)>| -> Result<usize> {
         solves += 1;
-        let cfg = FlatHrConfig {
-            epsilon: eps,
-            ..base
-        };
-        match FlatHr::solve(scene, cfg) {
+        match solve(eps) {
             Ok(hr) => {
-                let n = hr.link_count();
+                let n = count(&hr);
                 let d = n.abs_diff(target);
                 if best
                     .as_ref()
@@ -81,11 +173,6 @@ pub fn solve_for_links(
     };
     let done = |n: usize| n != usize::MAX && (n.abs_diff(target) as f64) <= tol;
     // an ε above every possible ρ·F·B: F ≤ 1 and B ≤ max E / (1 − max ρ)
-    let (mut e_max, mut rho_max) = (0.0f64, 0.0f64);
-    for s in &scene.segments {
-        e_max = e_max.max(s.emission.max());
-        rho_max = rho_max.max(s.rho.max());
-    }
     let mut hi = 2.0 * e_max / (1.0 - rho_max);
     let n_hi = eval(hi, &mut best)?;
     if !done(n_hi) && n_hi < target {
@@ -119,7 +206,7 @@ pub fn solve_for_links(
     }
     let Some((n, eps, hr)) = best else {
         return Err(HrError::LinkLimit {
-            limit: base.max_links,
+            limit: max_links,
             epsilon: hi,
         });
     };
@@ -131,9 +218,5 @@ pub fn solve_for_links(
             epsilon: eps,
         });
     }
-    Ok(BudgetResult {
-        hr,
-        epsilon: eps,
-        solves,
-    })
+    Ok((hr, eps, solves))
 }

@@ -146,6 +146,19 @@ fn furnace_gives_e_over_one_minus_rho() {
     assert!(coarse.links().iter().all(|l| l.visibility == 1.0));
     let err = furnace_error(&coarse, want);
     assert!(err < 1e-9, "{err}");
+    // the final gather at any point: exact point-to-polygon factors summing to one
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    for k in 0..10 {
+        let i = rng.random_range(0..scene.faces.len());
+        let f = &scene.faces[i];
+        let p = SurfacePoint {
+            point: triangle_point(&f.v, [rng.random(), rng.random()]),
+            normal: f.normal,
+            face: i as u32,
+        };
+        let b = coarse.gather_at(&p, 4, k).unwrap().0[0];
+        assert!((b - want).abs() < 1e-9 * want, "gather {b} vs {want}");
+    }
     // ε = 0: uniform refinement to the floor, exact again
     let full = TriHr::solve(
         &scene,
@@ -311,4 +324,12 @@ fn bad_input_is_an_error() {
         face: 0,
     };
     assert!(hr.radiosity_at(&off).is_err());
+    assert!(hr.gather_at(&off, 4, 0).is_err());
+    let on = SurfacePoint {
+        point: scene.faces[0].centroid(),
+        normal: scene.faces[0].normal,
+        face: 0,
+    };
+    assert!(hr.gather_at(&on, 0, 0).is_err());
+    assert!(hr.gather_at(&on, 4, 0).is_ok());
 }

@@ -94,6 +94,24 @@ impl SceneSurface {
         self.masked_gaussian_integral(c, a, tol, &[], 0.0, scratch)
     }
 
+    /// Elements whose bounding boxes meet the ball (centre, radius), ascending.
+    pub fn elements_near(&self, centre: DVec3, radius: f64, out: &mut Vec<u32>) {
+        self.grid.query_ball(centre, radius, out);
+    }
+
+    /// [`SceneSurface::gaussian_integral`] with the support query answered from `candidates`
+    /// (ascending element ids, a superset of the elements within the support, e.g. from
+    /// [`SceneSurface::elements_near`] with a larger ball): the same elements in the same
+    /// order, hence the same sum, without a grid query.
+    pub fn gaussian_integral_among(&self, c: DVec3, a: f64, tol: f64, candidates: &[u32]) -> f64 {
+        let r = support_radius(1.0 / a.sqrt(), tol);
+        candidates
+            .iter()
+            .filter(|&&e| self.grid.box_hits(e, c, r))
+            .map(|&e| self.elements[e as usize].gaussian_integral(c, a))
+            .sum()
+    }
+
     /// ∫ exp(−a|x − c|²) dx over the elements of S that face like every normal in `facing`
     /// (element normal · n > `cos_min`; a zero n accepts every element).
     pub fn masked_gaussian_integral(

@@ -28,7 +28,9 @@
 use crate::element::{Bands, MAX_BANDS};
 use crate::fem::{KernelCells, SceneSurface};
 use crate::solver::Sample;
+use crate::spatial::support_radius;
 use gauss_integrals as integrals;
+use glam::DVec3;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
@@ -42,15 +44,14 @@ pub struct ProjectionReport {
 }
 
 /// `∫_S g(x; w1, d1)·g(x; w2, d2) dx` (3-D: the 3 first coordinates; Flatland embeds z = 0):
-/// the product is one Gaussian (MATH.md §2) integrated exactly over the scene.
+/// the product is one Gaussian (MATH.md §2) integrated exactly over the scene's elements among
+/// `candidates` (ascending ids covering the product's support).
 fn half_overlap(
     scene: &SceneSurface,
-    w1: glam::DVec3,
-    a1: f64,
-    w2: glam::DVec3,
-    a2: f64,
+    (w1, a1): (DVec3, f64),
+    (w2, a2): (DVec3, f64),
     tol: f64,
-    scratch: &mut Vec<u32>,
+    candidates: &[u32],
 ) -> f64 {
     let a = a1 + a2;
     let c = (a1 * w1 + a2 * w2) / a;
@@ -58,7 +59,24 @@ fn half_overlap(
     if k == 0.0 {
         return 0.0;
     }
-    k * scene.gaussian_integral(c, a, tol, scratch)
+    k * scene.gaussian_integral_among(c, a, tol, candidates)
+}
+
+/// Per cell, the elements within twice its support radius of each half: a superset of the
+/// support of its product with any cell the pair cut keeps. With `ln(1/tol) = L`, a kept pair
+/// has `a_o a_p/(a_o + a_p)·|Δ|² ≤ L`, so the product's centre lies within `√(L/a_o)` of `w_o`
+/// and its support radius `√(L/(a_o + a_p))` is smaller still. Replaces one grid query per
+/// pair and half by one per cell and half.
+fn candidates(centres: &[DVec3], widths: &[f64], scene: &SceneSurface, tol: f64) -> Vec<Vec<u32>> {
+    centres
+        .par_iter()
+        .zip(widths)
+        .map(|(c, d)| {
+            let mut out = Vec::new();
+            scene.elements_near(*c, 2.0 * support_radius(*d, tol), &mut out);
+            out
+        })
+        .collect()
 }
 
 /// The Gram matrix `G_oo' = ∫∫_{S×S} g_o g_o'` of the kernel cells (module docs). Entries whose
@@ -67,9 +85,18 @@ pub fn kernel_gram(kernel: &KernelCells, scene: &SceneSurface, tol: f64) -> DMat
     let n = kernel.len();
     let a: Vec<f64> = kernel.width.iter().map(|d| 1.0 / (d * d)).collect();
     let cut = (1.0 / tol).ln();
+    let near_x = candidates(&kernel.wx, &kernel.width, scene, tol);
+    let near_y = candidates(&kernel.wy, &kernel.width, scene, tol);
+    let shorter = |lists: &[Vec<u32>], o: usize, p: usize| -> usize {
+        if lists[o].len() <= lists[p].len() {
+            o
+        } else {
+            p
+        }
+    };
     let rows: Vec<Vec<(usize, f64)>> = (0..n)
         .into_par_iter()
-        .map_init(Vec::new, |scratch, o| {
+        .map(|o| {
             let mut row = Vec::new();
             for p in o..n {
                 let ab = a[o] * a[p] / (a[o] + a[p]);
@@ -78,11 +105,13 @@ pub fn kernel_gram(kernel: &KernelCells, scene: &SceneSurface, tol: f64) -> DMat
                 if ab * d2 > cut {
                     continue;
                 }
-                let ix = half_overlap(scene, kernel.wx[o], a[o], kernel.wx[p], a[p], tol, scratch);
+                let (ho, hp) = ((kernel.wx[o], a[o]), (kernel.wx[p], a[p]));
+                let ix = half_overlap(scene, ho, hp, tol, &near_x[shorter(&near_x, o, p)]);
                 if ix == 0.0 {
                     continue;
                 }
-                let iy = half_overlap(scene, kernel.wy[o], a[o], kernel.wy[p], a[p], tol, scratch);
+                let (ho, hp) = ((kernel.wy[o], a[o]), (kernel.wy[p], a[p]));
+                let iy = half_overlap(scene, ho, hp, tol, &near_y[shorter(&near_y, o, p)]);
                 if iy != 0.0 {
                     row.push((p, ix * iy));
                 }

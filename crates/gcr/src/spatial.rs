@@ -85,7 +85,9 @@ impl BoxGrid {
         out.dedup();
     }
 
-    fn box_hits(&self, i: u32, c: DVec3, r: f64) -> bool {
+    /// Whether item `i`'s box intersects the ball (c, r): the test [`BoxGrid::query_ball`]
+    /// applies, for callers that filter a candidate list of their own.
+    pub fn box_hits(&self, i: u32, c: DVec3, r: f64) -> bool {
         let (lo, hi) = self.boxes[i as usize];
         c.clamp(lo, hi).distance_squared(c) <= r * r
     }

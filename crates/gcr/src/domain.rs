@@ -5,7 +5,7 @@
 //! network input dimensions differ: the kernel network sees (x, y) ∈ R^6 in 3-D and R^4 in
 //! Flatland, the shading network R^3 or R^2.
 
-use crate::element::{Bands, Element};
+use crate::element::{Bands, Element, MAX_BANDS};
 use glam::{DVec2, DVec3};
 use scene_sampler::{
     FlatKernelSampler, FlatPoint, FlatlandScene, KernelSampler, Scene, SurfacePoint,
@@ -229,6 +229,37 @@ impl Domain<'_> {
         }
     }
 
+    /// Per band, the maximum principle's bound `E_max / (1 − ρ_max)` on any radiosity (and any
+    /// sample strength): `B = E + ρ ∫ G B` with `∫_S G(x, y) dy ≤ 1` gives
+    /// `B_max ≤ E_max + ρ_max B_max`. Infinite when ρ_max ≥ 1 (the loaders reject that).
+    pub fn radiosity_bound(&self) -> Bands {
+        let faces: Vec<(Bands, Bands)> = match self {
+            Domain::ThreeD(k) => k
+                .scene
+                .faces
+                .iter()
+                .map(|f| (f.emission.0, f.rho.0))
+                .collect(),
+            Domain::Flat(k) => k
+                .scene
+                .segments
+                .iter()
+                .map(|s| (s.emission.0, s.rho.0))
+                .collect(),
+        };
+        let mut bound = [0.0; MAX_BANDS];
+        for (k, b) in bound.iter_mut().enumerate() {
+            let e = faces.iter().map(|f| f.0[k]).fold(0.0, f64::max);
+            let rho = faces.iter().map(|f| f.1[k]).fold(0.0, f64::max);
+            *b = if rho < 1.0 {
+                e / (1.0 - rho)
+            } else {
+                f64::INFINITY
+            };
+        }
+        bound
+    }
+
     /// The 3-D scene, if this is one.
     pub fn scene_3d(&self) -> Option<&Scene> {
         match self {
@@ -290,6 +321,37 @@ impl Domain<'_> {
 mod tests {
     use super::*;
     use scene_sampler::{AnyScene, SceneBvh, builtin};
+
+    /// The bound is E_max/(1 − ρ_max) per band: tight in the furnace (B = E/(1 − ρ) exactly),
+    /// above every face's own E in the Cornell box.
+    #[test]
+    fn radiosity_bound_is_the_maximum_principle() {
+        let AnyScene::ThreeD(furnace) = builtin("furnace").unwrap() else {
+            panic!()
+        };
+        let bvh = SceneBvh::new(&furnace);
+        let d = Domain::ThreeD(KernelSampler::new(&furnace, &bvh));
+        let f = &furnace.faces[0];
+        let b = d.radiosity_bound();
+        for k in 0..d.bands() {
+            let exact = f.emission.0[k] / (1.0 - f.rho.0[k]);
+            assert!((b[k] - exact).abs() <= 1e-12 * exact, "{b:?} vs {exact}");
+        }
+        let AnyScene::ThreeD(cornell) = builtin("cornell-box").unwrap() else {
+            panic!()
+        };
+        let bvh = SceneBvh::new(&cornell);
+        let d = Domain::ThreeD(KernelSampler::new(&cornell, &bvh));
+        let b = d.radiosity_bound();
+        let light = cornell
+            .faces
+            .iter()
+            .find(|f| !f.emission.is_zero())
+            .unwrap();
+        for k in 0..3 {
+            assert!(b[k] > light.emission.0[k] && b[k].is_finite(), "{b:?}");
+        }
+    }
 
     #[test]
     fn cornell_rays_have_finite_nonnegative_kernels_and_6d_inputs() {

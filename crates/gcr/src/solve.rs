@@ -18,6 +18,9 @@ pub enum SolveError {
     /// The networks could not be created.
     #[error("network: {0}")]
     Network(#[from] isgcs::IsgcsError),
+    /// The kernel projection kept breaking the maximum-principle bound on B.
+    #[error("numerically unstable solve: {0}")]
+    Unstable(String),
 }
 
 /// Creates the kernel network (n = 2·dim, k = 4 in 3-D / 2 in Flatland, m = bands) and the
@@ -63,5 +66,5 @@ pub fn solve(
 ) -> Result<Trained, SolveError> {
     config.validate()?;
     let (mut kernel, mut shading) = make_networks(domain, config)?;
-    Ok(train(domain, &mut kernel, &mut shading, config, observer))
+    train(domain, &mut kernel, &mut shading, config, observer)
 }

@@ -14,6 +14,7 @@ use crate::network::GrowingNetwork;
 use crate::projection::{KernelProjection, kernel_reflected_power, sampled_reflected_power};
 use crate::shading::ShadingGeometry;
 use crate::shooting::SenderDensity;
+use crate::solve::SolveError;
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -196,7 +197,7 @@ pub fn train(
     shading: &mut impl GrowingNetwork,
     config: &SolveConfig,
     observer: &mut dyn FnMut(&Progress),
-) -> Trained {
+) -> Result<Trained, SolveError> {
     let start = Instant::now();
     let mut metrics = Metrics {
         bands: domain.bands(),
@@ -379,7 +380,7 @@ pub fn train(
                     shots,
                     &scene_surface,
                     TRAINING_BOUNCES,
-                );
+                )?;
                 metrics.bounces += p.bounces;
                 p.kernel
             } else {
@@ -425,7 +426,7 @@ pub fn train(
             shots,
             &scene_surface,
             FINAL_BOUNCES,
-        );
+        )?;
         metrics.bounces += p.bounces;
         metrics.energy_balance = config.energy_correction.then_some(p.energy_balance);
         let (frozen, sender) = (p.kernel, p.sender);
@@ -469,13 +470,13 @@ pub fn train(
     let fem = fem.expect("at least one FEM step ran");
     metrics.shading_triangles = fem.base.geo.simplices.len();
     metrics.rejected_base_components = fem.rejected;
-    Trained {
+    Ok(Trained {
         kernel: frozen,
         sender,
         fem,
         samples,
         metrics,
-    }
+    })
 }
 
 /// Bounces per projection during training.
@@ -489,7 +490,8 @@ const BOUNCE_TOLERANCE: f64 = 1e-5;
 /// iterates `s ← E + B_refl(s)` with the kernel collection (one light bounce per iteration) until
 /// the total strength changes by less than [`BOUNCE_TOLERANCE`] or `max_bounces` is reached.
 /// Returns the projected kernel, its sender integrals and the bounces run.
-fn propagate(
+#[allow(clippy::too_many_arguments)]
+fn propagate_at(
     kernel: &impl GrowingNetwork,
     domain: &Domain,
     config: &SolveConfig,
@@ -497,20 +499,16 @@ fn propagate(
     shots: u64,
     scene: &SceneSurface,
     max_bounces: usize,
+    (tol, rejection): (f64, f64),
 ) -> Propagated {
     let mut frozen = freeze_kernel(kernel, domain.dim(), domain.bands());
-    let sender = sender_integrals(&frozen, scene, config.projection_tolerance);
-    let projection = KernelProjection::new(
-        &frozen,
-        scene,
-        config.projection_tolerance,
-        config.projection_rejection,
-    );
+    let sender = sender_integrals(&frozen, scene, tol);
+    let projection = KernelProjection::new(&frozen, scene, tol, rejection);
     let reflectance = |f| domain.reflectance(f);
     let total =
         |samples: &[Sample]| -> f64 { samples.iter().map(|s| s.s.iter().sum::<f64>()).sum() };
     let receiver = if config.energy_correction {
-        receiver_integrals(&frozen, scene, config.projection_tolerance)
+        receiver_integrals(&frozen, scene, tol)
     } else {
         Vec::new()
     };
@@ -564,6 +562,67 @@ fn propagate(
         energy_balance: balance,
     }
 }
+
+/// [`propagate_at`], guarded by the maximum principle: with `∫_S G(x, y) dy ≤ 1`, every
+/// radiosity obeys `B ≤ E_max / (1 − ρ_max)` per band ([`Domain::radiosity_bound`]), and so does
+/// every sample strength of a sound solve. A projected kernel whose bounce iteration breaks the
+/// bound tenfold has gone unstable: measured with 1400 cornell-box cells at a support cut-off of
+/// 1e−4 (B ≈ 1e15, and still ≈ 1e69 after redoing the projection with the cut-off 1000× tighter
+/// and the rejection threshold raised to 0.1, so the damage is in the network the loose cut-off
+/// trained, not in one Gram matrix). The solve then stops with an error instead of a wrong
+/// picture.
+#[allow(clippy::too_many_arguments)]
+fn propagate(
+    kernel: &impl GrowingNetwork,
+    domain: &Domain,
+    config: &SolveConfig,
+    samples: &mut [Sample],
+    shots: u64,
+    scene: &SceneSurface,
+    max_bounces: usize,
+) -> Result<Propagated, SolveError> {
+    let cut = (config.projection_tolerance, config.projection_rejection);
+    let p = propagate_at(
+        kernel,
+        domain,
+        config,
+        samples,
+        shots,
+        scene,
+        max_bounces,
+        cut,
+    );
+    let worst = bound_excess(samples, &domain.radiosity_bound());
+    if worst > UNSTABLE_FACTOR {
+        return Err(SolveError::Unstable(format!(
+            "the projected kernel's bounces give radiosities {worst:.1e} times the bound \
+             E_max/(1 − ρ_max) of the scene (projection cut-off {:.0e}, rejection {:.0e}; the \
+             defaults 1e-9 and 1e-6 are the measured-safe ones)",
+            cut.0, cut.1
+        )));
+    }
+    Ok(p)
+}
+
+/// The largest `|s_k| / bound_k` over the samples and bands (∞ for a non-finite strength; a zero
+/// bound counts as the smallest positive number, so any strength in a dark band is an excess).
+fn bound_excess(samples: &[Sample], bound: &Bands) -> f64 {
+    samples
+        .iter()
+        .flat_map(|s| (0..MAX_BANDS).map(move |k| (s.s[k].abs(), k)))
+        .map(|(v, k)| {
+            if v.is_finite() {
+                v / bound[k].max(f64::MIN_POSITIVE)
+            } else {
+                f64::INFINITY
+            }
+        })
+        .fold(0.0, f64::max)
+}
+
+/// How far beyond the maximum-principle bound a strength may go (Monte-Carlo noise and the
+/// projection's ringing stay far below this) before the solve counts as unstable.
+const UNSTABLE_FACTOR: f64 = 10.0;
 
 /// What [`propagate`] returns.
 struct Propagated {
@@ -683,4 +742,43 @@ fn update_strengths(
                 StrengthFrom::Kernel => kernel_strength(&smp.ray, kernel, &fem.sender),
             };
         });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(s: Bands) -> Sample {
+        Sample {
+            ray: Ray {
+                x: DVec3::ZERO,
+                nx: DVec3::Y,
+                y: DVec3::ONE,
+                ny: DVec3::NEG_Y,
+                face_x: 0,
+                face_y: 1,
+                kernel: [0.0; MAX_BANDS],
+                emission_x: [0.0; MAX_BANDS],
+            },
+            s,
+            kernel_bmu: None,
+            shading_bmu: None,
+            inv_px: 0.0,
+        }
+    }
+
+    /// The unstable-solve test reads the worst ratio to the bound over every sample and band,
+    /// takes magnitudes (a projection can ring negative), and flags non-finite strengths.
+    #[test]
+    fn bound_excess_finds_the_worst_strength() {
+        let bound = [2.0, 4.0, 8.0];
+        let (a, mut b) = ([1.0, 1.0, 1.0], [0.5, -12.0, 4.0]);
+        assert_eq!(bound_excess(&[sample(a), sample(b)], &bound), 3.0);
+        assert_eq!(bound_excess(&[], &bound), 0.0);
+        b[2] = f64::NAN;
+        assert_eq!(bound_excess(&[sample(a), sample(b)], &bound), f64::INFINITY);
+        // A strength in a band the scene does not emit in is an excess of its own.
+        let dark_bound = [2.0, 4.0, 0.0];
+        assert!(bound_excess(&[sample([0.0, 0.0, 1e-3])], &dark_bound) > UNSTABLE_FACTOR);
+    }
 }

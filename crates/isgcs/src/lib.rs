@@ -19,8 +19,10 @@
 //! assert!((y[0] - 1.0).abs() < 0.1);
 //! ```
 
+mod linalg;
 mod network;
 mod params;
+pub mod rbf;
 
 pub use network::{Isgcs, IsgcsError};
 pub use params::Params;

@@ -266,10 +266,19 @@ impl Isgcs {
     /// Ψ(x) evaluated over every cell (the global reference).
     pub fn predict_global(&self, x: &[f64], out: &mut [f64]) {
         out.iter_mut().for_each(|o| *o = 0.0);
+        let mut sum = 0.0;
         for i in 0..self.len() {
             let a = self.activation(i, x);
+            sum += a;
             for (o, v) in out.iter_mut().zip(self.output(i)) {
                 *o += v * a;
+            }
+        }
+        if self.params.normalized {
+            if sum > 0.0 {
+                out.iter_mut().for_each(|o| *o /= sum);
+            } else {
+                out.copy_from_slice(self.output(self.bmu(x, None)));
             }
         }
     }
@@ -292,10 +301,20 @@ impl Isgcs {
         }
     }
 
+    /// The cells of [`Isgcs::support`] with the weights Ψ uses: Ω_i(x), or Ω_i(x) / Σ Ω_j(x) with
+    /// [`Params::normalized`]. A normalized network far outside its cells (empty support) falls
+    /// back to the best-matching unit with weight 1.
+    pub fn weights(&self, x: &[f64], out: &mut Vec<(usize, f64)>) {
+        self.support(x, out);
+        if self.params.normalized {
+            normalize(out, || self.bmu(x, None));
+        }
+    }
+
     /// Ψ(x) with the support cut-off of [`Isgcs::support`].
     pub fn predict(&self, x: &[f64], out: &mut [f64]) {
         let mut cells = Vec::new();
-        self.support(x, &mut cells);
+        self.weights(x, &mut cells);
         out.iter_mut().for_each(|o| *o = 0.0);
         for &(i, a) in &cells {
             for (o, v) in out.iter_mut().zip(self.output(i)) {
@@ -351,6 +370,9 @@ impl Isgcs {
         // Supervised: delta rule over the cells whose Gaussian reaches x.
         let mut support = Vec::new();
         self.support(x, &mut support);
+        if self.params.normalized {
+            normalize(&mut support, || b);
+        }
         let mut psi = vec![0.0; self.m];
         for &(i, a) in &support {
             for c in 0..self.m {
@@ -378,6 +400,62 @@ impl Isgcs {
             self.insert();
         }
         b
+    }
+
+    /// Least-squares polish of the output layer (a knob beyond the dissertation, which only uses
+    /// the delta rule, eq. 2.8): with the centres and widths fixed, Ψ is linear in the v_i, so the
+    /// v_i minimising Σ_s |Ψ(x_s) − y_s|² + ρ Σ_i |v_i|² solve the normal equations
+    /// (AᵀA + ρI) V = AᵀY, A_si being the weight of cell i at x_s ([`Isgcs::weights`]).
+    ///
+    /// `inputs` holds N points (N × n, row-major), `targets` their values (N × m). `ridge` is ρ
+    /// relative to the mean diagonal of AᵀA (1e-9 suits well-spread samples); it is raised
+    /// tenfold until the Cholesky factorisation succeeds. Returns the relative ridge used.
+    /// Cost O(N s² + z³) for s cells in a support, memory z²: meant for z up to a few thousand.
+    pub fn fit_outputs(
+        &mut self,
+        inputs: &[f64],
+        targets: &[f64],
+        ridge: f64,
+    ) -> Result<f64, IsgcsError> {
+        let (n, m, z) = (self.n, self.m, self.len());
+        if inputs.is_empty()
+            || inputs.len() % n != 0
+            || targets.len() != inputs.len() / n * m
+            || inputs.iter().chain(targets).any(|v| !v.is_finite())
+        {
+            return Err(IsgcsError::Invalid(format!(
+                "fit_outputs needs N > 0 finite inputs of dimension {n} and as many targets of \
+                 dimension {m} (got {} and {} numbers)",
+                inputs.len(),
+                targets.len()
+            )));
+        }
+        if !(ridge.is_finite() && ridge >= 0.0) {
+            return Err(IsgcsError::Invalid(format!(
+                "ridge {ridge} must be finite and >= 0"
+            )));
+        }
+        let mut gram = vec![0.0; z * z];
+        let mut rhs = vec![0.0; z * m];
+        let mut cells = Vec::new();
+        for (x, y) in inputs.chunks_exact(n).zip(targets.chunks_exact(m)) {
+            self.weights(x, &mut cells);
+            for &(i, a) in &cells {
+                for &(j, b) in &cells {
+                    if j <= i {
+                        gram[i * z + j] += a * b;
+                    }
+                }
+                for c in 0..m {
+                    rhs[i * m + c] += a * y[c];
+                }
+            }
+        }
+        let used = crate::linalg::ridge_solve(&gram, z, &mut rhs, m, ridge).ok_or_else(|| {
+            IsgcsError::Invalid("fit_outputs: no sample activates any cell".into())
+        })?;
+        self.outputs = rhs;
+        Ok(used)
     }
 
     /// Inserts a cell at the midpoint of the longest edge of the cell with the highest resource
@@ -475,6 +553,18 @@ impl Isgcs {
         for &c in &affected {
             self.refresh_width(c);
         }
+    }
+}
+
+/// Divides the weights by their sum; an empty or zero support becomes the fallback cell with
+/// weight 1.
+fn normalize(cells: &mut Vec<(usize, f64)>, fallback: impl FnOnce() -> usize) {
+    let sum: f64 = cells.iter().map(|&(_, a)| a).sum();
+    if sum > 0.0 {
+        cells.iter_mut().for_each(|(_, a)| *a /= sum);
+    } else {
+        cells.clear();
+        cells.push((fallback(), 1.0));
     }
 }
 

@@ -9,23 +9,10 @@
 //! The last line is `cells=<z> rms=<rms / sd> seconds=<training time>` for the network.
 
 use isgcs::rbf::GaussianRbf;
+use isgcs::test_functions::{franke, smooth6};
 use isgcs::{Isgcs, Params};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-
-fn franke(x: f64, y: f64) -> f64 {
-    0.75 * (-((9.0 * x - 2.0).powi(2) + (9.0 * y - 2.0).powi(2)) / 4.0).exp()
-        + 0.75 * (-(9.0 * x + 1.0).powi(2) / 49.0 - (9.0 * y + 1.0) / 10.0).exp()
-        + 0.5 * (-((9.0 * x - 7.0).powi(2) + (9.0 * y - 3.0).powi(2)) / 4.0).exp()
-        - 0.2 * (-(9.0 * x - 4.0).powi(2) - (9.0 * y - 7.0).powi(2)).exp()
-}
-
-/// A smooth function on [0, 1]⁶: a broad bump modulated by a plane wave, plus a product term.
-fn smooth6(x: &[f64]) -> f64 {
-    let r2: f64 = x.iter().map(|v| (v - 0.5) * (v - 0.5)).sum();
-    (-r2).exp() * (1.0 + 0.5 * (2.0 * x[0] + x[1] - x[2]).sin()) + 0.3 * x[3] * x[4]
-        - 0.2 * (2.0 * x[5]).cos()
-}
 
 fn arg<T: std::str::FromStr>(args: &[String], name: &str, default: T) -> Result<T, String> {
     match args.iter().position(|a| a == name) {

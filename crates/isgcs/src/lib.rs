@@ -23,6 +23,7 @@ mod linalg;
 mod network;
 mod params;
 pub mod rbf;
+pub mod test_functions;
 
 pub use network::{Isgcs, IsgcsError};
 pub use params::Params;

@@ -4,7 +4,13 @@
 //! standard deviation.
 //!
 //! `cargo run --release -p isgcs --example franke -- --cells 500 --seed 1 [--preset thesis|accurate]
-//! [--function franke|smooth6] [--lambda L] [--width W] [--rbf-width W] [--ridge R] [--normalized 0|1]`
+//! [--function franke|smooth6] [--lambda L] [--width W] [--rbf-width W] [--ridge R] [--normalized 0|1]
+//! [--polish 0|1] [--rbf 0|1]`
+//!
+//! `--preset accurate` (the default) is `Params::accurate()` followed by the least-squares polish
+//! `Isgcs::fit_outputs`; `--preset thesis` is `Params::thesis()` with the delta rule only. The other
+//! options override single knobs of the preset (`--polish 0|1` the least-squares polish,
+//! `--rbf 0` skips the reference fit).
 //!
 //! The last line is `cells=<z> rms=<rms / sd> seconds=<training time>` for the network.
 
@@ -34,6 +40,8 @@ struct Options {
     rbf_width: f64,
     ridge: f64,
     normalized: Option<bool>,
+    polish: Option<bool>,
+    rbf: bool,
 }
 
 fn options() -> Result<Options, String> {
@@ -75,6 +83,12 @@ fn options() -> Result<Options, String> {
             1 => Some(true),
             _ => None,
         },
+        polish: match arg(&args, "--polish", 2u8)? {
+            0 => Some(false),
+            1 => Some(true),
+            _ => None,
+        },
+        rbf: arg(&args, "--rbf", 1u8)? != 0,
     })
 }
 
@@ -140,7 +154,7 @@ fn main() {
         steps += 1;
     }
     let mut ridge = None;
-    if o.accurate {
+    if o.polish.unwrap_or(o.accurate) {
         // The accurate preset ends with the least-squares polish of the output layer.
         match net.fit_outputs(&samples.concat(), &targets, o.ridge) {
             Ok(r) => ridge = Some(r),
@@ -173,18 +187,25 @@ fn main() {
     let net_rms = rms(&|p, out| net.predict(p, out));
     // The reference in the same run: Gaussian RBF, k-means centres, least squares.
     let start = std::time::Instant::now();
-    match GaussianRbf::fit(
-        &samples.concat(),
-        &targets,
-        n,
-        1,
-        net.len(),
-        o.rbf_width,
-        30,
-        o.ridge,
-        o.seed,
+    match (!o.rbf).then_some(()).map_or_else(
+        || {
+            GaussianRbf::fit(
+                &samples.concat(),
+                &targets,
+                n,
+                1,
+                net.len(),
+                o.rbf_width,
+                30,
+                o.ridge,
+                o.seed,
+            )
+            .map(Some)
+        },
+        |_| Ok(None),
     ) {
-        Ok(rbf) => {
+        Ok(None) => {}
+        Ok(Some(rbf)) => {
             let rbf_seconds = start.elapsed().as_secs_f64();
             println!(
                 "rbf: centres={} rms={:.4} seconds={:.2}",

@@ -35,6 +35,10 @@ pub struct Isgcs {
     since_insert: usize,
     insertions: u64,
     growing: bool,
+    #[serde(default)]
+    since_delete: usize,
+    #[serde(default)]
+    deletions: u64,
 }
 
 impl Isgcs {
@@ -76,7 +80,10 @@ impl Isgcs {
             && p.phi > 0.0
             && p.omega > 0.0
             && p.usl_weight >= 0.0
-            && p.width_multiplier > 0.0;
+            && p.width_multiplier > 0.0
+            && p.width_multiplier.is_finite()
+            && p.epsilon >= 0.0
+            && p.epsilon.is_finite();
         if !ok {
             return bad(format!("parameters out of range: {p:?}"));
         }
@@ -100,6 +107,8 @@ impl Isgcs {
             since_insert: 0,
             insertions: 0,
             growing: true,
+            since_delete: 0,
+            deletions: 0,
         };
         for i in 0..z {
             net.refresh_width(i);
@@ -399,7 +408,128 @@ impl Isgcs {
             self.since_insert = 0;
             self.insert();
         }
+        // Deletion test every κ steps (sec. 2.4.2), off when κ = 0.
+        if self.params.kappa > 0 {
+            self.since_delete += 1;
+            if self.since_delete >= self.params.kappa {
+                self.since_delete = 0;
+                let low = (0..self.len()).min_by(|&a, &c| {
+                    self.resource(a)
+                        .total_cmp(&self.resource(c))
+                        .then(a.cmp(&c))
+                });
+                if let Some(d) = low.filter(|&d| self.resource(d) < self.params.epsilon) {
+                    self.delete(d);
+                }
+            }
+        }
         b
+    }
+
+    /// Deletions so far.
+    pub fn deletions(&self) -> u64 {
+        self.deletions
+    }
+
+    /// Deletes cell `d` (sec. 2.3.3): the simplices containing it, their edges, and every cell
+    /// left in no simplex (d and orphans). The remaining cells keep their weights and resources
+    /// (sec. 2.4.2) but are renumbered densely in their old order, so cell indices held outside
+    /// (BMU hints) are invalid afterwards. Refused (returns 0) when d is out of range or the
+    /// deletion would leave no simplex; otherwise returns the number of cells removed.
+    pub fn delete(&mut self, d: usize) -> usize {
+        if d >= self.len() {
+            return 0;
+        }
+        let d32 = d as u32;
+        if self.simplices.iter().all(|s| s.contains(&d32)) {
+            return 0;
+        }
+        self.simplices.retain(|s| !s.contains(&d32));
+        let z = self.len();
+        let mut used = vec![false; z];
+        for s in &self.simplices {
+            for &v in s {
+                used[v as usize] = true;
+            }
+        }
+        let mut map = vec![u32::MAX; z];
+        let mut next = 0u32;
+        for i in 0..z {
+            if used[i] {
+                map[i] = next;
+                next += 1;
+            }
+        }
+        let keep = |v: &Vec<f64>, w: usize| -> Vec<f64> {
+            (0..z)
+                .filter(|&i| used[i])
+                .flat_map(|i| v[i * w..(i + 1) * w].iter().copied())
+                .collect()
+        };
+        self.centres = keep(&self.centres, self.n);
+        self.outputs = keep(&self.outputs, self.m);
+        self.tau_sl = keep(&self.tau_sl, 1);
+        self.tau_usl = keep(&self.tau_usl, 1);
+        self.hits = (0..z).filter(|&i| used[i]).map(|i| self.hits[i]).collect();
+        for s in &mut self.simplices {
+            for v in s.iter_mut() {
+                *v = map[*v as usize];
+            }
+        }
+        let z_new = next as usize;
+        self.widths = vec![0.0; z_new];
+        self.neighbours = vec![Vec::new(); z_new];
+        for s in &self.simplices {
+            for &a in s {
+                for &b in s {
+                    if a != b {
+                        self.neighbours[a as usize].push(b);
+                    }
+                }
+            }
+        }
+        for nb in &mut self.neighbours {
+            nb.sort_unstable();
+            nb.dedup();
+        }
+        for i in 0..z_new {
+            self.refresh_width(i);
+        }
+        self.deletions += 1;
+        z - z_new
+    }
+
+    /// Connected component of every cell (the network may fall apart by deletion): ids 0, 1, …
+    /// numbered in order of each component's lowest cell index.
+    pub fn components(&self) -> Vec<u32> {
+        let mut id = vec![u32::MAX; self.len()];
+        let mut count = 0;
+        let mut stack = Vec::new();
+        for start in 0..self.len() {
+            if id[start] != u32::MAX {
+                continue;
+            }
+            id[start] = count;
+            stack.push(start);
+            while let Some(i) = stack.pop() {
+                for &j in &self.neighbours[i] {
+                    if id[j as usize] == u32::MAX {
+                        id[j as usize] = count;
+                        stack.push(j as usize);
+                    }
+                }
+            }
+            count += 1;
+        }
+        id
+    }
+
+    /// Number of connected components.
+    pub fn component_count(&self) -> usize {
+        self.components()
+            .iter()
+            .max()
+            .map_or(0, |&c| c as usize + 1)
     }
 
     /// Least-squares polish of the output layer (a knob beyond the dissertation, which only uses
@@ -459,9 +589,10 @@ impl Isgcs {
     }
 
     /// Inserts a cell at the midpoint of the longest edge of the cell with the highest resource
-    /// (sec. 2.3.2, 2.4.1). Output weights and resources are redistributed (eq. 2.11–2.14, 2.20,
-    /// 2.21): the new cell takes the mean output of the edge's ends and a third of their
-    /// resources. Every simplex containing the edge is split in two. Returns the new cell.
+    /// (sec. 2.3.2, 2.4.1). In place of the Γ-redistribution of eq. 2.11–2.14, 2.20 and 2.21
+    /// (Voronoi-volume ratios), the new cell takes the mean output of the edge's ends and a third
+    /// of their resources, the ends keep two thirds (this simpler rule is what `gcr` was tuned
+    /// with, so it stays). Every simplex containing the edge is split in two. Returns the new cell.
     pub fn insert(&mut self) -> usize {
         let q = (0..self.len())
             .max_by(|&a, &b| {
@@ -635,6 +766,124 @@ mod tests {
             }
             prop_assert_eq!(net.len(), k + 1 + inserts);
         }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+        #[test]
+        fn insertions_and_deletions_keep_a_pure_k_complex(
+            k in 1usize..=4,
+            ops in proptest::collection::vec((any::<bool>(), 0usize..1000), 1..60),
+            seed in 0u64..1000,
+        ) {
+            let n = k.max(2) + 1;
+            let mut net = Isgcs::new(Params { lambda: 1_000_000, ..Params::default() }, n, 1, k, simplex_points(n, k)).unwrap();
+            let mut s = seed;
+            for (insert, pick) in ops {
+                for _ in 0..3 {
+                    s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                    let x: Vec<f64> = (0..n).map(|a| ((s >> (8 * a)) & 0xff) as f64 / 255.0).collect();
+                    net.train(&x, &[x[0]], None);
+                }
+                let before = net.len();
+                if insert {
+                    net.insert();
+                    prop_assert_eq!(net.len(), before + 1);
+                } else {
+                    let removed = net.delete(pick % before);
+                    prop_assert_eq!(net.len(), before - removed);
+                    prop_assert!(net.len() > k);
+                }
+                check_complex(&net);
+                let comp = net.components();
+                // Neighbours share a component.
+                for i in 0..net.len() {
+                    for &j in net.neighbours(i) {
+                        prop_assert_eq!(comp[i], comp[j as usize]);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn deleting_the_middle_of_a_chain_splits_it_into_two_components() {
+        // k = 1 grows a chain: every insertion splits an edge.
+        let mut net = Isgcs::new(
+            Params {
+                lambda: 1_000_000,
+                ..Params::default()
+            },
+            1,
+            1,
+            1,
+            vec![vec![0.0], vec![1.0]],
+        )
+        .unwrap();
+        for _ in 0..9 {
+            net.insert();
+        }
+        assert_eq!(net.component_count(), 1);
+        // The cell at the median position has two neighbours on either side of it.
+        let mut order: Vec<usize> = (0..net.len()).collect();
+        order.sort_by(|&a, &b| net.centre(a)[0].total_cmp(&net.centre(b)[0]));
+        let mid = order[order.len() / 2];
+        let mid_x = net.centre(mid)[0];
+        assert_eq!(net.neighbours(mid).len(), 2);
+        assert_eq!(net.delete(mid), 1);
+        check_complex(&net);
+        assert_eq!(net.component_count(), 2);
+        // The two components are the cells left and right of the deleted one.
+        let comp = net.components();
+        for i in 0..net.len() {
+            for j in 0..net.len() {
+                let same_side = (net.centre(i)[0] < mid_x) == (net.centre(j)[0] < mid_x);
+                assert_eq!(comp[i] == comp[j], same_side);
+            }
+        }
+        // Deleting an end cell removes it alone; its neighbour stays in the other edge.
+        let end = order[0];
+        assert_eq!(net.delete(if end > mid { end - 1 } else { end }), 1);
+        check_complex(&net);
+    }
+
+    #[test]
+    fn deletion_by_resource_removes_cells_that_no_sample_reaches() {
+        // Data only in x < 0.5 after growth over the whole square: cells on the right stop
+        // winning (until USL drags them left), their resources decay below ε and some are
+        // deleted.
+        let mut net = trained(
+            Params {
+                usl_weight: 1.0,
+                ..Params::thesis()
+            },
+            60,
+            |_, _| 0.0,
+        );
+        let right = |net: &Isgcs| (0..net.len()).filter(|&i| net.centre(i)[0] > 0.7).count();
+        assert!(right(&net) > 5);
+        let mut net2 = Isgcs {
+            params: Params {
+                kappa: 200,
+                epsilon: 1e-6,
+                ..*net.params()
+            },
+            ..net.clone()
+        };
+        net2.set_growing(false);
+        net.set_growing(false);
+        for i in 0..60_000u64 {
+            let x = 0.5 * ((i as f64) * 0.754_877_666).fract();
+            let y = ((i as f64) * 0.569_840_291).fract();
+            net.train(&[x, y], &[0.0], None);
+            net2.train(&[x, y], &[0.0], None);
+        }
+        check_complex(&net2);
+        assert!(net2.deletions() > 0);
+        assert_eq!(net.deletions(), 0, "κ = 0 never deletes");
+        // The network without deletion keeps all its cells (USL pulls them left instead).
+        assert_eq!(net.len(), 60);
+        assert!(net2.len() < net.len(), "{} cells left", net2.len());
     }
 
     #[test]

@@ -31,6 +31,16 @@ pub struct Params {
     /// the normalized activations as its gradient.
     #[serde(default)]
     pub normalized: bool,
+    /// κ: steps between deletion tests (sec. 2.4.2, fig. 2.9; the dissertation recommends
+    /// 400–1000). 0 switches deletion off, which is the default: the defaults reproduce the
+    /// network `gcr` was tuned on, which never deletes.
+    #[serde(default)]
+    pub kappa: usize,
+    /// ε: every κ steps the cell with the lowest resource τ_i is deleted if τ_i < ε
+    /// (sec. 2.4.2; fig. 2.9 says "exceeds", a typo per MATH.md §6). The dissertation
+    /// recommends 0.001–0.01 for its resource scale.
+    #[serde(default)]
+    pub epsilon: f64,
 }
 
 impl Params {
@@ -68,6 +78,8 @@ impl Default for Params {
             width_multiplier: 1.0,
             locality_depth: 2,
             normalized: false,
+            kappa: 0,
+            epsilon: 0.0,
         }
     }
 }

@@ -15,8 +15,15 @@ use rand_chacha::ChaCha8Rng;
 /// One network state: projected edges.
 struct Snapshot {
     cells: usize,
+    components: usize,
     edges: Vec<[(f64, f64); 2]>,
 }
+
+/// ε of the deletion runs (figs. 2.7, 2.8). With α = 0.03 the resource forgets within ~33 steps
+/// while a cell of z wins once per ~z steps, so the lowest resource is tiny even among useful
+/// cells (ε = 1e-5 deleted cells inside the clusters and broke them into up to 7 components);
+/// τ^USL ≈ 3e-3 · 0.97^s after s steps without a win, so 1e-40 means "no win for ~3000 steps".
+const DELETION_EPSILON: f64 = 1e-40;
 
 /// Snapshots of one run and a subsample of its data, projected.
 type Run = (Vec<Snapshot>, Vec<(f64, f64)>);
@@ -46,6 +53,7 @@ fn grow(
     k: usize,
     cells: usize,
     seed: u64,
+    deletion: bool,
     draw: &dyn Fn(&mut ChaCha8Rng) -> Vec<f64>,
 ) -> Result<Run> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -54,13 +62,19 @@ fn grow(
     let params = Params {
         usl_weight: 1.0,
         lambda: 300,
+        // Deletion (sec. 2.4.2) for the separated data sets: a cell that stops winning samples
+        // sees its resource decay by (1 − α)^κ per test period and goes.
+        kappa: if deletion { 400 } else { 0 },
+        epsilon: if deletion { DELETION_EPSILON } else { 0.0 },
         ..Params::default()
     };
     let mut net = Isgcs::new(params, n, 1, k, init)?;
     let marks = [cells / 3, 2 * cells / 3, cells];
     let mut shots = Vec::new();
     for &mark in &marks {
-        while net.len() < mark.max(k + 1) {
+        // Cap the steps: with deletion on, growth could in principle stall.
+        let cap = net.steps() + 3 * params.lambda as u64 * cells as u64;
+        while net.len() < mark.max(k + 1) && net.steps() < cap {
             let x = draw(&mut rng);
             net.train(&x, &[0.0], None);
         }
@@ -81,6 +95,7 @@ fn grow(
         }
         shots.push(Snapshot {
             cells: net.len(),
+            components: net.component_count(),
             edges,
         });
     }
@@ -117,7 +132,11 @@ fn draw_figure(
         for (panel, shot) in panels.iter().zip(shots) {
             let mut chart = ChartBuilder::on(panel)
                 .caption(
-                    format!("{} cells", shot.cells),
+                    if shot.components > 1 {
+                        format!("{} cells, {} components", shot.cells, shot.components)
+                    } else {
+                        format!("{} cells", shot.cells)
+                    },
                     ("sans-serif", if ctx.quick { 10 } else { 15 }),
                 )
                 .margin(4)
@@ -150,7 +169,9 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     // A bent 2-D sheet in 3-D: (u, v) ∈ [0, 1]² ↦ (u, v, 0.3 sin(π u)).
     let sheet = |u: f64, v: f64| vec![u, v, 0.3 * (std::f64::consts::PI * u).sin()];
     // Fig. 2.4: k = 2 on a 2-D area in 3-D, uniform.
-    let (s, d) = grow(3, 2, budget(200), 1, &|r| sheet(r.random(), r.random()))?;
+    let (s, d) = grow(3, 2, budget(200), 1, false, &|r| {
+        sheet(r.random(), r.random())
+    })?;
     draw_figure(
         ctx,
         "2.4-sheet",
@@ -160,7 +181,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     )?;
     // Fig. 2.5: the same with doubled density in the lower right quarter (u > ½, v < ½):
     // draw from the square with weight 1, the quarter with weight 2 (density ratio 2).
-    let (s, d) = grow(3, 2, budget(200), 2, &|r| {
+    let (s, d) = grow(3, 2, budget(200), 2, false, &|r| {
         if r.random::<f64>() < 2.0 / 5.0 {
             sheet(0.5 + 0.5 * r.random::<f64>(), 0.5 * r.random::<f64>())
         } else {
@@ -180,7 +201,9 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         &d,
     )?;
     // Fig. 2.6 (right picture): k = 1 on 2-D data.
-    let (s, d) = grow(2, 1, budget(120), 3, &|r| vec![r.random(), r.random()])?;
+    let (s, d) = grow(2, 1, budget(120), 3, false, &|r| {
+        vec![r.random(), r.random()]
+    })?;
     draw_figure(
         ctx,
         "2.6-curve",
@@ -189,7 +212,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         &d,
     )?;
     // Fig. 2.7: two separate 2-D clusters in 3-D (two tilted discs).
-    let (s, d) = grow(3, 2, budget(160), 4, &|r| {
+    let (s, d) = grow(3, 2, budget(160), 4, true, &|r| {
         let (a, rr): (f64, f64) = (r.random::<f64>() * std::f64::consts::TAU, r.random());
         let (x, y) = (0.35 * rr.sqrt() * a.cos(), 0.35 * rr.sqrt() * a.sin());
         if r.random::<bool>() {
@@ -201,12 +224,12 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     draw_figure(
         ctx,
         "2.7-clusters",
-        "fig. 2.7: k = 2 network on two separate 2-D clusters in 3-D (no deletion: edges bridge the gap)",
+        "fig. 2.7: k = 2 network on two separate 2-D clusters in 3-D, with deletion",
         &s,
         &d,
     )?;
     // Fig. 2.8: k = 3 network on 3-D data (two separate boxes).
-    let (s, d) = grow(3, 3, budget(150), 5, &|r| {
+    let (s, d) = grow(3, 3, budget(150), 5, true, &|r| {
         let p: Vec<f64> = (0..3).map(|_| r.random::<f64>() * 0.5).collect();
         if r.random::<bool>() {
             p
@@ -217,7 +240,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     draw_figure(
         ctx,
         "2.8-volume",
-        "fig. 2.8: k = 3 network on 3-D data (two separate boxes; no deletion: edges bridge the gap)",
+        "fig. 2.8: k = 3 network on 3-D data (two separate boxes), with deletion",
         &s,
         &d,
     )?;

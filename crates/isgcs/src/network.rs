@@ -39,6 +39,13 @@ pub struct Isgcs {
     since_delete: usize,
     #[serde(default)]
     deletions: u64,
+    /// Scratch buffers of `train` (no state: contents are dead between steps).
+    #[serde(skip)]
+    scratch_d2: Vec<f64>,
+    #[serde(skip)]
+    scratch_nb: Vec<u32>,
+    #[serde(skip)]
+    scratch_support: Vec<(usize, f64)>,
 }
 
 impl Isgcs {
@@ -109,6 +116,9 @@ impl Isgcs {
             growing: true,
             since_delete: 0,
             deletions: 0,
+            scratch_d2: Vec::new(),
+            scratch_nb: Vec::new(),
+            scratch_support: Vec::new(),
         };
         for i in 0..z {
             net.refresh_width(i);
@@ -356,6 +366,118 @@ impl Isgcs {
     pub fn train(&mut self, x: &[f64], target: &[f64], hint: Option<usize>) -> usize {
         debug_assert_eq!(x.len(), self.n);
         debug_assert_eq!(target.len(), self.m);
+        let _ = hint;
+        // One scan computes every |x − w_i|² for the BMU (as `bmu`: first strict minimum) and
+        // is reused for the support after the moved cells' distances are recomputed: the same
+        // arithmetic as `bmu` + `support`, so the results are bit-identical to the reference
+        // (`train_reference` in the tests) while the cells are scanned once instead of twice.
+        let mut d2 = std::mem::take(&mut self.scratch_d2);
+        d2.clear();
+        let mut b = 0;
+        let mut best = f64::INFINITY;
+        for i in 0..self.len() {
+            let di = self.dist2(i, x);
+            d2.push(di);
+            if di < best {
+                best = di;
+                b = i;
+            }
+        }
+        self.steps += 1;
+        self.hits[b] += 1;
+        // Unsupervised: move the BMU and its neighbours towards x.
+        let q_err = d2[b];
+        let (eb, en) = (self.params.eps_bmu, self.params.eps_neighbour);
+        for a in 0..self.n {
+            self.centres[b * self.n + a] += eb * (x[a] - self.centres[b * self.n + a]);
+        }
+        let mut nb = std::mem::take(&mut self.scratch_nb);
+        nb.clear();
+        nb.extend_from_slice(&self.neighbours[b]);
+        for &j in &nb {
+            let j = j as usize;
+            for a in 0..self.n {
+                self.centres[j * self.n + a] += en * (x[a] - self.centres[j * self.n + a]);
+            }
+        }
+        self.refresh_width(b);
+        d2[b] = self.dist2(b, x);
+        for &j in &nb {
+            self.refresh_width(j as usize);
+            d2[j as usize] = self.dist2(j as usize, x);
+        }
+        self.scratch_nb = nb;
+        // Supervised: delta rule over the cells whose Gaussian reaches x (as `support`).
+        let mut support = std::mem::take(&mut self.scratch_support);
+        support.clear();
+        for (i, (&d, &r2)) in self.widths.iter().zip(&d2).enumerate() {
+            if d > 0.0 && r2 < 16.0 * d * d {
+                support.push((i, (-r2 / (d * d)).exp()));
+            }
+        }
+        self.scratch_d2 = d2;
+        if self.params.normalized {
+            normalize(&mut support, || b);
+        }
+        let mut psi = vec![0.0; self.m];
+        for &(i, a) in &support {
+            for c in 0..self.m {
+                psi[c] += self.outputs[i * self.m + c] * a;
+            }
+        }
+        let err: Vec<f64> = target.iter().zip(&psi).map(|(t, p)| t - p).collect();
+        let eta = self.params.eta;
+        for &(i, a) in &support {
+            for c in 0..self.m {
+                self.outputs[i * self.m + c] += eta * err[c] * a;
+            }
+        }
+        self.scratch_support = support;
+        // Resources (eq. 2.15–2.18): decay, then accumulate at the BMU.
+        let keep = 1.0 - self.params.alpha;
+        for t in self.tau_sl.iter_mut() {
+            *t *= keep;
+        }
+        for t in self.tau_usl.iter_mut() {
+            *t *= keep;
+        }
+        self.tau_sl[b] += err.iter().map(|e| e * e).sum::<f64>();
+        self.tau_usl[b] += q_err;
+        self.after_step();
+        b
+    }
+
+    /// Insertion every λ steps and the deletion test every κ steps (fig. 2.9).
+    fn after_step(&mut self) {
+        // Insertion every λ steps.
+        self.since_insert += 1;
+        if self.growing && self.since_insert >= self.params.lambda {
+            self.since_insert = 0;
+            self.insert();
+        }
+        // Deletion test every κ steps (sec. 2.4.2), off when κ = 0.
+        if self.params.kappa > 0 {
+            self.since_delete += 1;
+            if self.since_delete >= self.params.kappa {
+                self.since_delete = 0;
+                let low = (0..self.len()).min_by(|&a, &c| {
+                    self.resource(a)
+                        .total_cmp(&self.resource(c))
+                        .then(a.cmp(&c))
+                });
+                if let Some(d) = low.filter(|&d| self.resource(d) < self.params.epsilon) {
+                    self.delete(d);
+                }
+            }
+        }
+    }
+
+    /// The straightforward training step (`bmu`, then `support` over all cells), kept as the
+    /// reference that `train` must match bit for bit.
+    #[cfg(test)]
+    fn train_reference(&mut self, x: &[f64], target: &[f64], hint: Option<usize>) -> usize {
+        debug_assert_eq!(x.len(), self.n);
+        debug_assert_eq!(target.len(), self.m);
         let b = self.bmu(x, hint);
         self.steps += 1;
         self.hits[b] += 1;
@@ -402,27 +524,7 @@ impl Isgcs {
         }
         self.tau_sl[b] += err.iter().map(|e| e * e).sum::<f64>();
         self.tau_usl[b] += q_err;
-        // Insertion every λ steps.
-        self.since_insert += 1;
-        if self.growing && self.since_insert >= self.params.lambda {
-            self.since_insert = 0;
-            self.insert();
-        }
-        // Deletion test every κ steps (sec. 2.4.2), off when κ = 0.
-        if self.params.kappa > 0 {
-            self.since_delete += 1;
-            if self.since_delete >= self.params.kappa {
-                self.since_delete = 0;
-                let low = (0..self.len()).min_by(|&a, &c| {
-                    self.resource(a)
-                        .total_cmp(&self.resource(c))
-                        .then(a.cmp(&c))
-                });
-                if let Some(d) = low.filter(|&d| self.resource(d) < self.params.epsilon) {
-                    self.delete(d);
-                }
-            }
-        }
+        self.after_step();
         b
     }
 
@@ -884,6 +986,59 @@ mod tests {
         // The network without deletion keeps all its cells (USL pulls them left instead).
         assert_eq!(net.len(), 60);
         assert!(net2.len() < net.len(), "{} cells left", net2.len());
+    }
+
+    #[test]
+    fn fused_training_step_is_bit_identical_to_the_reference() {
+        for (params, n, k) in [
+            (Params::thesis(), 2, 2),
+            (Params::accurate(), 2, 2),
+            (
+                Params {
+                    lambda: 50,
+                    kappa: 70,
+                    epsilon: 1e-3,
+                    usl_weight: 1.0,
+                    ..Params::thesis()
+                },
+                3,
+                2,
+            ),
+            (
+                Params {
+                    lambda: 40,
+                    ..Params::thesis()
+                },
+                6,
+                4,
+            ),
+        ] {
+            let mut fast = Isgcs::new(params, n, 2, k, simplex_points(n, k)).unwrap();
+            let mut slow = fast.clone();
+            let mut s = 7u64;
+            for step in 0..6000 {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                let x: Vec<f64> = (0..n)
+                    .map(|a| ((s >> (7 * a)) & 0x3ff) as f64 / 1023.0)
+                    .collect();
+                let y = [x[0].sin() + x[1], x.iter().sum::<f64>()];
+                let (bf, bs) = (fast.train(&x, &y, None), slow.train_reference(&x, &y, None));
+                assert_eq!(bf, bs, "step {step}");
+            }
+            assert!(fast.len() > 20, "{} cells", fast.len());
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&fast.centres), bits(&slow.centres));
+            assert_eq!(bits(&fast.outputs), bits(&slow.outputs));
+            assert_eq!(bits(&fast.widths), bits(&slow.widths));
+            assert_eq!(bits(&fast.tau_sl), bits(&slow.tau_sl));
+            assert_eq!(bits(&fast.tau_usl), bits(&slow.tau_usl));
+            assert_eq!(fast.simplices, slow.simplices);
+            assert_eq!(fast.hits, slow.hits);
+            assert_eq!(fast.deletions(), slow.deletions());
+            assert!(params.kappa == 0 || fast.deletions() > 0, "deletion exercised");
+        }
     }
 
     #[test]

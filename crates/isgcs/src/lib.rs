@@ -19,11 +19,13 @@
 //! assert!((y[0] - 1.0).abs() < 0.1);
 //! ```
 
+mod driver;
 mod linalg;
 mod network;
 mod params;
 pub mod rbf;
 pub mod test_functions;
 
+pub use driver::{Event, GoalFunction, Stopped, Termination};
 pub use network::{Isgcs, IsgcsError};
 pub use params::Params;

@@ -342,6 +342,25 @@ impl Isgcs {
         }
     }
 
+    /// Ψ at N points at once, in parallel (rayon): `inputs` is N × n row-major, `out` N × m.
+    /// Each row equals [`Isgcs::predict`] of that point exactly.
+    pub fn predict_batch(&self, inputs: &[f64], out: &mut [f64]) -> Result<(), IsgcsError> {
+        use rayon::prelude::*;
+        let (n, m) = (self.n, self.m);
+        if inputs.len() % n != 0 || out.len() != inputs.len() / n * m {
+            return Err(IsgcsError::Invalid(format!(
+                "predict_batch: {} input numbers are not N × {n}, or {} outputs not N × {m}",
+                inputs.len(),
+                out.len()
+            )));
+        }
+        out.par_chunks_mut(m)
+            .zip(inputs.par_chunks(n))
+            .with_min_len(64)
+            .for_each(|(o, x)| self.predict(x, o));
+        Ok(())
+    }
+
     /// Network activation Υ(x) = Σ Ω_i(x) (eq. 2.22).
     pub fn activation_sum(&self, x: &[f64]) -> f64 {
         let mut cells = Vec::new();
@@ -364,9 +383,15 @@ impl Isgcs {
     /// the delta rule on the output layer (eq. 2.8), resource updates with decay, and an
     /// insertion every λ steps while growing. Returns the BMU.
     pub fn train(&mut self, x: &[f64], target: &[f64], hint: Option<usize>) -> usize {
+        let _ = hint;
+        self.train_step(x, target).0
+    }
+
+    /// [`Isgcs::train`], also returning the squared output error |y − Ψ(x)|² of the step
+    /// (before the delta rule's update).
+    pub(crate) fn train_step(&mut self, x: &[f64], target: &[f64]) -> (usize, f64) {
         debug_assert_eq!(x.len(), self.n);
         debug_assert_eq!(target.len(), self.m);
-        let _ = hint;
         // One scan computes every |x − w_i|² for the BMU (as `bmu`: first strict minimum) and
         // is reused for the support after the moved cells' distances are recomputed: the same
         // arithmetic as `bmu` + `support`, so the results are bit-identical to the reference
@@ -441,10 +466,11 @@ impl Isgcs {
         for t in self.tau_usl.iter_mut() {
             *t *= keep;
         }
-        self.tau_sl[b] += err.iter().map(|e| e * e).sum::<f64>();
+        let sq_err = err.iter().map(|e| e * e).sum::<f64>();
+        self.tau_sl[b] += sq_err;
         self.tau_usl[b] += q_err;
         self.after_step();
-        b
+        (b, sq_err)
     }
 
     /// Insertion every λ steps and the deletion test every κ steps (fig. 2.9).
@@ -1037,8 +1063,28 @@ mod tests {
             assert_eq!(fast.simplices, slow.simplices);
             assert_eq!(fast.hits, slow.hits);
             assert_eq!(fast.deletions(), slow.deletions());
-            assert!(params.kappa == 0 || fast.deletions() > 0, "deletion exercised");
+            assert!(
+                params.kappa == 0 || fast.deletions() > 0,
+                "deletion exercised"
+            );
         }
+    }
+
+    #[test]
+    fn batched_prediction_equals_single_predictions() {
+        let net = trained(Params::thesis(), 40, |x, y| (4.0 * x).sin() + y);
+        let inputs: Vec<f64> = (0..1000)
+            .flat_map(|i| [((i as f64) * 0.37).fract(), ((i as f64) * 0.91).fract()])
+            .collect();
+        let mut out = vec![0.0; 1000];
+        net.predict_batch(&inputs, &mut out).unwrap();
+        let mut one = [0.0];
+        for (x, o) in inputs.chunks(2).zip(&out) {
+            net.predict(x, &mut one);
+            assert_eq!(one[0].to_bits(), o.to_bits());
+        }
+        assert!(net.predict_batch(&inputs[1..], &mut out).is_err());
+        assert!(net.predict_batch(&inputs, &mut out[1..]).is_err());
     }
 
     #[test]

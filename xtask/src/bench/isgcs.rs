@@ -20,6 +20,8 @@ struct Growth {
     steps: u64,
     seconds: f64,
     cost: Vec<(usize, f64)>,
+    /// (cells, mean number of cells in a Gaussian support) at the end of each block.
+    support: Vec<(usize, f64)>,
 }
 
 /// Grows a thesis-default network on uniform samples of [0, 1]ⁿ labelled by `f` to `cells`
@@ -39,6 +41,10 @@ fn grow(
     let mut rng = ChaCha8Rng::seed_from_u64(1);
     let mut x = vec![0.0; n];
     let mut cost = Vec::new();
+    let mut support = Vec::new();
+    let mut cells_in: Vec<(usize, f64)> = Vec::new();
+    let mut probe = ChaCha8Rng::seed_from_u64(2);
+    let mut measured = std::time::Duration::ZERO;
     let start = Instant::now();
     while net.len() < cells {
         let t = Instant::now();
@@ -51,13 +57,24 @@ fn grow(
             net.len(),
             t.elapsed().as_secs_f64() * 1e9 / params.lambda as f64,
         ));
+        // Support size at 16 random points (outside the timed blocks; its time is subtracted).
+        let t = Instant::now();
+        let mut total = 0;
+        for _ in 0..16 {
+            x.iter_mut().for_each(|v| *v = probe.random());
+            net.support(&x, &mut cells_in);
+            total += cells_in.len();
+        }
+        support.push((net.len(), total as f64 / 16.0));
+        measured += t.elapsed();
     }
     Ok(Growth {
         label: label.to_string(),
         cells: net.len(),
         steps: net.steps(),
-        seconds: start.elapsed().as_secs_f64(),
+        seconds: (start.elapsed() - measured).as_secs_f64(),
         cost,
+        support,
     })
 }
 
@@ -105,10 +122,9 @@ fn plot(path: &std::path::Path, runs: &[Growth]) -> Result<()> {
     Ok(())
 }
 
-/// Mean cost per step over the blocks whose cell count lies in [lo, hi).
-fn mean_cost(g: &Growth, lo: usize, hi: usize) -> Option<f64> {
-    let v: Vec<f64> = g
-        .cost
+/// Mean of `series` over the blocks whose cell count lies in [lo, hi).
+fn mean_in(series: &[(usize, f64)], lo: usize, hi: usize) -> Option<f64> {
+    let v: Vec<f64> = series
         .iter()
         .filter(|c| c.0 >= lo && c.0 < hi)
         .map(|c| c.1)
@@ -155,18 +171,21 @@ fn body(ctx: &Ctx) -> Result<()> {
     md.push_str(
         "\n## Cost per training step against the number of cells\n\n\
          Nanoseconds per step, averaged over the blocks of λ steps that ended in the given range of \
-         cell counts (sec. 2.6 claims a constant cost per step):\n\n\
+         cell counts (sec. 2.6 claims a constant cost per step), and the mean number of cells in the \
+         Gaussian support (|x − w_i| < 4 d_i) at 16 random points after each block. A step scans all \
+         cells once (BMU and support, exact) and decays every resource, then evaluates the support's \
+         Gaussians: its cost grows with z and with the support size.\n\n\
          | cells | ",
     );
     md.push_str(
         &runs
             .iter()
-            .map(|r| format!("{} (ns/step)", r.label))
+            .map(|r| format!("{} (ns/step) | support", r.label))
             .collect::<Vec<_>>()
             .join(" | "),
     );
     md.push_str(" |\n|---:|");
-    md.push_str(&"---:|".repeat(runs.len()));
+    md.push_str(&"---:|".repeat(2 * runs.len()));
     md.push('\n');
     let edges: Vec<usize> = [10, 50, 100, 200, 400, 700, 1000, 1401]
         .into_iter()
@@ -175,7 +194,14 @@ fn body(ctx: &Ctx) -> Result<()> {
     for w in edges.windows(2) {
         let cols: Vec<String> = runs
             .iter()
-            .map(|r| mean_cost(r, w[0], w[1]).map_or("–".into(), |c| format!("{c:.0}")))
+            .map(|r| {
+                let f = |v: Option<f64>| v.map_or("–".into(), |c| format!("{c:.0}"));
+                format!(
+                    "{} | {}",
+                    f(mean_in(&r.cost, w[0], w[1])),
+                    f(mean_in(&r.support, w[0], w[1]))
+                )
+            })
             .collect();
         let _ = writeln!(md, "| {}–{} | {} |", w[0], w[1] - 1, cols.join(" | "));
     }

@@ -24,6 +24,7 @@ mod linalg;
 mod network;
 mod params;
 pub mod rbf;
+mod resample;
 pub mod test_functions;
 
 pub use driver::{Event, GoalFunction, Stopped, Termination};

@@ -39,6 +39,9 @@ pub struct Isgcs {
     since_delete: usize,
     #[serde(default)]
     deletions: u64,
+    /// Hits decayed with α (for the extended resource; empty unless it is on).
+    #[serde(default)]
+    hit_rate: Vec<f64>,
     /// Scratch buffers of `train` (no state: contents are dead between steps).
     #[serde(skip)]
     scratch_d2: Vec<f64>,
@@ -116,6 +119,11 @@ impl Isgcs {
             growing: true,
             since_delete: 0,
             deletions: 0,
+            hit_rate: if params.extended_resource {
+                vec![0.0; z]
+            } else {
+                Vec::new()
+            },
             scratch_d2: Vec::new(),
             scratch_nb: Vec::new(),
             scratch_support: Vec::new(),
@@ -181,9 +189,19 @@ impl Isgcs {
         &self.simplices
     }
 
-    /// The combined resource τ_i (sec. 2.4).
+    /// The resource τ_i that drives insertion and deletion (sec. 2.4): τ^SL + `usl_weight` ·
+    /// τ^USL, or the extended resource τ^x of eq. 2.19 with [`Params::extended_resource`].
     pub fn resource(&self, i: usize) -> f64 {
-        self.tau_sl[i] + self.params.usl_weight * self.tau_usl[i]
+        if self.params.extended_resource {
+            let h = self.hit_rate.get(i).copied().unwrap_or(0.0);
+            if h <= 0.0 {
+                return 0.0;
+            }
+            let l = self.widths[i] / self.params.width_multiplier;
+            self.tau_sl[i] / h * l.powi(self.k as i32)
+        } else {
+            self.tau_sl[i] + self.params.usl_weight * self.tau_usl[i]
+        }
     }
 
     /// Times cell i was the best-matching unit.
@@ -466,6 +484,14 @@ impl Isgcs {
         for t in self.tau_usl.iter_mut() {
             *t *= keep;
         }
+        if self.params.extended_resource {
+            let z = self.len();
+            self.hit_rate.resize(z, 0.0);
+            for h in self.hit_rate.iter_mut() {
+                *h *= keep;
+            }
+            self.hit_rate[b] += 1.0;
+        }
         let sq_err = err.iter().map(|e| e * e).sum::<f64>();
         self.tau_sl[b] += sq_err;
         self.tau_usl[b] += q_err;
@@ -548,6 +574,14 @@ impl Isgcs {
         for t in self.tau_sl.iter_mut().chain(self.tau_usl.iter_mut()) {
             *t *= keep;
         }
+        if self.params.extended_resource {
+            let z = self.len();
+            self.hit_rate.resize(z, 0.0);
+            for h in self.hit_rate.iter_mut() {
+                *h *= keep;
+            }
+            self.hit_rate[b] += 1.0;
+        }
         self.tau_sl[b] += err.iter().map(|e| e * e).sum::<f64>();
         self.tau_usl[b] += q_err;
         self.after_step();
@@ -598,6 +632,9 @@ impl Isgcs {
         self.outputs = keep(&self.outputs, self.m);
         self.tau_sl = keep(&self.tau_sl, 1);
         self.tau_usl = keep(&self.tau_usl, 1);
+        if !self.hit_rate.is_empty() {
+            self.hit_rate = keep(&self.hit_rate, 1);
+        }
         self.hits = (0..z).filter(|&i| used[i]).map(|i| self.hits[i]).collect();
         for s in &mut self.simplices {
             for v in s.iter_mut() {
@@ -754,6 +791,12 @@ impl Isgcs {
         self.tau_usl.push((uq + uf) / 3.0);
         self.tau_usl[q] *= 2.0 / 3.0;
         self.tau_usl[f] *= 2.0 / 3.0;
+        if !self.hit_rate.is_empty() {
+            let (hq, hf) = (self.hit_rate[q], self.hit_rate[f]);
+            self.hit_rate.push((hq + hf) / 3.0);
+            self.hit_rate[q] *= 2.0 / 3.0;
+            self.hit_rate[f] *= 2.0 / 3.0;
+        }
         self.hits.push(0);
         self.widths.push(0.0);
         self.neighbours.push(Vec::new());
@@ -1037,6 +1080,15 @@ mod tests {
                 },
                 6,
                 4,
+            ),
+            (
+                Params {
+                    lambda: 60,
+                    extended_resource: true,
+                    ..Params::accurate()
+                },
+                2,
+                2,
             ),
         ] {
             let mut fast = Isgcs::new(params, n, 2, k, simplex_points(n, k)).unwrap();

@@ -36,6 +36,12 @@ pub struct Params {
     /// network `gcr` was tuned on, which never deletes.
     #[serde(default)]
     pub kappa: usize,
+    /// Use the extended resource τ^x_i = (τ^SL_i / h_i) · l̄_i^k (eq. 2.19 as corrected in
+    /// MATH.md §6: the mean error per hit times the cell's volume estimate, h_i the hits decayed
+    /// like the resources, l̄_i the mean edge length, k̃ = k) for insertion and deletion instead
+    /// of τ^SL + `usl_weight` · τ^USL. Off by default.
+    #[serde(default)]
+    pub extended_resource: bool,
     /// ε: every κ steps the cell with the lowest resource τ_i is deleted if τ_i < ε
     /// (sec. 2.4.2; fig. 2.9 says "exceeds", a typo per MATH.md §6). The dissertation
     /// recommends 0.001–0.01 for its resource scale.
@@ -80,6 +86,7 @@ impl Default for Params {
             normalized: false,
             kappa: 0,
             epsilon: 0.0,
+            extended_resource: false,
         }
     }
 }

@@ -4,7 +4,18 @@
 //! A network of z cells with centres w_i ∈ Rⁿ, widths d_i (mean incident edge length, eq. 2.10)
 //! and outputs v_i ∈ Rᵐ computes Ψ(ξ) = Σ v_i exp(−|ξ − w_i|²/d_i²) (eq. 2.1–2.5). The cells form a
 //! pure k-dimensional simplicial complex (sec. 2.3) that grows by splitting the longest edge of the
-//! cell with the highest resource every λ steps (sec. 2.3.2, 2.4.1).
+//! cell with the highest resource every λ steps (sec. 2.3.2, 2.4.1), and optionally shrinks by
+//! deleting low-resource cells every κ steps (sec. 2.3.3), falling apart into components.
+//!
+//! * [`Params::thesis`] (= `Params::default()`) holds the dissertation's defaults;
+//!   [`Params::accurate`] with [`Isgcs::fit_outputs`] (least-squares output layer) is far more
+//!   accurate on smooth functions (docs/isgcs.md: Franke's function at 500 cells, rms 0.2214 vs
+//!   0.0007 relative to the function's standard deviation).
+//! * [`Isgcs::fit`] runs the training loop on a [`GoalFunction`] with a [`Termination`] and an
+//!   observer; [`Isgcs::train`] is one step for callers with their own loop.
+//! * Resampling (sec. 2.5): [`Isgcs::critical_cells`], [`Isgcs::in_critical_region`],
+//!   [`Isgcs::resample_positions`].
+//! * [`rbf::GaussianRbf`] is the reference fit the network is measured against.
 //!
 //! ```
 //! use isgcs::{Isgcs, Params};
@@ -19,8 +30,14 @@
 //! assert!((y[0] - 1.0).abs() < 0.1);
 //! ```
 
+mod driver;
+mod linalg;
 mod network;
 mod params;
+pub mod rbf;
+mod resample;
+pub mod test_functions;
 
+pub use driver::{Event, GoalFunction, Stopped, Termination};
 pub use network::{Isgcs, IsgcsError};
 pub use params::Params;

@@ -26,6 +26,48 @@ pub struct Params {
     pub width_multiplier: f64,
     /// Topological depth of [`crate::Isgcs::neighbourhood`] queries (sec. 2.6).
     pub locality_depth: usize,
+    /// Normalized activations: Ψ(ξ) = Σ v_i Ω_i(ξ) / Σ Ω_i(ξ) instead of eq. 2.5's plain sum
+    /// (a knob beyond the dissertation; `false` is eq. 2.5). The delta rule (eq. 2.8) then uses
+    /// the normalized activations as its gradient.
+    #[serde(default)]
+    pub normalized: bool,
+    /// κ: steps between deletion tests (sec. 2.4.2, fig. 2.9; the dissertation recommends
+    /// 400–1000). 0 switches deletion off, which is the default: the defaults reproduce the
+    /// network `gcr` was tuned on, which never deletes.
+    #[serde(default)]
+    pub kappa: usize,
+    /// Use the extended resource τ^x_i = (τ^SL_i / h_i) · l̄_i^k (eq. 2.19 as corrected in
+    /// MATH.md §6: the mean error per hit times the cell's volume estimate, h_i the hits decayed
+    /// like the resources, l̄_i the mean edge length, k̃ = k) for insertion and deletion instead
+    /// of τ^SL + `usl_weight` · τ^USL. Off by default.
+    #[serde(default)]
+    pub extended_resource: bool,
+    /// ε: every κ steps the cell with the lowest resource τ_i is deleted if τ_i < ε
+    /// (sec. 2.4.2; fig. 2.9 says "exceeds", a typo per MATH.md §6). The dissertation
+    /// recommends 0.001–0.01 for its resource scale.
+    #[serde(default)]
+    pub epsilon: f64,
+}
+
+impl Params {
+    /// The dissertation's defaults (fig. 4.17); identical to [`Params::default`].
+    pub fn thesis() -> Self {
+        Self::default()
+    }
+
+    /// A preset tuned for approximation accuracy on smooth functions (measured in docs/isgcs.md):
+    /// normalized activations and Gaussians twice as wide as eq. 2.10. Use it together with
+    /// [`crate::Isgcs::fit_outputs`], the least-squares polish of the output layer after
+    /// growth; the delta rule alone converges slowly on the overlapping Gaussians. λ stays at
+    /// 300: with λ = 100 the cells had too few steps to spread between insertions, widths
+    /// ranged over two orders of magnitude and the least-squares fit overfitted.
+    pub fn accurate() -> Self {
+        Self {
+            width_multiplier: 2.0,
+            normalized: true,
+            ..Self::default()
+        }
+    }
 }
 
 impl Default for Params {
@@ -41,6 +83,10 @@ impl Default for Params {
             usl_weight: 0.0,
             width_multiplier: 1.0,
             locality_depth: 2,
+            normalized: false,
+            kappa: 0,
+            epsilon: 0.0,
+            extended_resource: false,
         }
     }
 }

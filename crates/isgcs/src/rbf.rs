@@ -1,0 +1,214 @@
+//! A reference approximator to measure the network against (issue 2): a Gaussian radial basis
+//! function network with k-means centres and least-squares output weights.
+
+use crate::network::IsgcsError;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// Ψ(x) = Σ_j v_j exp(−|x − c_j|² / d_j²) with centres c_j from k-means (Lloyd) on the training
+/// inputs, widths d_j = `width_multiplier` × the mean distance from c_j to its n + 1 nearest
+/// other centres, and output weights v_j by regularised least squares.
+#[derive(Clone, Debug)]
+pub struct GaussianRbf {
+    n: usize,
+    m: usize,
+    centres: Vec<f64>,
+    widths: Vec<f64>,
+    weights: Vec<f64>,
+}
+
+fn dist2(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(p, q)| (p - q) * (p - q)).sum()
+}
+
+impl GaussianRbf {
+    /// Fits `centres` Gaussians to N points `inputs` (N × n, row-major) with values `targets`
+    /// (N × m): `kmeans_iterations` Lloyd iterations from `centres` distinct random inputs
+    /// (seeded by `seed`), then least squares with relative ridge `ridge` (as in
+    /// [`crate::Isgcs::fit_outputs`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn fit(
+        inputs: &[f64],
+        targets: &[f64],
+        n: usize,
+        m: usize,
+        centres: usize,
+        width_multiplier: f64,
+        kmeans_iterations: usize,
+        ridge: f64,
+        seed: u64,
+    ) -> Result<Self, IsgcsError> {
+        let bad = |s: String| Err(IsgcsError::Invalid(s));
+        if n == 0 || m == 0 || inputs.len() % n != 0 || targets.len() != inputs.len() / n * m {
+            return bad(format!(
+                "rbf: {} input and {} target numbers do not fit n = {n}, m = {m}",
+                inputs.len(),
+                targets.len()
+            ));
+        }
+        let count = inputs.len() / n;
+        if centres < 2 || centres > count {
+            return bad(format!(
+                "rbf: {centres} centres need 2 to {count} (the number of samples)"
+            ));
+        }
+        let knobs_ok = width_multiplier.is_finite()
+            && width_multiplier > 0.0
+            && ridge.is_finite()
+            && ridge >= 0.0;
+        if !knobs_ok || inputs.iter().chain(targets).any(|v| !v.is_finite()) {
+            return bad("rbf: non-finite data, width multiplier <= 0 or ridge < 0".into());
+        }
+        // k-means initialisation: distinct random samples (partial Fisher–Yates).
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut order: Vec<usize> = (0..count).collect();
+        for i in 0..centres {
+            let j = rng.random_range(i..count);
+            order.swap(i, j);
+        }
+        let mut c: Vec<f64> = order[..centres]
+            .iter()
+            .flat_map(|&s| inputs[s * n..(s + 1) * n].iter().copied())
+            .collect();
+        let mut assign = vec![usize::MAX; count];
+        for _ in 0..kmeans_iterations {
+            let mut changed = false;
+            for (s, x) in inputs.chunks_exact(n).enumerate() {
+                let best = (0..centres)
+                    .map(|j| (j, dist2(x, &c[j * n..(j + 1) * n])))
+                    .min_by(|a, b| a.1.total_cmp(&b.1))
+                    .map_or(0, |(j, _)| j);
+                changed |= assign[s] != best;
+                assign[s] = best;
+            }
+            if !changed {
+                break;
+            }
+            let mut sum = vec![0.0; centres * n];
+            let mut cnt = vec![0usize; centres];
+            for (s, x) in inputs.chunks_exact(n).enumerate() {
+                cnt[assign[s]] += 1;
+                for a in 0..n {
+                    sum[assign[s] * n + a] += x[a];
+                }
+            }
+            for j in 0..centres {
+                if cnt[j] > 0 {
+                    for a in 0..n {
+                        c[j * n + a] = sum[j * n + a] / cnt[j] as f64;
+                    }
+                }
+            }
+        }
+        // Widths from the n + 1 nearest other centres.
+        let q = (n + 1).min(centres - 1);
+        let widths: Vec<f64> = (0..centres)
+            .map(|j| {
+                let mut d: Vec<f64> = (0..centres)
+                    .filter(|&i| i != j)
+                    .map(|i| dist2(&c[i * n..(i + 1) * n], &c[j * n..(j + 1) * n]).sqrt())
+                    .collect();
+                d.select_nth_unstable_by(q - 1, |a, b| a.total_cmp(b));
+                width_multiplier * d[..q].iter().sum::<f64>() / q as f64
+            })
+            .collect();
+        let mut net = Self {
+            n,
+            m,
+            centres: c,
+            widths,
+            weights: vec![0.0; centres * m],
+        };
+        let mut gram = vec![0.0; centres * centres];
+        let mut rhs = vec![0.0; centres * m];
+        let mut act = Vec::new();
+        for (x, y) in inputs.chunks_exact(n).zip(targets.chunks_exact(m)) {
+            net.activations(x, &mut act);
+            for &(i, a) in &act {
+                for &(j, b) in &act {
+                    if j <= i {
+                        gram[i * centres + j] += a * b;
+                    }
+                }
+                for k in 0..m {
+                    rhs[i * m + k] += a * y[k];
+                }
+            }
+        }
+        crate::linalg::ridge_solve(&gram, centres, &mut rhs, m, ridge)
+            .ok_or_else(|| IsgcsError::Invalid("rbf: no sample activates any centre".into()))?;
+        net.weights = rhs;
+        Ok(net)
+    }
+
+    /// Number of centres.
+    pub fn len(&self) -> usize {
+        self.widths.len()
+    }
+
+    /// Always false (a fit has at least two centres).
+    pub fn is_empty(&self) -> bool {
+        self.widths.is_empty()
+    }
+
+    /// The Gaussians reaching x (|x − c_j| < 4 d_j, relative cut-off e⁻¹⁶) with their values.
+    fn activations(&self, x: &[f64], out: &mut Vec<(usize, f64)>) {
+        out.clear();
+        for (j, &d) in self.widths.iter().enumerate() {
+            let r2 = dist2(x, &self.centres[j * self.n..(j + 1) * self.n]);
+            if d > 0.0 && r2 < 16.0 * d * d {
+                out.push((j, (-r2 / (d * d)).exp()));
+            }
+        }
+    }
+
+    /// Ψ(x) into `out` (length m).
+    pub fn predict(&self, x: &[f64], out: &mut [f64]) {
+        let mut act = Vec::new();
+        self.activations(x, &mut act);
+        out.iter_mut().for_each(|o| *o = 0.0);
+        for &(j, a) in &act {
+            for (o, v) in out
+                .iter_mut()
+                .zip(&self.weights[j * self.m..(j + 1) * self.m])
+            {
+                *o += a * v;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fits_a_smooth_function_and_rejects_bad_input() {
+        let f = |x: f64, y: f64| (3.0 * x).sin() + y * y;
+        let mut inputs = Vec::new();
+        let mut targets = Vec::new();
+        for i in 0..2000u64 {
+            let (x, y) = (
+                ((i as f64) * 0.754_877_666).fract(),
+                ((i as f64) * 0.569_840_291).fract(),
+            );
+            inputs.extend([x, y]);
+            targets.push(f(x, y));
+        }
+        let rbf = GaussianRbf::fit(&inputs, &targets, 2, 1, 60, 2.5, 20, 1e-9, 3).unwrap();
+        let mut out = [0.0];
+        let mut worst: f64 = 0.0;
+        for i in 0..200 {
+            let (x, y) = (
+                0.1 + 0.8 * ((i as f64) * 0.31).fract(),
+                0.1 + 0.8 * ((i as f64) * 0.77).fract(),
+            );
+            rbf.predict(&[x, y], &mut out);
+            worst = worst.max((out[0] - f(x, y)).abs());
+        }
+        assert!(worst < 0.02, "max error {worst}");
+        assert!(GaussianRbf::fit(&inputs, &targets, 2, 1, 1, 1.0, 20, 1e-9, 3).is_err());
+        assert!(GaussianRbf::fit(&inputs, &targets[1..], 2, 1, 60, 1.0, 20, 1e-9, 3).is_err());
+        assert!(GaussianRbf::fit(&inputs, &targets, 2, 1, 60, -1.0, 20, 1e-9, 3).is_err());
+    }
+}

@@ -1,7 +1,7 @@
 //! Relative L2 error of `gcr solve` at a scene's non-emitting probes against the path-traced
 //! reference, for both kernel output layers and every gather.
 //!
-//! `cargo run --release -p gcr --example compare_reference -- cornell-box 200 [seed]`
+//! `cargo run --release -p gcr --example compare_reference -- cornell-box 200 [seed] [samples-per-cell]`
 
 use gcr::config::{GatherMode, OutputFit, SolveConfig};
 use gcr::domain::Domain;
@@ -14,6 +14,9 @@ fn main() -> anyhow::Result<()> {
     let name = args.get(1).map_or("cornell-box", |s| s.as_str());
     let cells: usize = args.get(2).map_or(Ok(200), |s| s.parse())?;
     let seed: u64 = args.get(3).map_or(Ok(1), |s| s.parse())?;
+    let samples_per_cell: usize = args
+        .get(4)
+        .map_or(Ok(SolveConfig::default().samples_per_cell), |s| s.parse())?;
     let scene = scene_sampler::builtin(name)?.into_3d()?;
     let bvh = SceneBvh::new(&scene);
     let probes = scene_sampler::read_probes(format!("scenes/{name}.probes.txt"))?;
@@ -33,6 +36,7 @@ fn main() -> anyhow::Result<()> {
             shading_cells: cells / 2,
             output_fit,
             seed,
+            samples_per_cell,
             // The base gather below reads the shading network's base: keep it.
             skip_unused_base: false,
             ..SolveConfig::default()
@@ -66,7 +70,7 @@ fn main() -> anyhow::Result<()> {
                 }
             }
             println!(
-                "{name} cells={cells} seed={seed} output_fit={} gather={} rel_l2={:.3} solve_seconds={seconds:.1}",
+                "{name} cells={cells} seed={seed} samples_per_cell={samples_per_cell} output_fit={} gather={} rel_l2={:.3} solve_seconds={seconds:.1}",
                 output_fit.name(),
                 gather.name(),
                 (num / den).sqrt(),

@@ -1,5 +1,6 @@
 //! Benchmark groups, one file per crate or comparison. Each writes its report into `ctx.out`.
 
+mod breaking;
 mod compare;
 mod gauss;
 mod gcr;
@@ -17,6 +18,7 @@ const GROUPS: &[Group] = &[
     ("gauss", gauss::run),
     ("scenes", scenes::run),
     ("gcr", gcr::run),
+    ("breaking", breaking::run),
     ("compare", compare::run),
 ];
 

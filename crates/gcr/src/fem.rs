@@ -63,6 +63,21 @@ impl KernelCells {
     pub fn is_empty(&self) -> bool {
         self.wx.is_empty()
     }
+
+    /// The network's light flow Ψ(x, y) = Σ_o v_o exp(−(|x − w_o^x|² + |y − w_o^y|²)/d_o²)
+    /// per band (eq. 2.1–2.3 with the kernel's 6-D / 4-D input), summed over every cell.
+    pub fn evaluate(&self, x: DVec3, y: DVec3) -> Bands {
+        let mut out = [0.0; MAX_BANDS];
+        for o in 0..self.len() {
+            let e = (self.wx[o].distance_squared(x) + self.wy[o].distance_squared(y))
+                / (self.width[o] * self.width[o]);
+            let g = (-e).exp();
+            for (acc, v) in out.iter_mut().zip(&self.v[o]) {
+                *acc += g * v;
+            }
+        }
+        out
+    }
 }
 
 /// The true scene surface S, indexed for support queries (the sender integral c_o, and the

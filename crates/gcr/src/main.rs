@@ -58,6 +58,11 @@ enum Command {
         /// PNG image from the scene's camera.
         #[arg(long)]
         image: Option<PathBuf>,
+        /// Flatland only: PNG of the light flow over the kernel domain (s of the sender to the
+        /// right, t of the receiver upwards; fig. 4.1b): the sampled K·s on the left, the kernel
+        /// network's Ψ on the right, dark = large; the training rays marked red on the right.
+        #[arg(long)]
+        kernel_image: Option<PathBuf>,
         /// Binary glTF mesh with vertex colours.
         #[arg(long)]
         mesh: Option<PathBuf>,
@@ -133,6 +138,7 @@ fn run() -> Result<()> {
             output_fit,
             keep_base,
             image,
+            kernel_image,
             mesh,
             ply,
             probes,
@@ -159,11 +165,17 @@ fn run() -> Result<()> {
             }
             match loaded {
                 AnyScene::ThreeD(s) => {
+                    if kernel_image.is_some() {
+                        bail!(
+                            "--kernel-image needs a Flatland scene (the 3-D kernel has four \
+                             parameters); `{scene}` is a 3-D scene"
+                        );
+                    }
                     let bvh = SceneBvh::new(&s);
                     let domain = Domain::ThreeD(KernelSampler::new(&s, &bvh));
                     solve_and_write(
-                        &domain, &scene, &config, image, mesh, ply, probes, probe_out, metrics,
-                        quiet, start,
+                        &domain, &scene, &config, image, None, mesh, ply, probes, probe_out,
+                        metrics, quiet, start,
                     )
                 }
                 AnyScene::Flatland(s) => {
@@ -172,8 +184,18 @@ fn run() -> Result<()> {
                     }
                     let domain = Domain::Flat(FlatKernelSampler::new(&s));
                     solve_and_write(
-                        &domain, &scene, &config, image, None, None, probes, probe_out, metrics,
-                        quiet, start,
+                        &domain,
+                        &scene,
+                        &config,
+                        image,
+                        kernel_image,
+                        None,
+                        None,
+                        probes,
+                        probe_out,
+                        metrics,
+                        quiet,
+                        start,
                     )
                 }
             }
@@ -187,6 +209,7 @@ fn solve_and_write(
     scene_name: &str,
     config: &SolveConfig,
     image: Option<PathBuf>,
+    kernel_image: Option<PathBuf>,
     mesh_path: Option<PathBuf>,
     ply: Option<PathBuf>,
     probes: Option<PathBuf>,
@@ -268,6 +291,9 @@ fn solve_and_write(
         }
     } else if let (Some(path), Some(flat)) = (image, domain.scene_flat()) {
         flatland_image(domain, &trained, &emitters, config, flat, &path)?;
+    }
+    if let (Some(path), Domain::Flat(sampler)) = (kernel_image, domain) {
+        flatland_kernel_image(domain, sampler, &trained, &path)?;
     }
     metrics.seconds.total = start.elapsed().as_secs_f64();
     metrics.peak_memory_bytes = gcr::metrics::peak_memory_bytes();
@@ -396,6 +422,66 @@ fn flatland_image(
     image::RgbImage::from_raw(size, size, px)
         .context("image buffer")?
         .save(path)
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
+
+/// The light flow over (s, t) ∈ [0,1]² (fig. 4.1b): two 256² panels, the sampled kernel K·s with
+/// GCR's own final strength s = E + B_refl on the left and the network's Ψ on the right, on one
+/// grey scale (white = 0, black = the 99th percentile of K·s; band 0), the training rays as red
+/// dots on the right.
+fn flatland_kernel_image(
+    domain: &Domain,
+    sampler: &FlatKernelSampler,
+    trained: &gcr::solver::Trained,
+    path: &PathBuf,
+) -> Result<()> {
+    use rayon::prelude::*;
+    let n = 256usize;
+    let pairs: Vec<(f64, f64)> = (0..n * n)
+        .into_par_iter()
+        .map(|i| {
+            let s = (i % n) as f64 / n as f64 + 0.5 / n as f64;
+            let t = 1.0 - ((i / n) as f64 + 0.5) / n as f64;
+            let ray = domain.ray(&[s, t]);
+            let strength = ray.emission_x[0] + trained.reflected_kernel(ray.x)[0];
+            (
+                ray.kernel[0] * strength,
+                trained.kernel.evaluate(ray.x, ray.y)[0],
+            )
+        })
+        .collect();
+    let mut sorted: Vec<f64> = pairs
+        .iter()
+        .map(|p| p.0)
+        .filter(|v| v.is_finite())
+        .collect();
+    sorted.sort_by(f64::total_cmp);
+    let top = sorted
+        .get(sorted.len() * 99 / 100)
+        .copied()
+        .filter(|v| *v > 0.0)
+        .unwrap_or(1.0);
+    let grey = |v: f64| 255 - ((v / top).clamp(0.0, 1.0) * 255.0).round() as u8;
+    let (w, gap) = (2 * n + 8, 8);
+    let mut img = image::RgbImage::from_pixel(w as u32, n as u32, image::Rgb([255, 255, 255]));
+    for (i, (exact, psi)) in pairs.iter().enumerate() {
+        let (x, y) = ((i % n) as u32, (i / n) as u32);
+        img.put_pixel(x, y, image::Rgb([grey(*exact); 3]));
+        img.put_pixel((n + gap) as u32 + x, y, image::Rgb([grey(*psi); 3]));
+    }
+    for smp in &trained.samples {
+        let s = sampler
+            .sampler
+            .inverse(smp.ray.face_x, smp.ray.x.truncate());
+        let t = sampler
+            .sampler
+            .inverse(smp.ray.face_y, smp.ray.y.truncate());
+        let x = (n + gap) as f64 + (s * n as f64).min(n as f64 - 1.0);
+        let y = ((1.0 - t) * n as f64).min(n as f64 - 1.0);
+        img.put_pixel(x as u32, y as u32, image::Rgb([220, 30, 30]));
+    }
+    img.save(path)
         .with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }

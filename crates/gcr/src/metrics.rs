@@ -50,6 +50,9 @@ pub struct Metrics {
     pub fem_steps: usize,
     /// Light bounces propagated through projected kernels (`--output-fit projection`).
     pub bounces: usize,
+    /// Bounce iterations stopped because their changes grew (a projected kernel with a mode of
+    /// gain above 1; the strengths went back to the bounce with the smallest change).
+    pub diverging_bounces_stopped: usize,
     /// Kernel output layer: `delta-rule` or `projection`.
     pub output_fit: String,
     /// Kernel training steps executed.

@@ -79,6 +79,17 @@ fn bad_input_gives_a_message_and_a_non_zero_exit() {
         (vec!["solve", "furnace", "--time-budget=-1"], "budget"),
         (
             vec![
+                "solve",
+                "cornell-box",
+                "--cells",
+                "20",
+                "--kernel-image",
+                "k.png",
+            ],
+            "flatland",
+        ),
+        (
+            vec![
                 "reference",
                 "cornell-box",
                 "--probes",
@@ -112,4 +123,42 @@ fn bad_input_gives_a_message_and_a_non_zero_exit() {
         );
         assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
     }
+}
+
+/// Flatland: the scene image and the kernel image over (s, t) (fig. 4.1b), two 256² panels side
+/// by side: the sampled K·s (left) must be dark near the corner s ≈ t of the wall–floor joint
+/// and the network's Ψ (right) must follow it, with training rays marked red.
+#[test]
+fn flatland_solve_writes_the_kernel_image() {
+    let path = tmp("kernel.png");
+    let o = gcr(&[
+        "solve",
+        "flatland-corner",
+        "--cells",
+        "60",
+        "--quiet",
+        "--kernel-image",
+        &path,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = image::open(&path).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (520, 256));
+    let dark = |x0: u32| {
+        let mut n = 0;
+        for y in 0..256 {
+            for x in x0..x0 + 256 {
+                let p = img.get_pixel(x, y).0;
+                n += usize::from(p[0] < 128 && p[0] == p[1]);
+            }
+        }
+        n
+    };
+    let red = img.pixels().filter(|p| p.0 == [220, 30, 30]).count();
+    assert!(
+        dark(0) > 100,
+        "sampled kernel panel nearly white: {}",
+        dark(0)
+    );
+    assert!(dark(264) > 50, "network panel nearly white: {}", dark(264));
+    assert!(red > 100, "{red} training rays marked");
 }

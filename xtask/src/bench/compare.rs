@@ -370,10 +370,24 @@ fn three_d(
     Ok((curves, note))
 }
 
-/// Writes one log-log plot of error against seconds (errors clamped to [1e-4, 100]: a diverged run
-/// sits at the top). Tick labels with at most three significant digits.
+/// Writes one log-log plot of error against seconds. Runs with an error above 1000 % (diverged,
+/// listed in the tables) are left out and the title says so.
 fn plot_curves(path: &std::path::Path, title: &str, curves: &[Curve]) -> Result<()> {
     use plotters::prelude::*;
+    let ok = |p: &Point| p.error.is_finite() && p.error <= 10.0;
+    let dropped = curves.iter().flat_map(|c| &c.points).any(|p| !ok(p));
+    let title = if dropped {
+        format!("{title} (diverged runs left out)")
+    } else {
+        title.to_string()
+    };
+    let curves: Vec<Curve> = curves
+        .iter()
+        .map(|c| Curve {
+            name: c.name.clone(),
+            points: c.points.iter().copied().filter(ok).collect(),
+        })
+        .collect();
     let all: Vec<Point> = curves
         .iter()
         .flat_map(|c| c.points.iter().copied())
@@ -387,7 +401,7 @@ fn plot_curves(path: &std::path::Path, title: &str, curves: &[Curve]) -> Result<
     let colours = [RED, BLUE, GREEN, BLACK, MAGENTA, CYAN];
     crate::plot::png(path, 900, 600, |root| {
         let mut chart = ChartBuilder::on(root)
-            .caption(title, ("sans-serif", 22))
+            .caption(&title, ("sans-serif", 22))
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(60)

@@ -53,6 +53,9 @@ pub struct Metrics {
     /// Bounce iterations stopped because their changes grew (a projected kernel with a mode of
     /// gain above 1; the strengths went back to the bounce with the smallest change).
     pub diverging_bounces_stopped: usize,
+    /// Projections redone with a higher rejection threshold (0.5, then 0.9) because their
+    /// bounces diverged: fewer, nearly orthogonal kernel cells, a stable but coarser fit.
+    pub stabilized_projections: usize,
     /// Kernel output layer: `delta-rule` or `projection`.
     pub output_fit: String,
     /// Kernel training steps executed.

@@ -253,10 +253,11 @@ fn slivers_and_coincident_faces_stay_finite() {
     );
 }
 
-/// `wall-floor` at 400 kernel cells (seed 1) once ran its final bounces into B ≈ 1e51: the
-/// projected kernel had a mode with gain above 1 that the first 30 bounces hid. The bounce
-/// iteration now stops when its changes grow; B stays within the maximum-principle bound and
-/// near the path tracer.
+/// `wall-floor` at 400 kernel cells once ran its final bounces into B ≈ 1e51 (seed 1) and
+/// 1e133 (seed 2): the projected kernel had a mode with gain above 1 that the first 30 bounces
+/// hid. The bounce iteration now stops when its changes grow, and a projection that diverges is
+/// redone with a higher rejection threshold (seed 2 needs it); B stays within the
+/// maximum-principle bound and near the path tracer.
 #[test]
 fn a_projected_kernel_with_gain_above_one_does_not_blow_up() {
     let scene = scene_sampler::builtin("wall-floor")
@@ -264,19 +265,22 @@ fn a_projected_kernel_with_gain_above_one_does_not_blow_up() {
         .into_3d()
         .unwrap();
     let pts = points(&scene, 40);
-    let b = solve_at(&scene, &small(400), GatherMode::Kernel, &pts);
     let bvh = SceneBvh::new(&scene);
     let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
     let bound = domain.radiosity_bound();
-    assert!(
-        b.iter().all(|v| (0..3).all(|k| v[k] <= bound[k])),
-        "B above E_max/(1 − ρ_max) = {bound:?}"
-    );
     let reference: Vec<[f64; 3]> = baselines::pointwise::radiosity_at(&scene, &bvh, &pts, 4000, 3)
         .into_iter()
         .map(|e| e.mean)
         .collect();
-    let err = relative_l2(&b, &reference);
-    eprintln!("wall-floor at 400 cells: kernel gather error {err:.3}");
-    assert!(err < 0.5, "kernel gather error {err}");
+    for seed in [1, 2] {
+        let config = SolveConfig { seed, ..small(400) };
+        let b = solve_at(&scene, &config, GatherMode::Kernel, &pts);
+        assert!(
+            b.iter().all(|v| (0..3).all(|k| v[k] <= bound[k])),
+            "seed {seed}: B above E_max/(1 − ρ_max) = {bound:?}"
+        );
+        let err = relative_l2(&b, &reference);
+        eprintln!("wall-floor at 400 cells, seed {seed}: kernel gather error {err:.3}");
+        assert!(err < 0.5, "seed {seed}: kernel gather error {err}");
+    }
 }

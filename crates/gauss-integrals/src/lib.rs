@@ -16,9 +16,11 @@
 pub mod closed_form;
 pub mod criteria;
 pub mod cubature;
+pub mod gram;
 pub mod orthonormal;
 pub mod wedge;
 
 pub use closed_form::{line, plane, product, segment, triangle, triangle_fast, triangle_reference};
 pub use cubature::{Cubature, triangle_cubature};
+pub use gram::{Dim, Domain, Gaussian, Gram, GramConfig, GramError, Sparse, gram, gram_with};
 pub use orthonormal::{Orthonormal, classical_gram_schmidt};

@@ -18,6 +18,7 @@ pub mod criteria;
 pub mod cubature;
 pub mod gram;
 pub mod orthonormal;
+pub mod transfer;
 pub mod wedge;
 
 pub use closed_form::{line, plane, product, segment, triangle, triangle_fast, triangle_reference};

@@ -236,29 +236,47 @@ impl Domain {
         accurate: bool,
         candidates: Option<&[u32]>,
     ) -> f64 {
-        if a.is_nan() || a <= 0.0 || !a.is_finite() || !finite(c) {
-            return 0.0;
-        }
         let r = support_radius(a, tol);
+        match candidates {
+            Some(ids) => self.sum_within(c, a, r, accurate, ids.iter().copied()).0,
+            None => {
+                self.sum_within(c, a, r, accurate, 0..self.elements.len() as u32)
+                    .0
+            }
+        }
+    }
+
+    /// Σ over the elements among `ids` whose bounding sphere comes within `r` of `c`, and the
+    /// number of element integrals evaluated.
+    fn sum_within(
+        &self,
+        c: V,
+        a: f64,
+        r: f64,
+        accurate: bool,
+        ids: impl Iterator<Item = u32>,
+    ) -> (f64, usize) {
+        if a.is_nan() || a <= 0.0 || !a.is_finite() || !finite(c) {
+            return (0.0, 0);
+        }
         let mut sum = 0.0;
-        let mut one = |k: usize| {
+        let mut n = 0;
+        for k in ids {
+            let k = k as usize;
             let (ec, er) = self.spheres[k];
             let d = dist2(c, ec).sqrt() - er;
             if d > r {
-                return;
+                continue;
             }
             let [p, q, s] = self.element(k);
+            n += 1;
             sum += match (self.dim, accurate) {
                 (Dim::Two, _) => segment(c, a, p, q),
                 (Dim::Three, false) => triangle_fast(c, a, p, q, s),
                 (Dim::Three, true) => triangle(c, a, p, q, s),
             };
-        };
-        match candidates {
-            Some(ids) => ids.iter().for_each(|k| one(*k as usize)),
-            None => (0..self.elements.len()).for_each(&mut one),
         }
-        sum
+        (sum, n)
     }
 }
 
@@ -476,6 +494,8 @@ pub struct Gram {
     pub closed_form: usize,
     /// Pairs by the exact element sum.
     pub element_sum: usize,
+    /// Element integrals evaluated for the element sums.
+    pub element_integrals: usize,
 }
 
 /// Counts of how [`cross_with`] / [`gram_with`] integrated their pairs.
@@ -484,18 +504,44 @@ struct Counts {
     zero: usize,
     flat: usize,
     sum: usize,
+    evals: usize,
 }
 
-/// Per Gaussian, the elements within twice its support radius: a superset of the support of
-/// its product with any Gaussian the pair cut keeps (with `L = ln(1/tol)` a kept pair has
+/// Per Gaussian, the elements within twice its support radius, sorted by the lower bound
+/// `|e − w| − r_e` of their distance from the centre: a superset of the support of its product
+/// with any Gaussian the pair cut keeps (with `L = ln(1/tol)` a kept pair has
 /// `a_i a_j/(a_i+a_j)|Δ|² ≤ L`, so the product's centre lies within `√(L/a_i)` of `w_i` and its
-/// support radius `√(L/(a_i+a_j))` is smaller still).
-fn candidates(domain: &Domain, g: &[Gaussian], tol: f64) -> Vec<Vec<u32>> {
+/// support radius `√(L/(a_i+a_j))` is smaller still). A pair reads only the prefix that can reach
+/// its product's support.
+struct Near {
+    lower: Vec<f64>,
+    ids: Vec<u32>,
+}
+
+impl Near {
+    /// The candidates within `reach` of the centre.
+    fn within(&self, reach: f64) -> &[u32] {
+        &self.ids[..self.lower.partition_point(|l| *l <= reach)]
+    }
+}
+
+fn candidates(domain: &Domain, g: &[Gaussian], tol: f64) -> Vec<Near> {
     g.par_iter()
         .map(|gi| {
             let mut out = Vec::new();
             domain.elements_near(gi.centre, 2.0 * support_radius(gi.a(), tol), &mut out);
-            out
+            let mut v: Vec<(f64, u32)> = out
+                .iter()
+                .map(|k| {
+                    let (ec, er) = domain.spheres[*k as usize];
+                    (dist2(ec, gi.centre).sqrt() - er, *k)
+                })
+                .collect();
+            v.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            Near {
+                lower: v.iter().map(|e| e.0).collect(),
+                ids: v.iter().map(|e| e.1).collect(),
+            }
         })
         .collect()
 }
@@ -551,26 +597,34 @@ impl Sweep {
     }
 }
 
-/// One entry by the chosen method.
+/// One entry by the chosen method, and the number of element integrals it took. The element
+/// sum skips elements on which the product `s·exp(−a|x − c|²)` stays below `tol` (radius
+/// `√((ln(1/tol) + ln s)/a)` around `c`): on a plane the skipped mass is below `tol·π/a`.
 fn entry(
     domain: &Domain,
-    gi: &Gaussian,
-    gj: &Gaussian,
+    (gi, ni): (&Gaussian, &Near),
+    (gj, nj): (&Gaussian, &Near),
     how: Integration,
     cfg: &GramConfig,
-    cand: &[u32],
-) -> f64 {
+) -> (f64, usize) {
     match how {
-        Integration::Zero => 0.0,
-        Integration::ClosedForm => {
-            flat_inner_product(domain.dim, gi.centre, gi.width, gj.centre, gj.width)
-        }
+        Integration::Zero => (0.0, 0),
+        Integration::ClosedForm => (
+            flat_inner_product(domain.dim, gi.centre, gi.width, gj.centre, gj.width),
+            0,
+        ),
         Integration::ElementSum => {
             let (a, c, s) = product(gi.a(), gi.centre, gj.a(), gj.centre);
-            if s == 0.0 {
-                return 0.0;
+            let budget = (1.0 / cfg.tol).ln() + s.ln();
+            if s == 0.0 || budget <= 0.0 {
+                return (0.0, 0);
             }
-            s * domain.integrate(c, a, cfg.tol, cfg.accurate, Some(cand))
+            let r = (budget / a).sqrt();
+            let ci = ni.within(dist2(c, gi.centre).sqrt() + r);
+            let cj = nj.within(dist2(c, gj.centre).sqrt() + r);
+            let ids = if ci.len() <= cj.len() { ci } else { cj };
+            let (v, n) = domain.sum_within(c, a, r, cfg.accurate, ids.iter().copied());
+            (s * v, n)
         }
     }
 }
@@ -619,8 +673,8 @@ where
                     Integration::ClosedForm => n.flat += 1,
                     Integration::ElementSum => n.sum += 1,
                 }
-                let shorter = if cand[i].len() <= cand[j].len() { i } else { j };
-                let v = entry(domain, gi, gj, how, cfg, &cand[shorter]);
+                let (v, evals) = entry(domain, (gi, &cand[i]), (gj, &cand[j]), how, cfg);
+                n.evals += evals;
                 if v != 0.0 {
                     row.push((j as u32, v));
                 }
@@ -634,6 +688,7 @@ where
         total.zero += n.zero;
         total.flat += n.flat;
         total.sum += n.sum;
+        total.evals += n.evals;
         for (j, v) in row {
             rows[i].push((j, v));
             if j as usize != i {
@@ -646,6 +701,7 @@ where
         zero_rule: total.zero,
         closed_form: total.flat,
         element_sum: total.sum,
+        element_integrals: total.evals,
     })
 }
 
@@ -679,12 +735,14 @@ where
                 if ai * aj / (ai + aj) * dist2(gi.centre, gj.centre) > cut {
                     continue;
                 }
-                let cand = if cand_r[i].len() <= cand_c[j as usize].len() {
-                    &cand_r[i]
-                } else {
-                    &cand_c[j as usize]
-                };
-                let v = entry(domain, gi, gj, rule(gi, gj), cfg, cand);
+                let how = rule(gi, gj);
+                let (v, _) = entry(
+                    domain,
+                    (gi, &cand_r[i]),
+                    (gj, &cand_c[j as usize]),
+                    how,
+                    cfg,
+                );
                 if v != 0.0 {
                     row.push((j, v));
                 }

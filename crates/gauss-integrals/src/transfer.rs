@@ -182,20 +182,22 @@ pub fn reflect_naive(
         });
     }
     let (alpha, beta) = (f.alpha.to_dense(), f.beta.to_dense());
-    // Row-major Ĥ, rows p in parallel.
-    let h: Vec<Vec<f64>> = (0..n)
-        .into_par_iter()
-        .map(|p| {
-            let mut row = vec![0.0; n];
-            for (o, k) in kernel.iter().enumerate() {
-                let w = k.weight * alpha[(o, p)];
-                for q in 0..n {
-                    row[q] += w * beta[(o, q)];
-                }
+    // Row-major Ĥ, rows p in parallel once the work pays for the threads.
+    let row = |p: usize| {
+        let mut row = vec![0.0; n];
+        for (o, k) in kernel.iter().enumerate() {
+            let w = k.weight * alpha[(o, p)];
+            for q in 0..n {
+                row[q] += w * beta[(o, q)];
             }
-            row
-        })
-        .collect();
+        }
+        row
+    };
+    let h: Vec<Vec<f64>> = if n * n * kernel.len() < 1 << 20 {
+        (0..n).map(row).collect()
+    } else {
+        (0..n).into_par_iter().map(row).collect()
+    };
     let gamma = ortho.apply_at(bbar);
     let mut s = vec![0.0; n];
     for p in 0..n {

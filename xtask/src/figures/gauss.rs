@@ -33,8 +33,10 @@ struct Fit {
 /// grid triangulated (two triangles per square), each width the mean length of the cell's edges
 /// (eq. 2.10). The base is orthonormalized (Cholesky, MATH.md §5) on that triangulated domain, 1
 /// is projected onto it (`γ = G⁻¹ u`, `u_p = ∫_S Λ_p`), and `f = Σ γ_p Λ_p` is compared to 1 at
-/// 231 barycentric grid points of the triangle at the centre of the network.
-fn fig_3_4_run(n: usize, jitter: f64, seed: u64) -> Result<Fit> {
+/// 231 barycentric grid points of the triangle at the centre of the network. Returns the errors
+/// with exact element sums and with the flat closed forms of an unbounded plane (eq. 3.52,
+/// `u_p = π d_p²`).
+fn fig_3_4_run(n: usize, jitter: f64, seed: u64) -> Result<(Fit, Fit)> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut v = Vec::with_capacity(n * n);
     for y in 0..n {
@@ -84,17 +86,32 @@ fn fig_3_4_run(n: usize, jitter: f64, seed: u64) -> Result<Fit> {
     ];
     let dom = Domain::triangles(v.clone(), &tris)?;
     let cfg = GramConfig::default();
+    let t = central.map(|k| v[k as usize]);
+    // Exact: element sums over the network's triangles, u_p = ∫_S Λ_p.
     let gm = gram(&dom, &g, &cfg)?.matrix.to_dense();
     let o = Orthonormal::new(&gm, 1e-12);
     let u: Vec<f64> = g
         .iter()
         .map(|x| dom.integrate(x.centre, 1.0 / (x.width * x.width), cfg.tol, false, None))
         .collect();
-    let gamma = o.solve(&u);
-    let t = central.map(|k| v[k as usize]);
+    let exact = evaluate(&g, &o.solve(&u), t, o.rejected());
+    // Flat unbounded domain: eq. 3.52 everywhere, u_p = π d_p² (the whole plane).
+    let gf: Vec<Gaussian> = g.iter().map(|x| Gaussian { flat: true, ..*x }).collect();
+    let gm = gram(&dom, &gf, &cfg)?.matrix.to_dense();
+    let o = Orthonormal::new(&gm, 1e-12);
+    let u: Vec<f64> = g
+        .iter()
+        .map(|x| std::f64::consts::PI * x.width * x.width)
+        .collect();
+    let flat = evaluate(&g, &o.solve(&u), t, o.rejected());
+    Ok((exact, flat))
+}
+
+/// Errors of `f = Σ γ_p Λ_p` against 1 at the 231 points of a barycentric grid on `t`.
+fn evaluate(g: &[Gaussian], gamma: &[f64], t: [[f64; 3]; 3], rejected: usize) -> Fit {
     let m = 20;
     let mut fit = Fit {
-        rejected: o.rejected(),
+        rejected,
         ..Fit::default()
     };
     let mut count = 0;
@@ -105,7 +122,7 @@ fn fig_3_4_run(n: usize, jitter: f64, seed: u64) -> Result<Fit> {
             let x = [0, 1].map(|k| l0 * t[0][k] + l1 * t[1][k] + l2 * t[2][k]);
             let f: f64 = g
                 .iter()
-                .zip(&gamma)
+                .zip(gamma)
                 .map(|(gp, c)| {
                     let d2 = (x[0] - gp.centre[0]).powi(2) + (x[1] - gp.centre[1]).powi(2);
                     c * (-d2 / (gp.width * gp.width)).exp()
@@ -120,7 +137,7 @@ fn fig_3_4_run(n: usize, jitter: f64, seed: u64) -> Result<Fit> {
     }
     fit.rms = (fit.rms / count as f64).sqrt();
     fit.mean_abs /= count as f64;
-    Ok(fit)
+    fit
 }
 
 fn fig_3_4(ctx: &Ctx) -> Result<()> {
@@ -130,10 +147,12 @@ fn fig_3_4(ctx: &Ctx) -> Result<()> {
         (20, (0..=6).map(|k| 0.05 * k as f64).collect(), 4)
     };
     let mut rows = Vec::new();
+    let mut flat_rows = Vec::new();
     for &r in &rates {
-        let fits = (0..seeds)
+        let both = (0..seeds)
             .map(|s| fig_3_4_run(n, r, 1000 + s))
             .collect::<Result<Vec<_>>>()?;
+        let fits: Vec<Fit> = both.iter().map(|b| b.0).collect();
         let k = fits.len() as f64;
         let mean = |f: fn(&Fit) -> f64| fits.iter().map(f).sum::<f64>() / k;
         let rms = mean(|f| f.rms);
@@ -143,6 +162,9 @@ fn fig_3_4(ctx: &Ctx) -> Result<()> {
         let mean_abs = mean(|f| f.mean_abs);
         let max_abs = fits.iter().map(|f| f.max_abs).fold(0.0, f64::max);
         let rejected = fits.iter().map(|f| f.rejected).sum::<usize>();
+        let flat_rms = both.iter().map(|b| b.1.rms).sum::<f64>() / k;
+        let flat_rej = both.iter().map(|b| b.1.rejected).sum::<usize>();
+        flat_rows.push((flat_rms, flat_rej));
         rows.push((r, rms, lo, hi, mse, mean_abs, max_abs, rejected));
     }
     let mut md = String::new();
@@ -152,22 +174,30 @@ fn fig_3_4(ctx: &Ctx) -> Result<()> {
          {n}×{n} Gaussians, centres jittered uniformly in a disk of radius rate × spacing, width = mean \
          edge length of the triangulated grid (eq. 2.10), exact element-sum Gram matrix, Cholesky \
          (threshold 1e-12), projection of 1; errors of `f = Σ γ_p Λ_p` against 1 at 231 points of the \
-         central triangle, over {seeds} seeds per rate.\n\n\
-         | jitter | RMS error (mean over seeds) | RMS min | RMS max | MSE | mean abs error | max abs error | rejected |\n\
-         |---:|---:|---:|---:|---:|---:|---:|---:|",
+         central triangle, over {seeds} seeds per rate. Last two columns: the same base with the flat \
+         closed forms of an unbounded plane instead (eq. 3.52, `u_p = π d_p²`).\n\n\
+         | jitter | RMS error (mean over seeds) | RMS min | RMS max | MSE | mean abs error | max abs error | rejected | RMS error, flat closed forms | rejected (flat) |\n\
+         |---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
         if ctx.quick { " --quick" } else { "" }
     )?;
-    for (r, rms, lo, hi, mse, ma, mx, rej) in &rows {
+    for ((r, rms, lo, hi, mse, ma, mx, rej), (frms, frej)) in rows.iter().zip(&flat_rows) {
         writeln!(
             md,
-            "| {:.0} % | {rms:.2e} | {lo:.2e} | {hi:.2e} | {mse:.2e} | {ma:.2e} | {mx:.2e} | {rej} |",
+            "| {:.0} % | {rms:.2e} | {lo:.2e} | {hi:.2e} | {mse:.2e} | {ma:.2e} | {mx:.2e} | {rej} | {frms:.2e} | {frej} |",
             100.0 * r
         )?;
     }
     std::fs::write(ctx.out.join("gauss-fig3.4.md"), &md)?;
     println!("{md}");
 
-    let ymax = rows.iter().map(|r| r.3).fold(0.0, f64::max).max(1e-9) * 1.1 * 100.0;
+    let ymax = rows
+        .iter()
+        .map(|r| r.3)
+        .chain(flat_rows.iter().map(|f| f.0))
+        .fold(0.0, f64::max)
+        .max(1e-9)
+        * 1.1
+        * 100.0;
     crate::plot::png(&ctx.out.join("gauss-fig3.4.png"), 640, 420, |root| {
         let mut ch = ChartBuilder::on(root)
             .caption(

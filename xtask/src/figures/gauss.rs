@@ -235,10 +235,20 @@ fn fig_3_4(ctx: &Ctx) -> Result<()> {
         .map_err(|e| anyhow::anyhow!("{e}"))?
         .label("mean absolute error")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED));
+        let green = RGBColor(0, 140, 0);
+        ch.draw_series(LineSeries::new(
+            rows.iter()
+                .zip(&flat_rows)
+                .map(|(r, f)| (r.0 * 100.0, f.0 * 100.0)),
+            &green,
+        ))
+        .map_err(|e| anyhow::anyhow!("{e}"))?
+        .label("RMS error, flat closed forms of an unbounded plane (eq. 3.52)")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], green));
         ch.configure_series_labels()
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperLeft)
+            .position(SeriesLabelPosition::MiddleLeft)
             .draw()
             .map_err(|e| anyhow::anyhow!("{e}"))?;
         Ok(())

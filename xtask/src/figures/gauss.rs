@@ -7,9 +7,9 @@
 
 use crate::Ctx;
 use anyhow::Result;
-use gauss_integrals::Orthonormal;
 use gauss_integrals::criteria::{e_di, e_dt, e_fi, e_ft};
 use gauss_integrals::gram::{Domain, Gaussian, GramConfig, gram};
+use gauss_integrals::{Orthonormal, classical_gram_schmidt};
 use plotters::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -34,9 +34,10 @@ struct Fit {
 /// (eq. 2.10). The base is orthonormalized (Cholesky, MATH.md §5) on that triangulated domain, 1
 /// is projected onto it (`γ = G⁻¹ u`, `u_p = ∫_S Λ_p`), and `f = Σ γ_p Λ_p` is compared to 1 at
 /// 231 barycentric grid points of the triangle at the centre of the network. Returns the errors
-/// with exact element sums and with the flat closed forms of an unbounded plane (eq. 3.52,
-/// `u_p = π d_p²`).
-fn fig_3_4_run(n: usize, jitter: f64, seed: u64) -> Result<(Fit, Fit)> {
+/// with exact element sums and Cholesky, with the flat closed forms of an unbounded plane
+/// (eq. 3.52, `u_p = π d_p²`), and with exact element sums and the classical Gram–Schmidt of
+/// fig. B.3.
+fn fig_3_4_run(n: usize, jitter: f64, seed: u64) -> Result<(Fit, Fit, Fit)> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut v = Vec::with_capacity(n * n);
     for y in 0..n {
@@ -95,6 +96,17 @@ fn fig_3_4_run(n: usize, jitter: f64, seed: u64) -> Result<(Fit, Fit)> {
         .map(|x| dom.integrate(x.centre, 1.0 / (x.width * x.width), cfg.tol, false, None))
         .collect();
     let exact = evaluate(&g, &o.solve(&u), t, o.rejected());
+    // The same Gram matrix orthonormalized by the classical Gram–Schmidt printed in fig. B.3:
+    // γ = Aᵀ(A u).
+    let a = classical_gram_schmidt(&gm);
+    let nn = u.len();
+    let r: Vec<f64> = (0..nn)
+        .map(|k| (0..nn).map(|j| a[(k, j)] * u[j]).sum())
+        .collect();
+    let gamma: Vec<f64> = (0..nn)
+        .map(|j| (0..nn).map(|k| a[(k, j)] * r[k]).sum())
+        .collect();
+    let cgs = evaluate(&g, &gamma, t, 0);
     // Flat unbounded domain: eq. 3.52 everywhere, u_p = π d_p² (the whole plane).
     let gf: Vec<Gaussian> = g.iter().map(|x| Gaussian { flat: true, ..*x }).collect();
     let gm = gram(&dom, &gf, &cfg)?.matrix.to_dense();
@@ -104,7 +116,7 @@ fn fig_3_4_run(n: usize, jitter: f64, seed: u64) -> Result<(Fit, Fit)> {
         .map(|x| std::f64::consts::PI * x.width * x.width)
         .collect();
     let flat = evaluate(&g, &o.solve(&u), t, o.rejected());
-    Ok((exact, flat))
+    Ok((exact, flat, cgs))
 }
 
 /// Errors of `f = Σ γ_p Λ_p` against 1 at the 231 points of a barycentric grid on `t`.
@@ -164,7 +176,8 @@ fn fig_3_4(ctx: &Ctx) -> Result<()> {
         let rejected = fits.iter().map(|f| f.rejected).sum::<usize>();
         let flat_rms = both.iter().map(|b| b.1.rms).sum::<f64>() / k;
         let flat_rej = both.iter().map(|b| b.1.rejected).sum::<usize>();
-        flat_rows.push((flat_rms, flat_rej));
+        let cgs_rms = both.iter().map(|b| b.2.rms).sum::<f64>() / k;
+        flat_rows.push((flat_rms, flat_rej, cgs_rms));
         rows.push((r, rms, lo, hi, mse, mean_abs, max_abs, rejected));
     }
     let mut md = String::new();
@@ -175,15 +188,16 @@ fn fig_3_4(ctx: &Ctx) -> Result<()> {
          edge length of the triangulated grid (eq. 2.10), exact element-sum Gram matrix, Cholesky \
          (threshold 1e-12), projection of 1; errors of `f = Σ γ_p Λ_p` against 1 at 231 points of the \
          central triangle, over {seeds} seeds per rate. Last two columns: the same base with the flat \
-         closed forms of an unbounded plane instead (eq. 3.52, `u_p = π d_p²`).\n\n\
-         | jitter | RMS error (mean over seeds) | RMS min | RMS max | MSE | mean abs error | max abs error | rejected | RMS error, flat closed forms | rejected (flat) |\n\
-         |---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+         closed forms of an unbounded plane instead (eq. 3.52, `u_p = π d_p²`); last column: exact element \
+         sums orthonormalized by the classical Gram–Schmidt of fig. B.3.\n\n\
+         | jitter | RMS error (mean over seeds) | RMS min | RMS max | MSE | mean abs error | max abs error | rejected | RMS error, flat closed forms | rejected (flat) | RMS error, classical Gram–Schmidt |\n\
+         |---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
         if ctx.quick { " --quick" } else { "" }
     )?;
-    for ((r, rms, lo, hi, mse, ma, mx, rej), (frms, frej)) in rows.iter().zip(&flat_rows) {
+    for ((r, rms, lo, hi, mse, ma, mx, rej), (frms, frej, crms)) in rows.iter().zip(&flat_rows) {
         writeln!(
             md,
-            "| {:.0} % | {rms:.2e} | {lo:.2e} | {hi:.2e} | {mse:.2e} | {ma:.2e} | {mx:.2e} | {rej} | {frms:.2e} | {frej} |",
+            "| {:.0} % | {rms:.2e} | {lo:.2e} | {hi:.2e} | {mse:.2e} | {ma:.2e} | {mx:.2e} | {rej} | {frms:.2e} | {frej} | {crms:.2e} |",
             100.0 * r
         )?;
     }
@@ -193,7 +207,7 @@ fn fig_3_4(ctx: &Ctx) -> Result<()> {
     let ymax = rows
         .iter()
         .map(|r| r.3)
-        .chain(flat_rows.iter().map(|f| f.0))
+        .chain(flat_rows.iter().map(|f| f.0.max(f.2)))
         .fold(0.0, f64::max)
         .max(1e-9)
         * 1.1
@@ -245,6 +259,16 @@ fn fig_3_4(ctx: &Ctx) -> Result<()> {
         .map_err(|e| anyhow::anyhow!("{e}"))?
         .label("RMS error, flat closed forms of an unbounded plane (eq. 3.52)")
         .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], green));
+        let purple = RGBColor(140, 0, 160);
+        ch.draw_series(LineSeries::new(
+            rows.iter()
+                .zip(&flat_rows)
+                .map(|(r, f)| (r.0 * 100.0, f.2 * 100.0)),
+            &purple,
+        ))
+        .map_err(|e| anyhow::anyhow!("{e}"))?
+        .label("RMS error, classical Gram-Schmidt (fig. B.3)")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], purple));
         ch.configure_series_labels()
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)

@@ -855,6 +855,56 @@ mod tests {
     }
 
     #[test]
+    fn flatland_element_sum_matches_a_fine_midpoint_rule_and_orthonormalizes() {
+        // A curved polyline (quarter circle of radius 3, 60 segments) with 12 Gaussians on it.
+        let v: Vec<[f64; 2]> = (0..=60)
+            .map(|k| {
+                let t = k as f64 / 60.0 * std::f64::consts::FRAC_PI_2;
+                [3.0 * t.cos(), 3.0 * t.sin()]
+            })
+            .collect();
+        let s: Vec<[u32; 2]> = (0..60).map(|k| [k, k + 1]).collect();
+        let dom = Domain::segments(&v, &s).unwrap();
+        let g: Vec<Gaussian> = (0..12)
+            .map(|k| {
+                let t = (k as f64 + 0.5) / 12.0 * std::f64::consts::FRAC_PI_2;
+                Gaussian::new([3.0 * t.cos(), 3.0 * t.sin(), 0.0], 0.5 + 0.02 * k as f64)
+            })
+            .collect();
+        let m = gram(&dom, &g, &GramConfig::default())
+            .unwrap()
+            .matrix
+            .to_dense();
+        let f = |x: V, i: usize, j: usize| {
+            (-dist2(x, g[i].centre) / g[i].width.powi(2)
+                - dist2(x, g[j].centre) / g[j].width.powi(2))
+            .exp()
+        };
+        for (i, j) in [(0, 0), (0, 1), (3, 5), (11, 11), (2, 9)] {
+            // Composite midpoint rule, 4000 points per segment: error ~1e-9 relative.
+            let mut want = 0.0;
+            for k in 0..dom.len() {
+                let [p, q, _] = dom.element(k);
+                let len = dist2(p, q).sqrt();
+                let nmid = 4000;
+                for t in 0..nmid {
+                    let u = (t as f64 + 0.5) / nmid as f64;
+                    let x = [0, 1, 2].map(|c| p[c] + u * (q[c] - p[c]));
+                    want += f(x, i, j) * len / nmid as f64;
+                }
+            }
+            assert!(
+                (m[(i, j)] - want).abs() <= 1e-8 * m[(i, i)],
+                "{i},{j}: {} vs {want}",
+                m[(i, j)]
+            );
+        }
+        let a = Orthonormal::new(&m, 1e-12).matrix_a();
+        let err = (&a * &m * a.transpose() - DMatrix::identity(12, 12)).amax();
+        assert!(err < 1e-10, "{err:e}");
+    }
+
+    #[test]
     fn zero_rules_and_flat_decision_of_fig_3_6() {
         let dom = bumpy_grid(10, 0.5, 0.0);
         let up = [0.0, 0.0, 1.0];

@@ -17,6 +17,20 @@
 //! support radius `√(ln(1/tol)/(a_i+a_j))` from its centre is skipped. Pairs are found by a sweep
 //! over the centres sorted along their longest axis, elements by a uniform grid; rows are computed
 //! in parallel with rayon.
+//!
+//! ```
+//! use gauss_integrals::gram::{Domain, Gaussian, GramConfig, gram};
+//! use gauss_integrals::Orthonormal;
+//! // A flat 20×20 square of two triangles; two Gaussians of width 0.5 near its middle.
+//! let v = vec![[0.0, 0.0, 0.0], [20.0, 0.0, 0.0], [20.0, 20.0, 0.0], [0.0, 20.0, 0.0]];
+//! let dom = Domain::triangles(v, &[[0, 1, 2], [0, 2, 3]]).unwrap();
+//! let g = [Gaussian::new([10.0, 10.0, 0.0], 0.5), Gaussian::new([10.4, 10.0, 0.0], 0.5)];
+//! let m = gram(&dom, &g, &GramConfig::default()).unwrap().matrix;
+//! // ⟨A|A⟩ = π d²/2 (MATH.md §2's correction of eq. 3.53).
+//! assert!((m.get(0, 0) - std::f64::consts::PI * 0.25 / 2.0).abs() < 1e-13);
+//! let o = Orthonormal::new(&m.to_dense(), 1e-12);
+//! assert_eq!(o.rejected(), 0);
+//! ```
 
 use crate::closed_form::{product, segment, triangle, triangle_fast};
 use crate::criteria::Integration;

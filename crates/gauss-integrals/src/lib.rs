@@ -5,6 +5,14 @@
 //! deviation). Everything takes plain `[f64; 3]` points: this crate knows nothing of scenes or
 //! networks.
 //!
+//! - [`closed_form`], [`wedge`]: exact integrals over segments and triangles (MATH.md §2);
+//! - [`cubature`]: adaptive cubature, the reference of the tests;
+//! - [`criteria`]: the error estimates of sec. 3.9.4 and the decision of fig. 3.6;
+//! - [`gram`]: sparse Gram matrices of Gaussian bases on triangulated or segmented domains
+//!   (zero rules, flat closed form eq. 3.52, exact element sums);
+//! - [`orthonormal`]: the Cholesky orthonormalization (MATH.md §5);
+//! - [`transfer`]: the factorized transfer coefficients of MATH.md §3.
+//!
 //! ```
 //! use gauss_integrals::{triangle, plane};
 //! // A huge triangle around the centre integrates to the whole-plane value π/a.
@@ -16,9 +24,13 @@
 pub mod closed_form;
 pub mod criteria;
 pub mod cubature;
+pub mod gram;
 pub mod orthonormal;
+pub mod transfer;
 pub mod wedge;
 
 pub use closed_form::{line, plane, product, segment, triangle, triangle_fast, triangle_reference};
 pub use cubature::{Cubature, triangle_cubature};
+pub use gram::{Dim, Domain, Gaussian, Gram, GramConfig, GramError, Sparse, gram, gram_with};
 pub use orthonormal::{Orthonormal, classical_gram_schmidt};
+pub use transfer::{Factors, KernelGaussian};

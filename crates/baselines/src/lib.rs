@@ -17,6 +17,7 @@ pub mod error;
 pub mod flatland;
 pub mod hierarchical;
 pub mod pointwise;
+pub mod progressive;
 mod stats;
 
 pub use error::BaselineError;

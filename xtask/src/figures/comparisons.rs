@@ -109,17 +109,17 @@ fn off_blocker(scene: &FlatlandScene, n: usize) -> Option<Vec<bool>> {
 }
 
 /// One method at one budget.
-struct Run {
+pub(super) struct Run {
     /// Links (HR) or kernel cells (GCR) actually used.
-    links: usize,
+    pub(super) links: usize,
     /// Seconds: GCR's whole solve; HR's budget search (all its solves).
-    seconds: f64,
+    pub(super) seconds: f64,
     /// HR only: seconds of one solve at the found ε.
-    one_solve: Option<f64>,
+    pub(super) one_solve: Option<f64>,
     /// The light flow on the grid (row-major, row 0 = t close to 1).
-    flow: Vec<f64>,
+    pub(super) flow: Vec<f64>,
     /// Its error against the exact flow.
-    error: FlowError,
+    pub(super) error: FlowError,
 }
 
 /// The exact light flow on the n×n grid: `K(s,t)·B_exact(x(s))`.
@@ -285,7 +285,12 @@ fn kernel_image(
 }
 
 /// Log-log plot of the relative RMS and relative L1 against links for both methods.
-fn error_plot(path: &std::path::Path, title: &str, gcr: &[Run], hr: &[Run]) -> Result<()> {
+pub(super) fn error_plot(
+    path: &std::path::Path,
+    title: &str,
+    gcr: &[Run],
+    hr: &[Run],
+) -> Result<()> {
     use plotters::prelude::*;
     let all = gcr.iter().chain(hr);
     let (mut lo, mut hi, mut emin, mut emax) = (f64::INFINITY, 0.0f64, f64::INFINITY, 0.0f64);

@@ -4,6 +4,7 @@ mod comparisons;
 mod gauss;
 mod gcr;
 mod isgcs;
+mod kernel3d;
 mod scenes;
 
 use crate::Ctx;
@@ -18,6 +19,7 @@ const GROUPS: &[Group] = &[
     ("scenes", scenes::run),
     ("gcr", gcr::run),
     ("comparisons", comparisons::run),
+    ("kernel3d", kernel3d::run),
 ];
 
 /// Runs every group whose name contains `only` (all when `None`).

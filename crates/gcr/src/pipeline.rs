@@ -12,6 +12,29 @@ use crate::spatial::BoxGrid;
 use glam::DVec3;
 use rayon::prelude::*;
 
+/// [`radiosity_at`] at many surface points `(point, normal, face)` in parallel, point i with
+/// seed i: the same values whatever the thread count.
+///
+/// # Panics
+/// As [`radiosity_at`].
+pub fn radiosity_at_points(
+    domain: &Domain,
+    trained: &Trained,
+    emitters: &Emitters,
+    config: &SolveConfig,
+    points: &[(DVec3, DVec3, u32)],
+) -> Vec<Gathered> {
+    points
+        .par_iter()
+        .enumerate()
+        .map_init(Vec::new, |scratch, (i, &(y, n, face))| {
+            radiosity_at(
+                domain, trained, emitters, config, y, n, face, i as u64, scratch,
+            )
+        })
+        .collect()
+}
+
 /// Radiosity at surface point (y, n, face) by the configured gather; `seed` makes the ray gather
 /// deterministic per point.
 ///

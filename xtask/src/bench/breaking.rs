@@ -12,7 +12,7 @@ use gcr::config::{GatherMode, SolveConfig};
 use gcr::domain::Domain;
 use gcr::fem::BaseDomain;
 use gcr::gather::Emitters;
-use gcr::pipeline::radiosity_at;
+use gcr::pipeline::radiosity_at_points;
 use gcr::shading::Breaking;
 use scene_sampler::{KernelSampler, SceneBvh};
 use std::fmt::Write;
@@ -61,25 +61,12 @@ pub fn run(ctx: &Ctx) -> Result<()> {
                 let t = Instant::now();
                 let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
                 let seconds = t.elapsed().as_secs_f64();
-                let mut scratch = Vec::new();
-                let values: Vec<[f64; 3]> = points
-                    .iter()
-                    .enumerate()
-                    .map(|(i, p)| {
-                        radiosity_at(
-                            &domain,
-                            &trained,
-                            &emitters,
-                            &config,
-                            p.point,
-                            p.normal,
-                            p.face,
-                            i as u64,
-                            &mut scratch,
-                        )
-                        .radiosity
-                    })
-                    .collect();
+                let at: Vec<_> = points.iter().map(|p| (p.point, p.normal, p.face)).collect();
+                let values: Vec<[f64; 3]> =
+                    radiosity_at_points(&domain, &trained, &emitters, &config, &at)
+                        .into_iter()
+                        .map(|g| g.radiosity)
+                        .collect();
                 let error = relative_l2(&scene, &points, &values, &truth);
                 let line = format!(
                     "| {name} | {label} | {} | {} | {error:.3} | {seconds:.1} |",

@@ -8,7 +8,7 @@ use anyhow::Result;
 use gcr::config::{GatherMode, SolveConfig};
 use gcr::domain::Domain;
 use gcr::gather::Emitters;
-use gcr::pipeline::radiosity_at;
+use gcr::pipeline::radiosity_at_points;
 use scene_sampler::{KernelSampler, Scene, SceneBvh, SurfacePoint};
 use std::fmt::Write;
 use std::time::Instant;
@@ -152,25 +152,12 @@ pub fn gcr_curves(
             let (trained, solve_seconds) = (trained, *solve_seconds);
             let config = SolveConfig { gather, ..*config };
             let t = Instant::now();
-            let mut scratch = Vec::new();
-            let values: Vec<[f64; 3]> = points
-                .iter()
-                .enumerate()
-                .map(|(i, p)| {
-                    radiosity_at(
-                        &domain,
-                        trained,
-                        &emitters,
-                        &config,
-                        p.point,
-                        p.normal,
-                        p.face,
-                        i as u64,
-                        &mut scratch,
-                    )
-                    .radiosity
-                })
-                .collect();
+            let at: Vec<_> = points.iter().map(|p| (p.point, p.normal, p.face)).collect();
+            let values: Vec<[f64; 3]> =
+                radiosity_at_points(&domain, trained, &emitters, &config, &at)
+                    .into_iter()
+                    .map(|g| g.radiosity)
+                    .collect();
             let seconds = solve_seconds + t.elapsed().as_secs_f64();
             let error = relative_l2(scene, points, &values, reference);
             println!(

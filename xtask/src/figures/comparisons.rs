@@ -24,23 +24,10 @@ use baselines::flatland::{ExactOptions, ExactSolver};
 use baselines::hierarchical::{FlatHr, FlatHrConfig, HrKernel, budget, solve_for_links};
 use gcr::config::SolveConfig;
 use gcr::domain::Domain;
-use gcr::fem::KernelCells;
-use glam::DVec3;
 use rayon::prelude::*;
 use scene_sampler::{AnyScene, FlatKernelSampler, FlatlandScene};
 use std::fmt::Write;
 use std::time::Instant;
-
-/// Ψ(x,y) = Σ_o v_o exp(−(|x − w_o^x|² + |y − w_o^y|²)/d_o²), band 0 (eq. 2.10).
-fn psi(kernel: &KernelCells, x: DVec3, y: DVec3) -> f64 {
-    (0..kernel.len())
-        .map(|o| {
-            let e = (kernel.wx[o].distance_squared(x) + kernel.wy[o].distance_squared(y))
-                / (kernel.width[o] * kernel.width[o]);
-            kernel.v[o][0] * (-e).exp()
-        })
-        .sum()
-}
 
 /// Error of an approximation of the light flow against the exact one over the grid.
 #[derive(Clone, Copy, Debug)]
@@ -165,7 +152,7 @@ fn gcr_run(scene: &FlatlandScene, cells: usize, n: usize, exact: &[f64]) -> Resu
                 (col as f64 + 0.5) / n as f64,
                 1.0 - (row as f64 + 0.5) / n as f64,
             ]);
-            psi(&trained.kernel, ray.x, ray.y)
+            trained.kernel.evaluate(ray.x, ray.y)[0]
         })
         .collect();
     let error = flow_error(&flow, exact);

@@ -13,25 +13,12 @@ use crate::Ctx;
 use anyhow::{Context, Result};
 use gcr::config::{GatherMode, SolveConfig};
 use gcr::domain::Domain;
-use gcr::fem::KernelCells;
 use gcr::output::tonemap::Exposure;
 use gcr::pipeline::output_mesh;
 use gcr::retriangulate::RetriangulateLimits;
-use glam::DVec3;
 use rayon::prelude::*;
 use scene_sampler::{AnyScene, FlatKernelSampler, KernelSampler, SceneBvh};
 use std::fmt::Write;
-
-/// Ψ(x,y) = Σ_o v_o exp(−(|x − w_o^x|² + |y − w_o^y|²)/d_o²), band 0.
-fn psi(kernel: &KernelCells, x: DVec3, y: DVec3) -> f64 {
-    (0..kernel.len())
-        .map(|o| {
-            let e = (kernel.wx[o].distance_squared(x) + kernel.wy[o].distance_squared(y))
-                / (kernel.width[o] * kernel.width[o]);
-            kernel.v[o][0] * (-e).exp()
-        })
-        .sum()
-}
 
 /// Errors of Ψ against K·s over the grid.
 struct KernelError {
@@ -69,7 +56,7 @@ fn flatland_kernel(ctx: &Ctx, name: &str, cells: usize, n: usize) -> Result<Kern
             let far = ray.x.distance(ray.y) > near;
             (
                 ray.kernel[0] * strength,
-                psi(&trained.kernel, ray.x, ray.y),
+                trained.kernel.evaluate(ray.x, ray.y)[0],
                 far,
             )
         })

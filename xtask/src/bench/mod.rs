@@ -2,6 +2,7 @@
 
 mod breaking;
 mod compare;
+mod fem;
 mod gauss;
 mod gcr;
 mod isgcs;
@@ -19,6 +20,7 @@ const GROUPS: &[Group] = &[
     ("scenes", scenes::run),
     ("gcr", gcr::run),
     ("breaking", breaking::run),
+    ("fem", fem::run),
     ("compare", compare::run),
 ];
 

@@ -145,11 +145,13 @@ pub struct SolveConfig {
     pub projection_rejection: f64,
     /// Support cut-off of the projection's Gaussians: Gram entries, sender integrals and moments
     /// drop where the Gaussian (product) is below this fraction of its peak. Smaller is more
-    /// exact and slower (the pairs kept grow like the 6-D ball of radius d·√ln(1/tol)); at most
-    /// 1e-6. Measured on cornell-box (examples/tolerance_sweep.rs): 1e-6 gives the same errors as
-    /// 1e-9 at 400 and 1400 cells with 28 % less FEM time at 1400; 1e-4 was fine at 400 cells and
-    /// unstable at 1400 (B ≈ 1e15, now stopped by the solver's maximum-principle guard); 1e-3
-    /// gave B ≈ 1e123 at 400.
+    /// exact and slower (the pairs kept grow like the 6-D ball of radius d·√ln(1/tol)); default
+    /// and maximum 1e-6. Measured: on cornell-box (examples/tolerance_sweep.rs) 1e-6 gives the
+    /// same errors as 1e-9 at 400 and 1400 cells with 21–28 % less FEM time at 1400 (18.4 s
+    /// instead of 23.2 s alone on 2 cores); `cargo xtask bench --only compare` gives the same
+    /// errors to 4 digits on the three 3-D scenes at 50–400 cells and within 0.005 in Flatland.
+    /// 1e-4 was fine at 400 cells and unstable at 1400 (B ≈ 1e15, now stopped by the solver's
+    /// maximum-principle guard); 1e-3 gave B ≈ 1e123 at 400.
     pub projection_tolerance: f64,
     /// Rescale the projected kernel's weights per band so that it reflects exactly the power the
     /// shot samples carry (`Metrics::energy_balance` reports the factor it corrected). Off: the
@@ -179,7 +181,7 @@ impl Default for SolveConfig {
             resample_critical_fraction: 0.5,
             output_fit: OutputFit::default(),
             projection_rejection: 1e-6,
-            projection_tolerance: 1e-9,
+            projection_tolerance: 1e-6,
             energy_correction: true,
         }
     }

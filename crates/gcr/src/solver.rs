@@ -647,7 +647,7 @@ fn propagate(
         return Err(SolveError::Unstable(format!(
             "the projected kernel's bounces give radiosities {worst:.1e} times the bound \
              E_max/(1 − ρ_max) of the scene (projection cut-off {:.0e}, rejection {:.0e}; the \
-             defaults 1e-9 and 1e-6 are the measured-safe ones)",
+             defaults of both, 1e-6, are the measured-safe ones)",
             cut.0, cut.1
         )));
     }

@@ -110,7 +110,7 @@ pub fn triangle(c: V, a: f64, p: V, q: V, r: V) -> f64 {
 
 /// The exact triangle integral of MATH.md §2 (signed edge decomposition around the centre's foot
 /// c' on the plane) with each right triangle read from the tabulated function `R(ε, u)` of
-/// [`crate::wedge`] instead of two Owen's T calls: about 6 × 121 multiply–adds, one `exp`, four
+/// [`crate::wedge`] instead of two Owen's T calls: about 6 × 81 multiply–adds, one `exp`, four
 /// square roots, no other transcendental call.
 ///
 /// Absolute error ≲ 2e−15/a (times `exp(−a h²)`); no relative guarantee where the signed parts

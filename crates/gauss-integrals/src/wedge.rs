@@ -17,13 +17,13 @@ use std::f64::consts::PI;
 use std::sync::OnceLock;
 
 /// Patch edge length in units of the Gaussian width `d = 1/√a`.
-const H: f64 = 0.25;
+const H: f64 = 0.125;
 /// Polynomial degree per variable in each patch.
-const D: usize = 10;
+const D: usize = 8;
 const _: () = assert!(D % 2 == 0, "the centre must be a Chebyshev point");
 const NC: usize = D + 1;
 /// Number of patches per axis; the table covers `[0, L)²`, `L = N·H`.
-const N: usize = 26;
+const N: usize = 52;
 /// Table extent: beyond it `exp(−L²) ≈ 5e−19`.
 pub(crate) const L: f64 = N as f64 * H;
 

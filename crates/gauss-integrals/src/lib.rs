@@ -29,7 +29,9 @@ pub mod orthonormal;
 pub mod transfer;
 pub mod wedge;
 
-pub use closed_form::{line, plane, product, segment, triangle, triangle_fast, triangle_reference};
+pub use closed_form::{
+    line, plane, product, quad, quad_fast, segment, triangle, triangle_fast, triangle_reference,
+};
 pub use cubature::{Cubature, triangle_cubature};
 pub use gram::{Dim, Domain, Gaussian, Gram, GramConfig, GramError, Sparse, gram, gram_with};
 pub use orthonormal::{Orthonormal, classical_gram_schmidt};

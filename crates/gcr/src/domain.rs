@@ -171,36 +171,51 @@ impl Domain<'_> {
         out.extend_from_slice(&ray.y.to_array()[..d]);
     }
 
-    /// The scene's surface elements (triangles or segments) for exact integration.
+    /// The scene's surface elements for exact integration: segments, or triangles with coplanar
+    /// pairs merged into quadrilaterals.
     pub fn elements(&self) -> Vec<Element> {
-        match self {
-            Domain::ThreeD(k) => k
-                .scene
-                .faces
-                .iter()
-                .filter(|f| f.area > 0.0)
-                .map(|f| Element::Triangle(f.v))
-                .collect(),
-            Domain::Flat(k) => k
-                .scene
-                .segments
-                .iter()
-                .map(|s| Element::Segment([d3(s.a), d3(s.b)]))
-                .collect(),
-        }
+        self.surface_elements().into_iter().map(|e| e.0).collect()
     }
 
     /// Unit normals of [`Domain::elements`], in the same order (Flatland normals in z = 0).
     pub fn element_normals(&self) -> Vec<DVec3> {
+        self.surface_elements().into_iter().map(|e| e.1).collect()
+    }
+
+    /// The integration elements with their normals: Flatland segments; in 3-D the scene's
+    /// triangles of positive area, where two consecutive ones share an edge, lie in one plane
+    /// and form a convex quadrilateral (a rectangle split on load) merged into one
+    /// [`Element::Quad`], whose exact Gaussian integral costs two thirds of the two triangles'.
+    fn surface_elements(&self) -> Vec<(Element, DVec3)> {
         match self {
-            Domain::ThreeD(k) => k
+            Domain::ThreeD(k) => {
+                let faces: Vec<_> = k.scene.faces.iter().filter(|f| f.area > 0.0).collect();
+                let tol = 1e-12 * self.diagonal();
+                let mut out = Vec::with_capacity(faces.len());
+                let mut i = 0;
+                while i < faces.len() {
+                    let merged = faces
+                        .get(i + 1)
+                        .and_then(|next| Element::merge_triangles(faces[i].v, next.v, tol));
+                    match merged {
+                        Some(q) => {
+                            out.push((Element::Quad(q), faces[i].normal));
+                            i += 2;
+                        }
+                        None => {
+                            out.push((Element::Triangle(faces[i].v), faces[i].normal));
+                            i += 1;
+                        }
+                    }
+                }
+                out
+            }
+            Domain::Flat(k) => k
                 .scene
-                .faces
+                .segments
                 .iter()
-                .filter(|f| f.area > 0.0)
-                .map(|f| f.normal)
+                .map(|s| (Element::Segment([d3(s.a), d3(s.b)]), d3(s.normal)))
                 .collect(),
-            Domain::Flat(k) => k.scene.segments.iter().map(|s| d3(s.normal)).collect(),
         }
     }
 

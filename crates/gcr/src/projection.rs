@@ -303,7 +303,8 @@ mod tests {
     use scene_sampler::{AnyScene, KernelSampler, SceneBvh, builtin};
 
     /// Every Gram entry against an independent evaluation: both 3-D halves by adaptive cubature
-    /// over every triangle of the scene (no support cut-off, no product rule).
+    /// over every triangle of the scene as loaded (no support cut-off, no product rule, no merged
+    /// quadrilaterals).
     #[test]
     fn gram_entries_match_cubature_of_both_halves() {
         let AnyScene::ThreeD(scene) = builtin("cornell-box").unwrap() else {
@@ -311,14 +312,18 @@ mod tests {
         };
         let bvh = SceneBvh::new(&scene);
         let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
-        let elements = domain.elements();
         let surface = domain.scene_surface();
+        assert!(
+            domain
+                .elements()
+                .iter()
+                .any(|e| matches!(e, Element::Quad(_))),
+            "the scene's rectangles are integrated as quadrilaterals"
+        );
         let diag = domain.diagonal();
+        let triangles: Vec<[DVec3; 3]> = scene.faces.iter().map(|f| f.v).collect();
         // Cells near the surfaces: centres on face centroids, widths from narrow to wide.
-        let centroid = |i: usize| match elements[i] {
-            Element::Triangle([p, q, r]) => (p + q + r) / 3.0,
-            Element::Segment([p, q]) => (p + q) / 2.0,
-        };
+        let centroid = |i: usize| triangles[i].iter().sum::<DVec3>() / 3.0;
         let mut kernel = KernelCells::default();
         for (k, (i, j)) in [(0, 5), (1, 5), (3, 8), (12, 20), (30, 2)]
             .into_iter()
@@ -331,12 +336,9 @@ mod tests {
         }
         let g = kernel_gram(&kernel, &surface, 1e-14);
         let half = |w1: DVec3, d1: f64, w2: DVec3, d2: f64| -> f64 {
-            elements
+            triangles
                 .iter()
-                .map(|e| {
-                    let Element::Triangle([p, q, r]) = *e else {
-                        unreachable!()
-                    };
+                .map(|&[p, q, r]| {
                     let f = |x: [f64; 3]| {
                         let x = DVec3::from_array(x);
                         (-(x.distance_squared(w1) / (d1 * d1) + x.distance_squared(w2) / (d2 * d2)))

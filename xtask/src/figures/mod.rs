@@ -1,6 +1,7 @@
 //! Figure groups, one file per crate or chapter. Each group writes PNGs into `ctx.out`.
 
 mod comparisons;
+mod floor;
 mod gauss;
 mod gcr;
 mod isgcs;
@@ -20,6 +21,7 @@ const GROUPS: &[Group] = &[
     ("gcr", gcr::run),
     ("comparisons", comparisons::run),
     ("kernel3d", kernel3d::run),
+    ("floor", floor::run),
 ];
 
 /// Runs every group whose name contains `only` (all when `None`).

@@ -7,7 +7,8 @@
 //!   s(x) = E(x) + B_refl(x) is GCR's own final strength, so the error isolates the kernel
 //!   network's approximation of the light flow it was trained on.
 //! * `gcr-kernel-error.md`: relative RMS of Ψ against K·s over the grid, per scene and budget.
-//! * `gcr-wall-floor-{base,kernel,rays}.png` (fig. 4.13a–c): the three gathers of one solve.
+//! * `gcr-wall-floor-{base,kernel,rays}.png` (fig. 4.13a–c, 4.11c): the three gathers of one solve.
+//! * `gcr-two-blockers-{rays,kernel}.png` (fig. 4.15f) and `gcr-cornell-box-{rays,kernel}.png`.
 
 use crate::Ctx;
 use anyhow::{Context, Result};
@@ -98,8 +99,8 @@ fn flatland_kernel(ctx: &Ctx, name: &str, cells: usize, n: usize) -> Result<Kern
 }
 
 /// Fig. 4.13a–c: one solve of `wall-floor`, rendered with each gather.
-fn wall_floor_gathers(ctx: &Ctx, cells: usize) -> Result<()> {
-    let scene = scene_sampler::builtin("wall-floor")?.into_3d()?;
+fn scene_gathers(ctx: &Ctx, name: &str, cells: usize, gathers: &[GatherMode]) -> Result<()> {
+    let scene = scene_sampler::builtin(name)?.into_3d()?;
     let bvh = SceneBvh::new(&scene);
     let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
     let config = SolveConfig {
@@ -118,7 +119,7 @@ fn wall_floor_gathers(ctx: &Ctx, cells: usize) -> Result<()> {
     };
     // One exposure for all three (from the ray gather), so that the images compare.
     let mut exposure: Option<Exposure> = None;
-    for gather in [GatherMode::Rays, GatherMode::Base, GatherMode::Kernel] {
+    for &gather in gathers {
         let config = SolveConfig { gather, ..config };
         let (mesh, _) = output_mesh(&domain, &trained, &config, RetriangulateLimits::default());
         let exposure = exposure.get_or_insert_with(|| {
@@ -132,9 +133,7 @@ fn wall_floor_gathers(ctx: &Ctx, cells: usize) -> Result<()> {
         });
         let size = if ctx.quick { 128 } else { 512 };
         let px = gcr::output::raster::render(&mesh, &cam, exposure, size, size, 2);
-        let path = ctx
-            .out
-            .join(format!("gcr-wall-floor-{}.png", gather.name()));
+        let path = ctx.out.join(format!("gcr-{name}-{}.png", gather.name()));
         image::RgbImage::from_raw(size, size, px)
             .context("image buffer")?
             .save(&path)
@@ -172,6 +171,23 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         }
     }
     std::fs::write(ctx.out.join("gcr-kernel-error.md"), md)?;
-    wall_floor_gathers(ctx, if ctx.quick { 40 } else { 300 })?;
+    let all = [GatherMode::Rays, GatherMode::Base, GatherMode::Kernel];
+    let cells = if ctx.quick { 40 } else { 300 };
+    scene_gathers(ctx, "wall-floor", cells, &all)?;
+    if !ctx.quick {
+        // Fig. 4.15f (the final solution of the two-blocker scene) and the Cornell box.
+        scene_gathers(
+            ctx,
+            "two-blockers",
+            cells,
+            &[GatherMode::Rays, GatherMode::Kernel],
+        )?;
+        scene_gathers(
+            ctx,
+            "cornell-box",
+            cells,
+            &[GatherMode::Rays, GatherMode::Kernel],
+        )?;
+    }
     Ok(())
 }

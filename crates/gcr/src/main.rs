@@ -220,8 +220,16 @@ fn solve_and_write(
 ) -> Result<()> {
     let mut observer = |p: &gcr::solver::Progress| {
         if !quiet {
+            // The FEM steps' Gram matrices grow like cells² and dominate large budgets, so the
+            // remaining time is extrapolated quadratically in the cell count.
+            let done = p.kernel_cells as f64 / p.kernel_budget.max(1) as f64;
+            let eta = if done >= 0.1 && done < 1.0 {
+                format!("  ETA ~{:.0} s", p.elapsed * (1.0 / (done * done) - 1.0))
+            } else {
+                String::new()
+            };
             eprint!(
-                "\r{:>8} kernel {:>5}/{} cells  shading {:>4}  samples {:>6}  FEM {:>3}  {:>6.1} s",
+                "\r{:>8} kernel {:>5}/{} cells  shading {:>4}  samples {:>6}  FEM {:>3}  {:>6.1} s{eta}   ",
                 p.phase,
                 p.kernel_cells,
                 p.kernel_budget,

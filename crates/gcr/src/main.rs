@@ -223,7 +223,7 @@ fn solve_and_write(
             // The FEM steps' Gram matrices grow like cells² and dominate large budgets, so the
             // remaining time is extrapolated quadratically in the cell count.
             let done = p.kernel_cells as f64 / p.kernel_budget.max(1) as f64;
-            let eta = if done >= 0.1 && done < 1.0 {
+            let eta = if (0.1..1.0).contains(&done) {
                 format!("  ETA ~{:.0} s", p.elapsed * (1.0 / (done * done) - 1.0))
             } else {
                 String::new()

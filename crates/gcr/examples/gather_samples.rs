@@ -1,0 +1,90 @@
+//! How much of the ray gather's error is its own Monte-Carlo noise: one solve, then the ray gather
+//! (`--gather rays`) with more and more shadow and indirect rays per point, against the path-traced
+//! reference at points spread area-uniformly over the non-emitting faces.
+//!
+//! `cargo run --release -p gcr --example gather_samples -- cornell-box 200 [points] [reference paths]`
+//!
+//! Prints one line per sample count: relative L2 of B (and of B − E, the part the gather
+//! estimates) and the gather's seconds.
+
+use gcr::config::{GatherMode, SolveConfig};
+use gcr::domain::Domain;
+use gcr::gather::{Emitters, GatherSamples};
+use gcr::pipeline::radiosity_at_points;
+use scene_sampler::{KernelSampler, SceneBvh, SurfaceSampler};
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    let name = args.get(1).map_or("cornell-box", |s| s.as_str());
+    let cells: usize = args.get(2).map_or(Ok(200), |s| s.parse())?;
+    let count: usize = args.get(3).map_or(Ok(200), |s| s.parse())?;
+    let paths: usize = args.get(4).map_or(Ok(100_000), |s| s.parse())?;
+    let scene = scene_sampler::builtin(name)?.into_3d()?;
+    let bvh = SceneBvh::new(&scene);
+    let sampler = SurfaceSampler::new(&scene);
+    let points: Vec<_> = (1..100 * count as u64)
+        .map(|i| {
+            sampler.sample([
+                (i as f64 * 0.754_877_666_246_692_7).fract(),
+                (i as f64 * 0.569_840_290_998_053_3).fract(),
+            ])
+        })
+        .filter(|p| scene.faces[p.face as usize].emission.is_zero())
+        .take(count)
+        .collect();
+    let reference = baselines::pointwise::radiosity_at(&scene, &bvh, &points, paths, 0x5EED);
+    let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+    let emitters = Emitters::new(&domain);
+    let config = SolveConfig {
+        kernel_cells: cells,
+        shading_cells: cells / 2,
+        ..SolveConfig::default()
+    };
+    let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+    let at: Vec<_> = points.iter().map(|p| (p.point, p.normal, p.face)).collect();
+    let noise: f64 = {
+        let (mut num, mut den) = (0.0, 0.0);
+        for r in &reference {
+            for k in 0..3 {
+                num += r.std_error[k].powi(2);
+                den += r.mean[k].powi(2);
+            }
+        }
+        (num / den).sqrt()
+    };
+    println!(
+        "{name}, {cells} cells, {} points, reference {paths} paths (its own relative L2 noise {:.2} %)",
+        points.len(),
+        100.0 * noise
+    );
+    println!("| rays per point (direct + indirect) | rel. L2 of B | rel. L2 of B − E | gather s |");
+    println!("|---:|---:|---:|---:|");
+    for n in [16, 64, 256, 1024, 4096] {
+        let config = SolveConfig {
+            gather: GatherMode::Rays,
+            gather_samples: GatherSamples {
+                direct: n,
+                indirect: n,
+            },
+            ..config
+        };
+        let t = std::time::Instant::now();
+        let got = radiosity_at_points(&domain, &trained, &emitters, &config, &at);
+        let seconds = t.elapsed().as_secs_f64();
+        let (mut num, mut den, mut den_r) = (0.0, 0.0, 0.0);
+        for ((g, r), p) in got.iter().zip(&reference).zip(&points) {
+            let e = scene.faces[p.face as usize].emission.0;
+            for k in 0..3 {
+                num += (g.radiosity[k] - r.mean[k]).powi(2);
+                den += r.mean[k].powi(2);
+                den_r += (r.mean[k] - e[k]).powi(2);
+            }
+        }
+        println!(
+            "| {n} + {n} | {:.4} | {:.4} | {seconds:.2} |",
+            (num / den).sqrt(),
+            (num / den_r).sqrt()
+        );
+    }
+    Ok(())
+}

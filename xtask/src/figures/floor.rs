@@ -80,6 +80,7 @@ fn figure(ctx: &Ctx, name: &str, cells: usize) -> Result<String> {
         .filter(|s| s.ray.face_y as usize == fi)
         .map(|s| s.ray.y.x)
         .collect();
+    // HR at the same budget (within 25 %); a budget it cannot reach leaves its strip empty.
     let hr = solve_for_links(
         &scene,
         cells,
@@ -87,15 +88,21 @@ fn figure(ctx: &Ctx, name: &str, cells: usize) -> Result<String> {
             min_length: budget::min_length_for(&scene, cells),
             ..FlatHrConfig::default()
         },
-        0.05,
-    )?;
+        0.25,
+    );
     let seg = &scene.segments[fi];
-    let cuts: Vec<f64> = hr
-        .hr
-        .leaves()
-        .filter(|p| p.segment as usize == fi)
-        .map(|p| seg.a.x + p.t0 * (seg.b.x - seg.a.x))
-        .collect();
+    let cuts: Vec<f64> = match &hr {
+        Ok(found) => found
+            .hr
+            .leaves()
+            .filter(|p| p.segment as usize == fi)
+            .map(|p| seg.a.x + p.t0 * (seg.b.x - seg.a.x))
+            .collect(),
+        Err(why) => {
+            println!("figures floor: {name}: HR at {cells} links not reached: {why}");
+            Vec::new()
+        }
+    };
     let shadow = blocker(&scene, fy);
     let path = ctx.out.join(format!("floor-{name}.png"));
     crate::plot::png(&path, 900, 300, |root| {
@@ -181,7 +188,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     let mut md = format!(
         "# Floor edge distributions (figs. 4.9, 4.10)\n\n\
          Command: `cargo xtask figures --only floor{}`. On the floor segment: shading-network cell centres \
-         within 5 % of the diagonal of it, kernel training-ray end points on it, HR leaves on it at the same \
+         within 5 % of the diagonal of it, kernel training-ray end points on it, HR leaves on it at the same (within 25 %) \
          number of links; \"under the blocker\" counts those within the blocker's x extent.\n\n\
          | scene | cells / links | shading centres | ray end points | HR leaves | blocker's share of the floor | centres under it | ray ends under it | HR leaves under it |\n\
          |---|---:|---:|---:|---:|---:|---:|---:|---:|\n",

@@ -39,6 +39,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         rayon::current_num_threads(),
         defaults.projection_tolerance,
     );
+    let mut rows: Vec<(f64, f64, f64)> = Vec::new();
     for &cells in budgets {
         let config = SolveConfig {
             kernel_cells: cells,
@@ -85,7 +86,88 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         );
         println!("fem: {line}");
         writeln!(md, "{line}")?;
+        rows.push((z, 1e3 * sender, 1e3 * gram));
     }
+    let dir = ctx.out.join("figures");
+    std::fs::create_dir_all(&dir)?;
+    plot(&dir.join("fem-scaling.png"), &rows)?;
+    md += "\n![FEM parts against kernel cells, log-log, with slopes 1 and 2 for reference](figures/fem-scaling.png)\n";
     std::fs::write(ctx.out.join("benchmarks-fem.md"), md)?;
     Ok(())
+}
+
+/// Log-log plot of the two parts' milliseconds against kernel cells, with lines of slope 1 and 2
+/// through the first point of each for reference.
+fn plot(path: &std::path::Path, rows: &[(f64, f64, f64)]) -> Result<()> {
+    use plotters::prelude::*;
+    let Some(&(z0, s0, g0)) = rows.first() else {
+        return Ok(());
+    };
+    let z1 = rows.last().map_or(z0, |r| r.0).max(z0 * 1.5);
+    let lo = rows
+        .iter()
+        .map(|r| r.1.min(r.2))
+        .fold(f64::INFINITY, f64::min);
+    let hi = rows.iter().map(|r| r.1.max(r.2)).fold(0.0, f64::max);
+    crate::plot::png(path, 720, 480, |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(
+                "one FEM step's parts against kernel cells (cornell-box)",
+                ("sans-serif", 20),
+            )
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(
+                (z0 * 0.8..z1 * 1.25).log_scale(),
+                (lo * 0.5..hi * 2.0).log_scale(),
+            )
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc("kernel cells")
+            .y_desc("milliseconds")
+            .draw()
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        type Series = (&'static str, RGBColor, Vec<(f64, f64)>);
+        let series: [Series; 4] = [
+            (
+                "Gram + Cholesky",
+                RED,
+                rows.iter().map(|r| (r.0, r.2)).collect(),
+            ),
+            (
+                "sender integrals",
+                BLUE,
+                rows.iter().map(|r| (r.0, r.1)).collect(),
+            ),
+            (
+                "slope 2",
+                RGBColor(200, 150, 150),
+                vec![(z0, g0), (z1, g0 * (z1 / z0).powi(2))],
+            ),
+            (
+                "slope 1",
+                RGBColor(150, 150, 200),
+                vec![(z0, s0), (z1, s0 * z1 / z0)],
+            ),
+        ];
+        for (label, colour, pts) in series {
+            chart
+                .draw_series(LineSeries::new(pts, colour.stroke_width(2)))
+                .map_err(|e| anyhow::anyhow!("{e}"))?
+                .label(label)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperLeft)
+            .draw()
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        Ok(())
+    })
 }

@@ -754,10 +754,10 @@ impl Isgcs {
     }
 
     /// Inserts a cell at the midpoint of the longest edge of the cell with the highest resource
-    /// (sec. 2.3.2, 2.4.1). In place of the Γ-redistribution of eq. 2.11–2.14, 2.20 and 2.21
-    /// (Voronoi-volume ratios), the new cell takes the mean output of the edge's ends and a third
-    /// of their resources, the ends keep two thirds (this simpler rule is what `gcr` was tuned
-    /// with, so it stays). Every simplex containing the edge is split in two. Returns the new cell.
+    /// (sec. 2.3.2, 2.4.1). By default the new cell takes the mean output of the edge's ends and
+    /// a third of their resources, the ends keep two thirds (the rule `gcr` was tuned with); with
+    /// [`Params::gamma_redistribution`] the Γ-redistribution of eq. 2.11–2.14, 2.20 and 2.21
+    /// instead. Every simplex containing the edge is split in two. Returns the new cell.
     pub fn insert(&mut self) -> usize {
         let q = (0..self.len())
             .max_by(|&a, &b| {
@@ -775,22 +775,47 @@ impl Isgcs {
             })
             .expect("every cell of a pure complex has neighbours");
         let r = self.len();
+        // Γ (eq. 2.11–2.12) needs each future neighbour's mean edge length before the split:
+        // the new cell's neighbours are q, f and the cells sharing a simplex with both.
+        let before: Vec<(usize, f64)> = if self.params.gamma_redistribution {
+            let (q32, f32_) = (q as u32, f as u32);
+            let mut cells: Vec<usize> = vec![q, f];
+            for s in self
+                .simplices
+                .iter()
+                .filter(|s| s.contains(&q32) && s.contains(&f32_))
+            {
+                cells.extend(s.iter().map(|&v| v as usize));
+            }
+            cells.sort_unstable();
+            cells.dedup();
+            cells.into_iter().map(|c| (c, self.mean_edge(c))).collect()
+        } else {
+            Vec::new()
+        };
         for a in 0..self.n {
             let mid = 0.5 * (self.centres[q * self.n + a] + self.centres[f * self.n + a]);
             self.centres.push(mid);
         }
-        for c in 0..self.m {
-            let v = 0.5 * (self.outputs[q * self.m + c] + self.outputs[f * self.m + c]);
-            self.outputs.push(v);
+        if self.params.gamma_redistribution {
+            // Filled in by `redistribute_by_gamma` once the topology is known.
+            self.outputs.extend(std::iter::repeat_n(0.0, self.m));
+            self.tau_sl.push(0.0);
+            self.tau_usl.push(0.0);
+        } else {
+            for c in 0..self.m {
+                let v = 0.5 * (self.outputs[q * self.m + c] + self.outputs[f * self.m + c]);
+                self.outputs.push(v);
+            }
+            let (tq, tf) = (self.tau_sl[q], self.tau_sl[f]);
+            self.tau_sl.push((tq + tf) / 3.0);
+            self.tau_sl[q] *= 2.0 / 3.0;
+            self.tau_sl[f] *= 2.0 / 3.0;
+            let (uq, uf) = (self.tau_usl[q], self.tau_usl[f]);
+            self.tau_usl.push((uq + uf) / 3.0);
+            self.tau_usl[q] *= 2.0 / 3.0;
+            self.tau_usl[f] *= 2.0 / 3.0;
         }
-        let (tq, tf) = (self.tau_sl[q], self.tau_sl[f]);
-        self.tau_sl.push((tq + tf) / 3.0);
-        self.tau_sl[q] *= 2.0 / 3.0;
-        self.tau_sl[f] *= 2.0 / 3.0;
-        let (uq, uf) = (self.tau_usl[q], self.tau_usl[f]);
-        self.tau_usl.push((uq + uf) / 3.0);
-        self.tau_usl[q] *= 2.0 / 3.0;
-        self.tau_usl[f] *= 2.0 / 3.0;
         if !self.hit_rate.is_empty() {
             let (hq, hf) = (self.hit_rate[q], self.hit_rate[f]);
             self.hit_rate.push((hq + hf) / 3.0);
@@ -820,8 +845,50 @@ impl Isgcs {
         }
         self.simplices.extend(new_simplices);
         self.rebuild_neighbours_of(&[q, f, r]);
+        if self.params.gamma_redistribution {
+            self.redistribute_by_gamma(r, &before);
+        }
         self.insertions += 1;
         r
+    }
+
+    /// Mean length l̄_i of the edges at cell i (eq. 2.10 without the width multiplier).
+    fn mean_edge(&self, i: usize) -> f64 {
+        let nb = &self.neighbours[i];
+        if nb.is_empty() {
+            return 0.0;
+        }
+        nb.iter()
+            .map(|&j| self.dist2(j as usize, self.centre(i)).sqrt())
+            .sum::<f64>()
+            / nb.len() as f64
+    }
+
+    /// Eq. 2.13–2.14 and 2.20–2.21 for the new cell r: each neighbour j with mean edge length
+    /// `before` the split changes by Γ_j = (f̂_j^new − f̂_j^old)/f̂_j^old, f̂ = l̄^k (eq. 2.11–2.12),
+    /// in its outputs and resources, and r receives the negated sum of those changes.
+    fn redistribute_by_gamma(&mut self, r: usize, before: &[(usize, f64)]) {
+        let k = self.k as i32;
+        let neighbours: Vec<usize> = self.neighbours[r].iter().map(|&j| j as usize).collect();
+        for j in neighbours {
+            let Some(&(_, old)) = before.iter().find(|(c, _)| *c == j) else {
+                continue;
+            };
+            if old <= 0.0 {
+                continue;
+            }
+            let gamma = (self.mean_edge(j).powi(k) - old.powi(k)) / old.powi(k);
+            for c in 0..self.m {
+                let dv = gamma * self.outputs[j * self.m + c];
+                self.outputs[j * self.m + c] += dv;
+                self.outputs[r * self.m + c] -= dv;
+            }
+            let (ds, du) = (gamma * self.tau_sl[j], gamma * self.tau_usl[j]);
+            self.tau_sl[j] += ds;
+            self.tau_sl[r] -= ds;
+            self.tau_usl[j] += du;
+            self.tau_usl[r] -= du;
+        }
     }
 
     /// Recomputes the neighbour lists of the given cells and of the cells that share a simplex
@@ -1333,6 +1400,57 @@ mod tests {
                 after[0]
             );
         }
+    }
+
+    /// Eq. 2.13–2.14 and 2.20–2.21: the new cell receives exactly what its neighbours give, so
+    /// the sums of outputs and of both resources over the network do not change at an insertion;
+    /// the neighbours, whose Voronoi volumes shrink, give (Γ_j < 0), so r gets a positive share
+    /// of positive outputs and resources, and the complex stays pure.
+    #[test]
+    fn gamma_redistribution_conserves_outputs_and_resources() {
+        let f = |x: f64, y: f64| 0.5 + 0.3 * (2.0 * x).sin() + 0.2 * y;
+        let mut net = trained(
+            Params {
+                lambda: 1_000_000,
+                gamma_redistribution: true,
+                ..Params::default()
+            },
+            3,
+            f,
+        );
+        let sums = |net: &Isgcs| {
+            let v: f64 = (0..net.len()).map(|i| net.output(i)[0]).sum();
+            let t: f64 = net.tau_sl.iter().sum();
+            let u: f64 = net.tau_usl.iter().sum();
+            (v, t, u)
+        };
+        for round in 0..30 {
+            for i in 0..300u64 {
+                let x = ((i as f64) * 0.754_877_666).fract();
+                let y = ((i as f64) * 0.569_840_291).fract();
+                net.train(&[x, y], &[f(x, y)], None);
+            }
+            let (v0, t0, u0) = sums(&net);
+            let r = net.insert();
+            let (v1, t1, u1) = sums(&net);
+            let tol = 1e-12 * (v0.abs() + t0.abs() + u0.abs() + 1.0);
+            assert!((v1 - v0).abs() <= tol, "round {round}: Σv {v0} -> {v1}");
+            assert!(
+                (t1 - t0).abs() <= tol && (u1 - u0).abs() <= tol,
+                "round {round}"
+            );
+            assert!(
+                net.output(r)[0] > 0.0,
+                "round {round}: v_r = {}",
+                net.output(r)[0]
+            );
+            assert!(
+                net.tau_sl[r] > 0.0,
+                "round {round}: τ_r = {}",
+                net.tau_sl[r]
+            );
+        }
+        check_complex(&net);
     }
 
     #[test]

@@ -42,6 +42,14 @@ pub struct Params {
     /// of τ^SL + `usl_weight` · τ^USL. Off by default.
     #[serde(default)]
     pub extended_resource: bool,
+    /// At insertion, redistribute output weights and resources by the Voronoi-volume ratios Γ of
+    /// eq. 2.11–2.14, 2.20 and 2.21 (f̂_i = l̄_i^k̃ with k̃ = k, the topology's dimension):
+    /// each neighbour j of the new cell r gives `Γ_j · v_j` (Γ_j < 0 when its volume shrinks) and
+    /// r receives the sum, so Σ v and Σ τ over the neighbourhood are conserved. Off by default:
+    /// the default rule (r takes the mean output of the split edge's ends and a third of their
+    /// resources) is what `gcr` was tuned with.
+    #[serde(default)]
+    pub gamma_redistribution: bool,
     /// ε: every κ steps the cell with the lowest resource τ_i is deleted if τ_i < ε
     /// (sec. 2.4.2; fig. 2.9 says "exceeds", a typo per MATH.md §6). The dissertation
     /// recommends 0.001–0.01 for its resource scale.
@@ -87,6 +95,7 @@ impl Default for Params {
             kappa: 0,
             epsilon: 0.0,
             extended_resource: false,
+            gamma_redistribution: false,
         }
     }
 }

@@ -5,12 +5,13 @@
 //!
 //! `cargo run --release -p isgcs --example franke -- --cells 500 --seed 1 [--preset thesis|accurate]
 //! [--function franke|smooth6] [--lambda L] [--width W] [--rbf-width W] [--ridge R] [--normalized 0|1]
-//! [--polish 0|1] [--rbf 0|1] [--extended 0|1]`
+//! [--polish 0|1] [--rbf 0|1] [--extended 0|1] [--gamma 0|1]`
 //!
 //! `--preset accurate` (the default) is `Params::accurate()` followed by the least-squares polish
 //! `Isgcs::fit_outputs`; `--preset thesis` is `Params::thesis()` with the delta rule only. The other
 //! options override single knobs of the preset (`--polish 0|1` the least-squares polish,
-//! `--rbf 0` skips the reference fit, `--extended 1` the extended resource τ^x of eq. 2.19).
+//! `--rbf 0` skips the reference fit, `--extended 1` the extended resource τ^x of eq. 2.19,
+//! `--gamma 1` the Γ-redistribution at insertion, eq. 2.11–2.14).
 //!
 //! The last line is `cells=<z> rms=<rms / sd> seconds=<training time>` for the network.
 
@@ -43,6 +44,7 @@ struct Options {
     polish: Option<bool>,
     rbf: bool,
     extended: bool,
+    gamma: bool,
 }
 
 fn options() -> Result<Options, String> {
@@ -91,6 +93,7 @@ fn options() -> Result<Options, String> {
         },
         rbf: arg(&args, "--rbf", 1u8)? != 0,
         extended: arg(&args, "--extended", 0u8)? != 0,
+        gamma: arg(&args, "--gamma", 0u8)? != 0,
     })
 }
 
@@ -129,6 +132,7 @@ fn main() {
     if let Some(l) = o.lambda {
         params.lambda = l;
     }
+    params.gamma_redistribution = o.gamma;
     if o.extended {
         params.extended_resource = true;
     }

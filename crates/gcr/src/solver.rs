@@ -608,29 +608,10 @@ fn propagate(
     scene: &SceneSurface,
     max_bounces: usize,
 ) -> Result<Propagated, SolveError> {
-    let mut cut = (config.projection_tolerance, config.projection_rejection);
-    let start: Vec<Bands> = samples.iter().map(|s| s.s).collect();
-    let mut p = propagate_at(
-        kernel,
-        domain,
-        config,
-        samples,
-        shots,
-        scene,
-        max_bounces,
-        cut,
-    );
-    let mut stabilized = 0;
-    for rejection in STABILIZING_REJECTIONS {
-        if !p.diverged || rejection <= cut.1 {
-            break;
-        }
-        for (smp, s) in samples.iter_mut().zip(&start) {
-            smp.s = *s;
-        }
-        cut.1 = rejection;
-        stabilized += 1;
-        p = propagate_at(
+    let tol = config.projection_tolerance;
+    let mut rejection = config.projection_rejection;
+    let run = |samples: &mut [Sample], rejection: f64| {
+        propagate_at(
             kernel,
             domain,
             config,
@@ -638,8 +619,22 @@ fn propagate(
             shots,
             scene,
             max_bounces,
-            cut,
-        );
+            (tol, rejection),
+        )
+    };
+    let start: Vec<Bands> = samples.iter().map(|s| s.s).collect();
+    let mut p = run(samples, rejection);
+    let mut stabilized = 0;
+    for higher in STABILIZING_REJECTIONS {
+        if !p.diverged || higher <= rejection {
+            break;
+        }
+        for (smp, s) in samples.iter_mut().zip(&start) {
+            smp.s = *s;
+        }
+        rejection = higher;
+        stabilized += 1;
+        p = run(samples, rejection);
     }
     p.stabilized = stabilized;
     let worst = bound_excess(samples, &domain.radiosity_bound());
@@ -648,7 +643,7 @@ fn propagate(
             "the projected kernel's bounces give radiosities {worst:.1e} times the bound \
              E_max/(1 − ρ_max) of the scene (projection cut-off {:.0e}, rejection {:.0e}; the \
              defaults of both, 1e-6, are the measured-safe ones)",
-            cut.0, cut.1
+            tol, rejection
         )));
     }
     Ok(p)

@@ -403,10 +403,9 @@ fn three_d(
     Ok((curves, note))
 }
 
-/// Writes one log-log plot of error against seconds. Runs with an error above 1000 % (diverged,
-/// listed in the tables) are left out and the title says so.
+/// Writes one log-log plot of error against seconds ([`super::gcr::plot_curves`]). Runs with an
+/// error above 1000 % (diverged, listed in the tables) are left out and the title says so.
 fn plot_curves(path: &std::path::Path, title: &str, curves: &[Curve]) -> Result<()> {
-    use plotters::prelude::*;
     let ok = |p: &Point| p.error.is_finite() && p.error <= 10.0;
     let dropped = curves.iter().flat_map(|c| &c.points).any(|p| !ok(p));
     let title = if dropped {
@@ -421,61 +420,7 @@ fn plot_curves(path: &std::path::Path, title: &str, curves: &[Curve]) -> Result<
             points: c.points.iter().copied().filter(ok).collect(),
         })
         .collect();
-    let all: Vec<Point> = curves
-        .iter()
-        .flat_map(|c| c.points.iter().copied())
-        .collect();
-    let (tmin, tmax) = all.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
-        (a.min(p.seconds), b.max(p.seconds))
-    });
-    let (emin, emax) = all.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
-        (a.min(p.error), b.max(p.error))
-    });
-    let colours = [RED, BLUE, GREEN, BLACK, MAGENTA, CYAN];
-    crate::plot::png(path, 900, 600, |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(&title, ("sans-serif", 22))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(
-                (tmin.max(1e-4) * 0.7..tmax * 1.4).log_scale(),
-                (emin.max(1e-4) * 0.7..emax.min(100.0) * 1.4).log_scale(),
-            )
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-        chart
-            .configure_mesh()
-            .x_desc("seconds (2 threads)")
-            .x_label_formatter(&|v| format!("{v:.0e}"))
-            .y_label_formatter(&|v| format!("{v:.3}"))
-            .y_desc("relative L2 error of B at the probes")
-            .draw()
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-        for (curve, colour) in curves.iter().zip(colours.iter().cycle()) {
-            let pts: Vec<(f64, f64)> = curve
-                .points
-                .iter()
-                .map(|p| (p.seconds.max(1e-4), p.error.clamp(1e-4, 100.0)))
-                .collect();
-            chart
-                .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))
-                .map_err(|e| anyhow::anyhow!("{e}"))?
-                .label(curve.name.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
-                });
-            chart
-                .draw_series(pts.into_iter().map(|p| Circle::new(p, 4, colour.filled())))
-                .map_err(|e| anyhow::anyhow!("{e}"))?;
-        }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-        Ok(())
-    })
+    super::gcr::plot_curves(path, &title, &curves)
 }
 
 /// Seconds with three significant digits (the Flatland runs take micro- to milliseconds).

@@ -249,6 +249,8 @@ pub fn plot_curves(path: &std::path::Path, title: &str, curves: &[Curve]) -> Res
         chart
             .configure_mesh()
             .x_desc("seconds (2 threads)")
+            .x_label_formatter(&|v| format!("{v:.0e}"))
+            .y_label_formatter(&|v| format!("{v:.3}"))
             .y_desc("relative L2 error of B at the probes")
             .draw()
             .map_err(|e| anyhow::anyhow!("{e}"))?;

@@ -128,14 +128,26 @@ pub fn reflect(
     ortho: &Orthonormal,
 ) -> Result<Vec<f64>, GramError> {
     let n = check(f, kernel, ortho)?;
+    Ok(receive(f, kernel, ortho, &f.c, n))
+}
+
+/// `A Σ_o v_o·sender_o·β_o`: the receiver side both variants share, with `sender_o` the kernel
+/// cell's sender integral (c_o, or α_o · Aᵀ b̄).
+fn receive(
+    f: &Factors,
+    kernel: &[KernelGaussian],
+    ortho: &Orthonormal,
+    sender: &[f64],
+    n: usize,
+) -> Vec<f64> {
     let mut s = vec![0.0; n];
     for (o, k) in kernel.iter().enumerate() {
-        let w = k.weight * f.c[o];
+        let w = k.weight * sender[o];
         for (q, b) in f.beta.row(o) {
             s[q] += w * b;
         }
     }
-    Ok(ortho.apply_a(&s))
+    ortho.apply_a(&s)
 }
 
 /// The dissertation's variant (eq. 3.10–3.12, 3.42): the sender radiosity is `Σ b̄_i N_i`
@@ -155,14 +167,7 @@ pub fn reflect_projected(
     }
     let gamma = ortho.apply_at(bbar);
     let t = f.alpha.mul_vec(&gamma)?;
-    let mut s = vec![0.0; n];
-    for (o, k) in kernel.iter().enumerate() {
-        let w = k.weight * t[o];
-        for (q, b) in f.beta.row(o) {
-            s[q] += w * b;
-        }
-    }
-    Ok(ortho.apply_a(&s))
+    Ok(receive(f, kernel, ortho, &t, n))
 }
 
 /// The same as [`reflect_projected`] through the dense triple sum of eq. 3.42:

@@ -221,11 +221,8 @@ impl Domain<'_> {
 
     /// The scene surface S indexed for Gaussian integrals (cells of 5 % of the diagonal).
     pub fn scene_surface(&self) -> crate::fem::SceneSurface {
-        crate::fem::SceneSurface::new(
-            self.elements(),
-            self.element_normals(),
-            0.05 * self.diagonal(),
-        )
+        let (elements, normals) = self.surface_elements().into_iter().unzip();
+        crate::fem::SceneSurface::new(elements, normals, 0.05 * self.diagonal())
     }
 
     /// Emission of face (segment) `face`.

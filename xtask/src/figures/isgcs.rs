@@ -111,8 +111,8 @@ fn draw_figure(
     shots: &[Snapshot],
     dots: &[(f64, f64)],
 ) -> Result<()> {
-    let dir = ctx.out.join("figures");
-    std::fs::create_dir_all(&dir)?;
+    let dir = &ctx.out;
+    std::fs::create_dir_all(dir)?;
     let (w, h) = if ctx.quick { (450, 170) } else { (840, 300) };
     let all = dots
         .iter()

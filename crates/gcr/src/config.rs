@@ -1,6 +1,6 @@
 //! Settings of a solve, with the dissertation's defaults (fig. 4.17, sec. 4.4.1) and validation.
 
-use crate::fem::{BaseDomain, Transfer};
+use crate::fem::{BaseDomain, SurfaceClusters, Transfer};
 use crate::gather::GatherSamples;
 use crate::shading::Breaking;
 use thiserror::Error;
@@ -157,6 +157,11 @@ pub struct SolveConfig {
     /// shot samples carry (`Metrics::energy_balance` reports the factor it corrected). Off: the
     /// plain Galerkin projection, whose bounce iteration can run away when ρ is close to 1.
     pub energy_correction: bool,
+    /// Cluster large surfaces for the FEM integrals ([`crate::cluster`]): from
+    /// `min_elements` elements on, nodes of the cluster tree replace their elements wherever a
+    /// Gaussian is too wide to resolve them, so that an integral costs the same on a million
+    /// triangles as on a few thousand. Below it (every built-in scene) the integrals are exact.
+    pub surface_clusters: SurfaceClusters,
 }
 
 impl Default for SolveConfig {
@@ -183,6 +188,7 @@ impl Default for SolveConfig {
             projection_rejection: 1e-6,
             projection_tolerance: 1e-6,
             energy_correction: true,
+            surface_clusters: SurfaceClusters::default(),
         }
     }
 }
@@ -256,6 +262,12 @@ impl SolveConfig {
         }
         if self.gather_samples.direct + self.gather_samples.indirect > 1_000_000 {
             return bad("gather samples per point above 1000000".into());
+        }
+        let theta = self.surface_clusters.theta;
+        if !(0.0..=4.0).contains(&theta) {
+            return bad(format!(
+                "surface cluster criterion θ = {theta} (expected 0 to 4; 0 is exact)"
+            ));
         }
         if !(self.breaking.max_normal_angle > 0.0
             && self.breaking.max_normal_angle <= std::f64::consts::PI)

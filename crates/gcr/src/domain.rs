@@ -219,10 +219,22 @@ impl Domain<'_> {
         }
     }
 
-    /// The scene surface S indexed for Gaussian integrals (cells of 5 % of the diagonal).
+    /// The scene surface S indexed for Gaussian integrals (cells of 5 % of the diagonal), exact.
     pub fn scene_surface(&self) -> crate::fem::SceneSurface {
+        self.scene_surface_clustered(crate::fem::SurfaceClusters {
+            min_elements: usize::MAX,
+            ..Default::default()
+        })
+    }
+
+    /// [`Domain::scene_surface`], clustered when it has at least `clusters.min_elements`
+    /// elements ([`crate::cluster`]).
+    pub fn scene_surface_clustered(
+        &self,
+        clusters: crate::fem::SurfaceClusters,
+    ) -> crate::fem::SceneSurface {
         let (elements, normals) = self.surface_elements().into_iter().unzip();
-        crate::fem::SceneSurface::new(elements, normals, 0.05 * self.diagonal())
+        crate::fem::SceneSurface::with_clusters(elements, normals, 0.05 * self.diagonal(), clusters)
     }
 
     /// Emission of face (segment) `face`.

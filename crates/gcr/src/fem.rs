@@ -22,6 +22,7 @@
 //! triangles (segments) under its support. Inner products are zero across sub-networks and
 //! between opposed normals; a transfer is zero when the sender lies behind the receiver.
 
+use crate::cluster::{ClusterTree, Mask};
 use crate::element::{Bands, Element, MAX_BANDS};
 use crate::shading::ShadingGeometry;
 use crate::spatial::{BoxGrid, support_radius};
@@ -83,6 +84,11 @@ impl KernelCells {
 
 /// The true scene surface S, indexed for support queries (the sender integral c_o, and the
 /// base's integrals when it lives on S, [`BaseDomain::Scene`]).
+///
+/// Small surfaces are integrated exactly, element by element. Surfaces with many elements
+/// (≥ [`SurfaceClusters::min_elements`]) get a [`ClusterTree`] whose nodes stand in for their
+/// elements where a Gaussian is too wide to tell them apart, so that the cost of an integral no
+/// longer grows with the polygon count ([`crate::cluster`]).
 #[derive(Clone, Debug)]
 pub struct SceneSurface {
     /// Elements of S.
@@ -90,19 +96,65 @@ pub struct SceneSurface {
     /// Unit normal of each element.
     pub normals: Vec<DVec3>,
     grid: BoxGrid,
+    tree: Option<ClusterTree>,
+}
+
+/// When and how finely a large surface is clustered ([`crate::cluster`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceClusters {
+    /// Surfaces with at least this many elements are clustered (`usize::MAX`: never).
+    pub min_elements: usize,
+    /// A node replaces its elements in an integral of exp(−a|x − c|²) when a·R² ≤ θ (R: the
+    /// node's radius). The relative error of one node's contribution is O(θ²).
+    pub theta: f64,
+}
+
+impl Default for SurfaceClusters {
+    fn default() -> Self {
+        Self {
+            min_elements: 4096,
+            theta: 0.25,
+        }
+    }
 }
 
 impl SceneSurface {
     /// Indexes `elements` (with their unit `normals`) with buckets of about `cell` (typically
-    /// a kernel width).
+    /// a kernel width); every integral is exact.
     pub fn new(elements: Vec<Element>, normals: Vec<DVec3>, cell: f64) -> Self {
+        Self::with_clusters(
+            elements,
+            normals,
+            cell,
+            SurfaceClusters {
+                min_elements: usize::MAX,
+                ..SurfaceClusters::default()
+            },
+        )
+    }
+
+    /// [`SceneSurface::new`], clustered when `clusters` says so.
+    pub fn with_clusters(
+        elements: Vec<Element>,
+        normals: Vec<DVec3>,
+        cell: f64,
+        clusters: SurfaceClusters,
+    ) -> Self {
         assert_eq!(elements.len(), normals.len(), "one normal per element");
+        let tree = (elements.len() >= clusters.min_elements)
+            .then(|| ClusterTree::new(&elements, &normals, clusters.theta));
         let grid = BoxGrid::new(elements.iter().map(Element::bounds).collect(), cell);
         Self {
             elements,
             normals,
             grid,
+            tree,
         }
+    }
+
+    /// The cluster tree, when the surface is large enough to have one.
+    pub fn clusters(&self) -> Option<&ClusterTree> {
+        self.tree.as_ref()
     }
 
     /// ∫_S exp(−a|x − c|²) dx over the elements within the support (relative cut-off `tol`).
@@ -110,17 +162,27 @@ impl SceneSurface {
         self.masked_gaussian_integral(c, a, tol, &[], 0.0, scratch)
     }
 
-    /// Elements whose bounding boxes meet the ball (centre, radius), ascending.
+    /// Elements whose bounding boxes meet the ball (centre, radius), ascending. Empty on a
+    /// clustered surface, whose integrals do not take candidate lists.
     pub fn elements_near(&self, centre: DVec3, radius: f64, out: &mut Vec<u32>) {
+        if self.tree.is_some() {
+            out.clear();
+            return;
+        }
         self.grid.query_ball(centre, radius, out);
     }
 
     /// [`SceneSurface::gaussian_integral`] with the support query answered from `candidates`
     /// (ascending element ids, a superset of the elements within the support, e.g. from
     /// [`SceneSurface::elements_near`] with a larger ball): the same elements in the same
-    /// order, hence the same sum, without a grid query.
+    /// order, hence the same sum, without a grid query. A clustered surface ignores the list.
     pub fn gaussian_integral_among(&self, c: DVec3, a: f64, tol: f64, candidates: &[u32]) -> f64 {
         let r = support_radius(1.0 / a.sqrt(), tol);
+        if let Some(tree) = &self.tree {
+            return tree.integral(c, a, r, &Mask::ALL, &mut |e| {
+                self.elements[e as usize].gaussian_integral(c, a)
+            });
+        }
         candidates
             .iter()
             .filter(|&&e| self.grid.box_hits(e, c, r))
@@ -140,15 +202,20 @@ impl SceneSurface {
         scratch: &mut Vec<u32>,
     ) -> f64 {
         let r = support_radius(1.0 / a.sqrt(), tol);
+        let mask = Mask { facing, cos_min };
+        if let Some(tree) = &self.tree {
+            return tree.integral(c, a, r, &mask, &mut |e| {
+                if mask.accepts(self.normals[e as usize]) {
+                    self.elements[e as usize].gaussian_integral(c, a)
+                } else {
+                    0.0
+                }
+            });
+        }
         self.grid.query_ball(c, r, scratch);
         scratch
             .iter()
-            .filter(|&&e| {
-                let ne = self.normals[e as usize];
-                facing
-                    .iter()
-                    .all(|n| *n == DVec3::ZERO || ne.dot(*n) > cos_min)
-            })
+            .filter(|&&e| mask.accepts(self.normals[e as usize]))
             .map(|&e| self.elements[e as usize].gaussian_integral(c, a))
             .sum()
     }

@@ -4,6 +4,7 @@
 //! *kernel network*, [`isgcs`]), meshes the surfaces with a second one (the *shading network*),
 //! and integrates between them in closed form ([`gauss_integrals`]).
 
+pub mod cluster;
 pub mod config;
 pub mod domain;
 pub mod element;

@@ -217,7 +217,7 @@ pub fn train(
         base_domain: config.base_domain,
         ..FemSettings::default()
     };
-    let scene_surface = Arc::new(domain.scene_surface());
+    let scene_surface = Arc::new(domain.scene_surface_clustered(config.surface_clusters));
 
     // Initial sample set, s = E (the first shot, fig. 3.1): area-uniform over the ray domain
     // (fig. B.2) for the delta rule, shot rays for the projection.

@@ -16,8 +16,45 @@ pub const BUILTIN_NAMES: &[&str] = &[
     "flatland-blocker",
 ];
 
+/// The generated large scene's name pattern: `random-boxes-<N>` is [`random_boxes`]`(N, 1)`.
+pub const RANDOM_BOXES_PREFIX: &str = "random-boxes-";
+
+/// Largest `N` accepted in `random-boxes-<N>` (about 1.5 GB of scene and BVH at 20 M triangles).
+pub const RANDOM_BOXES_MAX: usize = 20_000_000;
+
+/// Parses `random-boxes-<N>` into `N`; `None` when `name` does not follow the pattern (so that a file such as
+/// `random-boxes-7.obj` still loads as a file), an error when `N` is out of range.
+pub fn parse_random_boxes(name: &str) -> Option<Result<usize>> {
+    let digits = name.strip_prefix(RANDOM_BOXES_PREFIX)?.replace('_', "");
+    if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    Some(match digits.parse::<usize>().ok() {
+        Some(n) if (36..=RANDOM_BOXES_MAX).contains(&n) => Ok(n),
+        _ => Err(SceneError::UnknownBuiltin {
+            name: name.into(),
+            known: format!(
+                "{} (and random-boxes-<N> for N from 36 to {RANDOM_BOXES_MAX} triangles)",
+                BUILTIN_NAMES.join(", ")
+            ),
+        }),
+    })
+}
+
+/// Whether [`builtin`] accepts `name`: one of [`BUILTIN_NAMES`], or `random-boxes-<N>`.
+pub fn is_builtin(name: &str) -> bool {
+    BUILTIN_NAMES.contains(&name) || parse_random_boxes(name).is_some()
+}
+
 /// Builds a built-in scene by name (see [`BUILTIN_NAMES`] and `docs/scene-sampler.md` for their geometry).
+///
+/// Besides the fixed names, `random-boxes-<N>` (e.g. `random-boxes-1000000`) generates the Cornell box
+/// filled with small random boxes, about `N` triangles in all ([`random_boxes`] with seed 1): the
+/// large-scene benchmark.
 pub fn builtin(name: &str) -> Result<AnyScene> {
+    if let Some(n) = parse_random_boxes(name) {
+        return Ok(AnyScene::ThreeD(random_boxes(n?, 1)));
+    }
     Ok(match name {
         "cornell-box" => AnyScene::ThreeD(cornell_box()),
         "wall-floor" => AnyScene::ThreeD(wall_floor()),
@@ -28,7 +65,7 @@ pub fn builtin(name: &str) -> Result<AnyScene> {
         _ => {
             return Err(SceneError::UnknownBuiltin {
                 name: name.into(),
-                known: BUILTIN_NAMES.join(", "),
+                known: format!("{}, random-boxes-<N>", BUILTIN_NAMES.join(", ")),
             });
         }
     })
@@ -516,4 +553,22 @@ pub fn random_boxes(n: usize, seed: u64) -> Scene {
         Some(base.camera),
     )
     .expect("generated scene is valid")
+}
+
+#[cfg(test)]
+mod random_boxes_name_tests {
+    use super::*;
+
+    #[test]
+    fn random_boxes_by_name() {
+        let AnyScene::ThreeD(s) = builtin("random-boxes-1000").unwrap() else {
+            panic!("3-D scene expected")
+        };
+        assert!((990..=1000).contains(&s.faces.len()), "{}", s.faces.len());
+        assert!(is_builtin("random-boxes-1_000"));
+        assert!(!is_builtin("random-boxes-7.obj"));
+        assert!(!is_builtin("random-boxes-"));
+        assert!(builtin("random-boxes-5").is_err());
+        assert!(builtin("random-boxes-999999999999").is_err());
+    }
 }

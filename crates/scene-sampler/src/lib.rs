@@ -39,7 +39,7 @@ pub mod sample;
 pub mod scene;
 pub mod spectrum;
 
-pub use builtin::{BUILTIN_NAMES, builtin, random_boxes};
+pub use builtin::{BUILTIN_NAMES, builtin, is_builtin, random_boxes};
 pub use bvh::{BuildQuality, FlatHit, FlatVisibility, Hit, SceneBvh};
 pub use error::{Result, SceneError};
 pub use flatland::{FlatView, FlatlandScene, Segment};

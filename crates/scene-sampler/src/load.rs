@@ -37,9 +37,10 @@ pub fn load(path: impl AsRef<Path>) -> Result<AnyScene> {
     }
 }
 
-/// Loads `name` as a built-in if it is one of [`crate::BUILTIN_NAMES`], else as a file.
+/// Loads `name` as a built-in if [`crate::builtin::is_builtin`] says so (one of [`crate::BUILTIN_NAMES`] or
+/// `random-boxes-<N>`), else as a file.
 pub fn load_or_builtin(name: &str) -> Result<AnyScene> {
-    if crate::BUILTIN_NAMES.contains(&name) {
+    if crate::builtin::is_builtin(name) {
         crate::builtin(name)
     } else {
         load(name)

@@ -15,6 +15,8 @@
 //!   observer; [`Isgcs::train`] is one step for callers with their own loop.
 //! * Resampling (sec. 2.5): [`Isgcs::critical_cells`], [`Isgcs::in_critical_region`],
 //!   [`Isgcs::resample_positions`].
+//! * With the cargo feature `linfa`, `isgcs::linfa` wraps the network as a regressor
+//!   behind linfa's `Fit` / `Predict` traits (ndarray records, `Array1` or `Array2` targets).
 //! * [`rbf::GaussianRbf`] is the reference fit the network is measured against.
 //!
 //! ```
@@ -32,6 +34,8 @@
 
 mod driver;
 mod linalg;
+#[cfg(feature = "linfa")]
+pub mod linfa;
 mod network;
 mod params;
 pub mod rbf;

@@ -21,22 +21,44 @@ pub struct MemProbe {
     pub bvh: u64,
     /// … after creating the surface and kernel samplers (what a solve builds before its first ray).
     pub samplers: u64,
+    /// Resident memory (VmRSS) after the scene is built (its transients freed).
+    pub scene_rss: u64,
+    /// Resident memory after the BVH build.
+    pub bvh_rss: u64,
     /// Seconds for the BVH build.
     pub bvh_s: f64,
+}
+
+/// A `/proc/self/status` field in bytes (`VmHWM`, `VmRSS`), Linux only.
+fn status_bytes(field: &str) -> Result<u64> {
+    let status = std::fs::read_to_string("/proc/self/status")?;
+    let line = status
+        .lines()
+        .find(|l| l.starts_with(field))
+        .with_context(|| format!("{field} not in /proc/self/status (Linux only)"))?;
+    let kb: u64 = line
+        .split_whitespace()
+        .nth(1)
+        .context("malformed status line")?
+        .parse()?;
+    Ok(kb * 1024)
 }
 
 /// The hidden `xtask mem-probe N` subcommand: builds `random_boxes(N, 1)`, its BVH and samplers, reading
 /// the process's peak resident memory after each step, and prints the result as one JSON line.
 /// Run in a fresh process per size, so that each peak belongs to that size alone.
 pub fn mem_probe(boxes: usize) -> Result<()> {
-    let peak = || gcr::metrics::peak_memory_bytes().context("VmHWM not available (Linux only)");
+    // VmHWM, the number gcr reports as `peak_memory_bytes`.
+    let peak = || status_bytes("VmHWM:");
     let start = peak()?;
     let scene = scene_sampler::random_boxes(boxes, 1);
     let after_scene = peak()?;
+    let scene_rss = status_bytes("VmRSS:")?;
     let t = std::time::Instant::now();
     let bvh = scene_sampler::SceneBvh::new(&scene);
     let bvh_s = t.elapsed().as_secs_f64();
     let after_bvh = peak()?;
+    let bvh_rss = status_bytes("VmRSS:")?;
     let surface = scene_sampler::SurfaceSampler::new(&scene);
     let kernel = scene_sampler::KernelSampler::new(&scene, &bvh);
     let after_samplers = peak()?;
@@ -47,6 +69,8 @@ pub fn mem_probe(boxes: usize) -> Result<()> {
         scene: after_scene,
         bvh: after_bvh,
         samplers: after_samplers,
+        scene_rss,
+        bvh_rss,
         bvh_s,
     };
     println!("{}", serde_json::to_string(&probe)?);
@@ -94,6 +118,8 @@ pub fn run(ctx: &Ctx) -> Result<()> {
          | triangles | threads | build (s) | bare obvhs (M rays/s) | visible (M/s) | kernel (M samples/s) | kernel / bare time | facing pairs | visible pairs | medium build (s) | bare obvhs, medium BVH (M rays/s) |\n\
          |---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
+    let load = || std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    let load_before = load();
     // (label, [(triangles, M/s)]) for the plot.
     let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
     let mut push = |label: String, x: usize, y: f64| {
@@ -136,6 +162,13 @@ pub fn run(ctx: &Ctx) -> Result<()> {
             );
         }
     }
+    writeln!(
+        md,
+        "\nLoad average (`/proc/loadavg`) before the throughput runs: {}; after: {}. Other jobs on the \
+         machine lower the 2-thread numbers most.",
+        load_before.trim(),
+        load().trim()
+    )?;
     let figures = ctx.out.join("figures");
     std::fs::create_dir_all(&figures)?;
     crate::plot::loglog(
@@ -159,42 +192,46 @@ pub fn run(ctx: &Ctx) -> Result<()> {
          Each size runs in its own child process (`xtask mem-probe N`, hidden), which builds \
          `random_boxes(N, 1)` in memory (no file is parsed), then its BVH (`BuildQuality::High`), then the surface \
          and kernel samplers, and reads the process's peak resident set (`VmHWM`, the same number `gcr` \
-         reports as `peak_memory_bytes`) after each step. *per triangle* = (peak after the samplers − peak at \
-         start) / triangles.\n\n\
-         | triangles | at start (MiB) | after scene (MiB) | after BVH (MiB) | after samplers (MiB) | BVH build (s) | per triangle (bytes) |\n\
-         |---:|---:|---:|---:|---:|---:|---:|"
+         reports as `peak_memory_bytes`) after each step, and the resident set (`VmRSS`) after the scene and \
+         after the BVH (what stays allocated; the allocator may keep freed pages). *per triangle* = (peak after \
+         the samplers − peak at start) / triangles. The peak after the scene already includes the generator's \
+         transients, which is why it can equal the later peaks.\n\n\
+         | triangles | peak at start (MiB) | peak after scene (MiB) | peak after BVH (MiB) | peak after samplers (MiB) | resident after scene (MiB) | resident after BVH (MiB) | BVH build (s) | peak per triangle (bytes) |\n\
+         |---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     )?;
     let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
     let mut mem_series: Vec<(String, Vec<(f64, f64)>)> = vec![
-        ("after the scene".into(), Vec::new()),
-        ("after the BVH".into(), Vec::new()),
-        ("after the samplers".into(), Vec::new()),
+        ("peak (VmHWM): scene + BVH + samplers".into(), Vec::new()),
+        ("resident after the scene (VmRSS)".into(), Vec::new()),
+        ("resident after the BVH (VmRSS)".into(), Vec::new()),
     ];
     for &boxes in mem_sizes {
         let p = probe_in_child(boxes)?;
         let per = (p.samplers.saturating_sub(p.start)) as f64 / p.triangles as f64;
         let line = format!(
-            "| {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.0} |",
+            "| {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.0} |",
             p.triangles,
             mib(p.start),
             mib(p.scene),
             mib(p.bvh),
             mib(p.samplers),
+            mib(p.scene_rss),
+            mib(p.bvh_rss),
             p.bvh_s,
             per
         );
         println!("scenes memory: {line}");
         writeln!(md, "{line}")?;
         let x = p.triangles as f64;
-        mem_series[0].1.push((x, mib(p.scene)));
-        mem_series[1].1.push((x, mib(p.bvh)));
-        mem_series[2].1.push((x, mib(p.samplers)));
+        mem_series[0].1.push((x, mib(p.samplers)));
+        mem_series[1].1.push((x, mib(p.scene_rss)));
+        mem_series[2].1.push((x, mib(p.bvh_rss)));
     }
     crate::plot::loglog(
         &figures.join("scaling-memory.png"),
-        "Peak resident memory: scene + BVH build (one process per size)",
+        "Memory of scene + BVH build against scene size (one process per size)",
         "triangles",
-        "peak resident memory (MiB, VmHWM)",
+        "resident memory (MiB)",
         &mem_series,
     )?;
     writeln!(

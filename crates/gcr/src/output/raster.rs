@@ -130,9 +130,8 @@ impl Image {
                 continue;
             }
             let s = frame.to_screen(c, w, h);
-            if !(s.x >= 0.0 && s.x < w && s.y >= 0.0 && s.y < h)
-                || !self.visible(s.x as usize, s.y as usize, s.z, depth_tol)
-            {
+            let inside = s.x >= 0.0 && s.x < w && s.y >= 0.0 && s.y < h;
+            if !inside || !self.visible(s.x as usize, s.y as usize, s.z, depth_tol) {
                 continue;
             }
             let (x0, x1) = ((s.x - r).floor().max(0.0), (s.x + r).ceil().min(w));

@@ -43,6 +43,13 @@ enum Command {
         #[arg(long, default_value = "docs")]
         out: PathBuf,
     },
+    /// Internal (run by `bench --only scenes`): peak memory of building `random_boxes(N, 1)` and its BVH,
+    /// printed as one JSON line. A separate process per size, so that each peak is that size's own.
+    #[command(hide = true)]
+    MemProbe {
+        /// Number of random boxes' triangles to ask `random_boxes` for.
+        triangles: usize,
+    },
 }
 
 /// What every figure or benchmark group receives.
@@ -64,5 +71,6 @@ fn main() -> Result<()> {
             std::fs::create_dir_all(&out)?;
             bench::run(&Ctx { quick, out }, only.as_deref())
         }
+        Command::MemProbe { triangles } => bench::mem_probe(triangles),
     }
 }

@@ -368,6 +368,61 @@ pub fn two_blockers() -> Scene {
     )
 }
 
+/// Fig. 4.19a/b: the second two-blocker geometry, built for sharp shadows. The floor, wall and camera of
+/// [`two_blockers`], but a small 0.2 × 0.2 light at height 1.5 centred over `(1, 1)` with the same power
+/// (E = 125), a 0.3 × 0.6 × 0.3 box standing on the floor and a 0.5 × 0.05 × 0.4 plate floating low, at
+/// height 0.45–0.5, so that both shadows have narrow penumbrae (about 0.1 for the plate). ρ = 0.6, grey.
+///
+/// Not in [`BUILTIN_NAMES`] (it has no files in `scenes/`): call it directly.
+pub fn two_blockers_sharp() -> Scene {
+    let mut b = Builder::new();
+    let rho = Spectrum::grey(0.6);
+    let z = Spectrum::ZERO;
+    let floor = b.object("floor");
+    b.poly(floor, &rect_xz(0.0, 2.0, 0.0, 2.0, 0.0), DVec3::Y, rho, z);
+    let wall = b.object("wall");
+    let p = [
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(2.0, 0.0, 0.0),
+        DVec3::new(2.0, 1.5, 0.0),
+        DVec3::new(0.0, 1.5, 0.0),
+    ];
+    b.poly(wall, &p, DVec3::Z, rho, z);
+    let light = b.object("light");
+    b.poly(
+        light,
+        &rect_xz(0.9, 1.1, 0.9, 1.1, 1.5),
+        -DVec3::Y,
+        Spectrum::ZERO,
+        Spectrum::grey(125.0),
+    );
+    let box1 = b.object("blocker 1 (box)");
+    b.block(
+        box1,
+        rect_xz(0.55, 0.85, 0.9, 1.2, 0.0),
+        rect_xz(0.55, 0.85, 0.9, 1.2, 0.6),
+        rho,
+        false,
+    );
+    let plate = b.object("blocker 2 (plate)");
+    b.block(
+        plate,
+        rect_xz(1.1, 1.6, 1.1, 1.5, 0.45),
+        rect_xz(1.1, 1.6, 1.1, 1.5, 0.5),
+        rho,
+        true,
+    );
+    b.finish(
+        "two-blockers-sharp",
+        Camera {
+            eye: DVec3::new(1.0, 1.2, 4.2),
+            target: DVec3::new(1.0, 0.5, 0.8),
+            up: DVec3::Y,
+            fov_y_deg: 45.0,
+        },
+    )
+}
+
 /// A furnace: the closed unit cube seen from inside (normals inward), every face with emission `e` and
 /// reflectance `rho`. Exact solution `B = E/(1 − ρ)` everywhere (MATH.md §8). The built-in uses E = 1, ρ = 0.5.
 ///

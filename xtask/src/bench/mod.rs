@@ -11,6 +11,8 @@ mod scenes;
 use crate::Ctx;
 use anyhow::Result;
 
+pub use scenes::mem_probe;
+
 /// A named benchmark group.
 type Group = (&'static str, fn(&Ctx) -> Result<()>);
 

@@ -9,16 +9,28 @@
 //! * `gcr-kernel-error.md`: relative RMS of Ψ against K·s over the grid, per scene and budget.
 //! * `gcr-wall-floor-{base,kernel,rays}.png` (fig. 4.13a–c, 4.11c): the three gathers of one solve.
 //! * `gcr-two-blockers-{rays,kernel}.png` (fig. 4.15f) and `gcr-cornell-box-{rays,kernel}.png`.
+//! * `gcr-{wall-floor,two-blockers}-{samples,network,triangulation}.png` ([`topology`]),
+//!   `gcr-wall-floor-network-unbroken.png` (the network of a solve without our breaking operator, as
+//!   the dissertation's), and the panels `gcr-wall-floor-fig4.12.png` (fig. 4.12a–c) and `gcr-two-blockers-fig4.15.png` (fig. 4.15d–f:
+//!   network, triangulation, the kernel-gather render); their counts in `gcr-topology.md`.
+//! * `gcr-two-blockers-sharp-fine-{kernel,rays}.png` and the panel `gcr-two-blockers-sharp-fig4.19.png`
+//!   (fig. 4.19c): the blurry shadows of the kernel collection against the ray gather's, on the second
+//!   two-blocker geometry, both gathered on one fine uniform mesh.
 
+use super::topology;
 use crate::Ctx;
 use anyhow::{Context, Result};
 use gcr::config::{GatherMode, SolveConfig};
 use gcr::domain::Domain;
+use gcr::gather::Emitters;
+use gcr::mesh::ShadedMesh;
+use gcr::output::raster::{Image, PinholeCamera, render_image};
 use gcr::output::tonemap::Exposure;
-use gcr::pipeline::output_mesh;
-use gcr::retriangulate::RetriangulateLimits;
+use gcr::pipeline::{output_mesh, radiosity_at_points};
+use gcr::retriangulate::{RetriangulateLimits, retriangulate};
+use glam::DVec3;
 use rayon::prelude::*;
-use scene_sampler::{AnyScene, FlatKernelSampler, KernelSampler, SceneBvh};
+use scene_sampler::{AnyScene, FlatKernelSampler, KernelSampler, Scene, SceneBvh};
 use std::fmt::Write;
 
 /// Errors of Ψ against K·s over the grid.
@@ -98,47 +110,197 @@ fn flatland_kernel(ctx: &Ctx, name: &str, cells: usize, n: usize) -> Result<Kern
     })
 }
 
-/// Fig. 4.13a–c: one solve of `wall-floor`, rendered with each gather.
-fn scene_gathers(ctx: &Ctx, name: &str, cells: usize, gathers: &[GatherMode]) -> Result<()> {
+/// Renders of one solve, one per gather, and (when asked for) its topology overlays.
+struct SceneFigures {
+    /// One image per requested gather, in the order asked for.
+    renders: Vec<(GatherMode, Image)>,
+    /// Samples, shading network and re-triangulation (figs. 4.12a–c, 4.15d–e).
+    topology: Option<([Image; 3], topology::Counts)>,
+}
+
+/// The scene's default camera as the rasterizer's.
+fn camera(scene: &Scene) -> PinholeCamera {
+    PinholeCamera {
+        eye: scene.camera.eye,
+        target: scene.camera.target,
+        up: scene.camera.up,
+        fov_y_degrees: scene.camera.fov_y_deg,
+    }
+}
+
+/// One exposure for several renders (from the first one's non-emitting vertices).
+fn exposure_of(scene: &Scene, mesh: &ShadedMesh) -> Exposure {
+    Exposure::auto(
+        mesh.triangles
+            .iter()
+            .zip(&mesh.face_of_triangle)
+            .filter(|(_, f)| scene.faces[**f as usize].emission.is_zero())
+            .map(|(t, _)| mesh.radiosity[t[0] as usize]),
+    )
+}
+
+/// Fig. 4.13a–c: one solve of `name`, rendered with each gather into `gcr-<name>-<gather>.png`;
+/// with `with_topology`, also the overlays of [`topology::write`] (figs. 4.12, 4.15d–e).
+fn scene_gathers(
+    ctx: &Ctx,
+    name: &str,
+    cells: usize,
+    gathers: &[GatherMode],
+    with_topology: bool,
+) -> Result<SceneFigures> {
     let scene = scene_sampler::builtin(name)?.into_3d()?;
     let bvh = SceneBvh::new(&scene);
     let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
     let config = SolveConfig {
         kernel_cells: cells,
         shading_cells: cells / 2,
-        // Fig. 4.13a/b show the base gather: keep the base.
+        // Fig. 4.13a/b show the base gather, figs. 4.12b / 4.15d its shading network: keep the base.
         skip_unused_base: false,
         ..SolveConfig::default()
     };
     let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
-    let cam = gcr::output::raster::PinholeCamera {
-        eye: scene.camera.eye,
-        target: scene.camera.target,
-        up: scene.camera.up,
-        fov_y_degrees: scene.camera.fov_y_deg,
-    };
-    // One exposure for all three (from the ray gather), so that the images compare.
+    let cam = camera(&scene);
+    let size = if ctx.quick { 128 } else { 512 };
+    // One exposure for all gathers (from the first, the ray gather), so that the images compare.
     let mut exposure: Option<Exposure> = None;
+    let mut figures = SceneFigures {
+        renders: Vec::new(),
+        topology: None,
+    };
     for &gather in gathers {
         let config = SolveConfig { gather, ..config };
         let (mesh, _) = output_mesh(&domain, &trained, &config, RetriangulateLimits::default());
-        let exposure = exposure.get_or_insert_with(|| {
-            Exposure::auto(
-                mesh.triangles
-                    .iter()
-                    .zip(&mesh.face_of_triangle)
-                    .filter(|(_, f)| scene.faces[**f as usize].emission.is_zero())
-                    .map(|(t, _)| mesh.radiosity[t[0] as usize]),
-            )
-        });
-        let size = if ctx.quick { 128 } else { 512 };
-        let px = gcr::output::raster::render(&mesh, &cam, exposure, size, size, 2);
-        let path = ctx.out.join(format!("gcr-{name}-{}.png", gather.name()));
-        image::RgbImage::from_raw(size, size, px)
-            .context("image buffer")?
-            .save(&path)
-            .with_context(|| format!("writing {}", path.display()))?;
+        let exposure = exposure.get_or_insert_with(|| exposure_of(&scene, &mesh));
+        let img = render_image(&mesh, &cam, exposure, size, size, 2);
+        topology::save(
+            &img,
+            &ctx.out.join(format!("gcr-{name}-{}.png", gather.name())),
+        )?;
+        figures.renders.push((gather, img));
+        if with_topology && figures.topology.is_none() {
+            // The output mesh is the same for every gather: draw it once.
+            figures.topology = Some(topology::write(
+                &ctx.out, name, &scene, &trained, &mesh, &cam, size,
+            )?);
+        }
     }
+    Ok(figures)
+}
+
+/// Fig. 4.12b as the dissertation has it: the same solve as [`scene_gathers`] with the breaking
+/// operator off, only its shading network drawn (`gcr-<name>-network-unbroken.png`).
+/// Returns the image, the shading cells and the shading triangles.
+fn unbroken_network(ctx: &Ctx, name: &str, cells: usize) -> Result<(Image, usize, usize)> {
+    let scene = scene_sampler::builtin(name)?.into_3d()?;
+    let bvh = SceneBvh::new(&scene);
+    let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+    let mut config = SolveConfig {
+        kernel_cells: cells,
+        shading_cells: cells / 2,
+        skip_unused_base: false,
+        ..SolveConfig::default()
+    };
+    config.breaking.enabled = false;
+    let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+    let cam = camera(&scene);
+    let size = if ctx.quick { 128 } else { 512 };
+    let background = topology::geometry_background(&scene, &cam, size, 2);
+    let img = topology::network_image(&background, &trained);
+    topology::save(
+        &img,
+        &ctx.out.join(format!("gcr-{name}-network-unbroken.png")),
+    )?;
+    let geo = &trained.fem.base.geo;
+    Ok((img, geo.centres.len(), geo.simplices.len()))
+}
+
+/// Fig. 4.19c: the kernel collection (the dissertation's final shading, fig. 4.13c) next to our
+/// ray gather on one solve of a two-blocker scene, both gathered at the vertices of one uniform
+/// mesh of edge length `edge` (finer than the shading network's), so that the two images differ
+/// by the gather only: the RBF kernel blurs the shadows, the shadow rays keep them.
+/// Writes `gcr-<scene>-fine-{kernel,rays}.png` and returns them (kernel first).
+fn blocking_effects(
+    ctx: &Ctx,
+    scene: Scene,
+    cells: usize,
+    edge: f64,
+) -> Result<Vec<(GatherMode, Image)>> {
+    let name = scene.name.clone();
+    let bvh = SceneBvh::new(&scene);
+    let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+    let config = SolveConfig {
+        kernel_cells: cells,
+        shading_cells: cells / 2,
+        ..SolveConfig::default()
+    };
+    let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+    let faces: Vec<[DVec3; 3]> = scene.faces.iter().map(|f| f.v).collect();
+    let tri = retriangulate(&faces, |_| edge, RetriangulateLimits::default());
+    let mut vertex_face = vec![0u32; tri.positions.len()];
+    for (t, f) in tri.triangles.iter().zip(&tri.face_of_triangle) {
+        for &v in t {
+            vertex_face[v as usize] = *f;
+        }
+    }
+    let points: Vec<(DVec3, DVec3, u32)> = tri
+        .positions
+        .iter()
+        .zip(&vertex_face)
+        .map(|(p, &f)| (*p, scene.faces[f as usize].normal, f))
+        .collect();
+    let emitters = Emitters::new(&domain);
+    let cam = camera(&scene);
+    let size = if ctx.quick { 128 } else { 512 };
+    let mut exposure: Option<Exposure> = None;
+    let mut out = Vec::new();
+    // Rays first: the exposure comes from the sharper solution.
+    for gather in [GatherMode::Rays, GatherMode::Kernel] {
+        let config = SolveConfig { gather, ..config };
+        let b = radiosity_at_points(&domain, &trained, &emitters, &config, &points);
+        let mesh = ShadedMesh {
+            positions: tri.positions.clone(),
+            triangles: tri.triangles.clone(),
+            face_of_triangle: tri.face_of_triangle.clone(),
+            radiosity: b.iter().map(|g| [g.radiosity[0]; 3]).collect(),
+        };
+        let exposure = exposure.get_or_insert_with(|| exposure_of(&scene, &mesh));
+        let img = render_image(&mesh, &cam, exposure, size, size, 2);
+        topology::save(
+            &img,
+            &ctx.out
+                .join(format!("gcr-{name}-fine-{}.png", gather.name())),
+        )?;
+        println!(
+            "figures gcr: {name} fig. 4.19c, {} gather at {} vertices",
+            gather.name(),
+            points.len()
+        );
+        out.push((gather, img));
+    }
+    out.reverse();
+    Ok(out)
+}
+
+/// A panel of rendered images with their labels (see [`crate::plot::panel`]).
+fn panel(path: &std::path::Path, tiles: &[(&str, &Image)]) -> Result<()> {
+    let tiles: Vec<(&str, u32, u32, &[u8])> = tiles
+        .iter()
+        .map(|(l, i)| (*l, i.width, i.height, i.pixels.as_slice()))
+        .collect();
+    crate::plot::panel(path, &tiles)
+}
+
+/// One row of `gcr-topology.md` (and the same on stdout).
+fn topo_row(md: &mut String, name: &str, cells: usize, c: &topology::Counts) -> Result<()> {
+    println!(
+        "figures gcr: {name}: {} samples, {} shading cells, {} shading triangles, output {} triangles / {} vertices",
+        c.samples, c.cells, c.simplices, c.triangles, c.vertices
+    );
+    writeln!(
+        md,
+        "| {name} | {cells} | {} | {} | {} | {} | {} |",
+        c.samples, c.cells, c.simplices, c.triangles, c.vertices
+    )?;
     Ok(())
 }
 
@@ -173,20 +335,84 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     std::fs::write(ctx.out.join("gcr-kernel-error.md"), md)?;
     let all = [GatherMode::Rays, GatherMode::Base, GatherMode::Kernel];
     let cells = if ctx.quick { 40 } else { 300 };
-    scene_gathers(ctx, "wall-floor", cells, &all)?;
-    if !ctx.quick {
-        // Fig. 4.15f (the final solution of the two-blocker scene) and the Cornell box.
-        scene_gathers(
-            ctx,
-            "two-blockers",
-            cells,
-            &[GatherMode::Rays, GatherMode::Kernel],
+    let mut topo_md = String::from(
+        "# What the overlays of figs. 4.12 and 4.15 show\n\n\
+         Command: `cargo xtask figures --only gcr`. One solve per scene (default settings, the base kept); \
+         the shading network is the one of the last FEM step. Images: `gcr-<scene>-{samples,network,triangulation}.png`, \
+         panels `gcr-wall-floor-fig4.12.png` and `gcr-two-blockers-fig4.15.png`.\n\n\
+         | scene | kernel cells | sample rays (receiver points, fig. 4.12a) | shading cells | shading triangles (after breaking) | output triangles | output vertices |\n\
+         |---|---:|---:|---:|---:|---:|---:|\n",
+    );
+    // Figs. 4.11c, 4.12a–c, 4.13a–c.
+    let wf = scene_gathers(ctx, "wall-floor", cells, &all, true)?;
+    let (unbroken, unbroken_cells, unbroken_triangles) =
+        unbroken_network(ctx, "wall-floor", cells)?;
+    if let Some(([samples, network, tri], counts)) = &wf.topology {
+        topo_row(&mut topo_md, "wall-floor", cells, counts)?;
+        writeln!(
+            topo_md,
+            "| wall-floor, breaking operator off (network only) | {cells} | | {unbroken_cells} | {unbroken_triangles} | | |"
         )?;
+        panel(
+            &ctx.out.join("gcr-wall-floor-fig4.12.png"),
+            &[
+                ("(a) kernel training samples: receivers y", samples),
+                ("(b) shading network (no breaking)", &unbroken),
+                ("(b') ... with our breaking operator", network),
+                ("(c) re-triangulation", tri),
+            ],
+        )?;
+    }
+    // Fig. 4.15d–f: the two-blocker scene's network, triangulation and final shading (the
+    // kernel collection, as the dissertation's; the ray gather is written next to it).
+    let two_cells = if ctx.quick { 40 } else { cells };
+    let tb = scene_gathers(
+        ctx,
+        "two-blockers",
+        two_cells,
+        &[GatherMode::Rays, GatherMode::Kernel],
+        true,
+    )?;
+    if let Some(([_, network, tri], counts)) = &tb.topology {
+        topo_row(&mut topo_md, "two-blockers", two_cells, counts)?;
+        let kernel = tb
+            .renders
+            .iter()
+            .find(|(g, _)| *g == GatherMode::Kernel)
+            .map(|(_, i)| i)
+            .context("kernel render")?;
+        panel(
+            &ctx.out.join("gcr-two-blockers-fig4.15.png"),
+            &[
+                ("(d) shading network", network),
+                ("(e) triangulation", tri),
+                ("(f) final shading (kernel gather)", kernel),
+            ],
+        )?;
+    }
+    std::fs::write(ctx.out.join("gcr-topology.md"), topo_md)?;
+    // Fig. 4.19c on the second two-blocker geometry (small light, sharp shadows).
+    let edge = if ctx.quick { 0.2 } else { 0.03 };
+    let fine = blocking_effects(
+        ctx,
+        scene_sampler::builtin::two_blockers_sharp(),
+        two_cells,
+        edge,
+    )?;
+    panel(
+        &ctx.out.join("gcr-two-blockers-sharp-fig4.19.png"),
+        &[
+            ("(c) kernel gather (dissertation)", &fine[0].1),
+            ("ray gather (ours)", &fine[1].1),
+        ],
+    )?;
+    if !ctx.quick {
         scene_gathers(
             ctx,
             "cornell-box",
             cells,
             &[GatherMode::Rays, GatherMode::Kernel],
+            false,
         )?;
     }
     Ok(())

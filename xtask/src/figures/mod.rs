@@ -7,6 +7,7 @@ mod gcr;
 mod isgcs;
 mod kernel3d;
 mod scenes;
+mod topology;
 
 use crate::Ctx;
 use anyhow::Result;

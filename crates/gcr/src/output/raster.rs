@@ -3,6 +3,11 @@
 //!
 //! Back faces are drawn black: in radiosity only the front side of a face reflects or emits,
 //! so a visible back face means the camera looks at the unlit side of a surface.
+//!
+//! [`render_image`] also keeps the depth buffer, so that points and line segments in world space
+//! can be drawn over the shaded image with hidden-point removal ([`Image::draw_points`],
+//! [`Image::draw_lines`]): the figures of the sample distribution, the shading network and the
+//! re-triangulation (figs. 4.12, 4.15) are drawn that way.
 
 use crate::mesh::ShadedMesh;
 use crate::output::tonemap::Exposure;
@@ -21,6 +26,175 @@ pub struct PinholeCamera {
     pub fov_y_degrees: f64,
 }
 
+/// The camera's orthonormal frame and focal factor, shared by the rasterizer and [`project`].
+struct Frame {
+    eye: DVec3,
+    right: DVec3,
+    up: DVec3,
+    forward: DVec3,
+    /// 1 / tan(fov_y / 2).
+    f: f64,
+}
+
+impl Frame {
+    fn new(camera: &PinholeCamera) -> Self {
+        let forward = (camera.target - camera.eye).normalize_or(DVec3::NEG_Z);
+        let right = forward.cross(camera.up).normalize_or(DVec3::X);
+        let up = right.cross(forward);
+        let f = 1.0 / (camera.fov_y_degrees.to_radians() * 0.5).tan();
+        Self {
+            eye: camera.eye,
+            right,
+            up,
+            forward,
+            f,
+        }
+    }
+
+    /// Camera space: x right, y up, z forward (distance along the view direction).
+    fn to_camera(&self, p: DVec3) -> DVec3 {
+        let d = p - self.eye;
+        DVec3::new(d.dot(self.right), d.dot(self.up), d.dot(self.forward))
+    }
+
+    /// Camera space to pixel coordinates (x right, y down, in pixels) and depth z.
+    fn to_screen(&self, c: DVec3, w: f64, h: f64) -> DVec3 {
+        let aspect = w / h;
+        DVec3::new(
+            (c.x * self.f / aspect / c.z * 0.5 + 0.5) * w,
+            (0.5 - c.y * self.f / c.z * 0.5) * h,
+            c.z,
+        )
+    }
+}
+
+/// Projects the world point `p` into a `width × height` image of `camera`: pixel coordinates
+/// (x to the right, y downwards, the pixel (i, j) covering [i, i+1) × [j, j+1)) and the depth
+/// along the view direction. `None` when `p` is not in front of the camera.
+pub fn project(camera: &PinholeCamera, width: u32, height: u32, p: DVec3) -> Option<DVec3> {
+    let frame = Frame::new(camera);
+    let c = frame.to_camera(p);
+    (c.z > 0.0).then(|| frame.to_screen(c, f64::from(width), f64::from(height)))
+}
+
+/// A rendered image with its depth buffer, to draw overlays on (see [`render_image`]).
+#[derive(Clone, Debug)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// 8-bit sRGB RGB, row-major, top row first.
+    pub pixels: Vec<u8>,
+    /// Per pixel, the nearest depth (distance along the view direction) of the mesh among the
+    /// pixel's sub-samples; infinite where only background was hit.
+    pub depth: Vec<f64>,
+    /// The camera the image was rendered from.
+    pub camera: PinholeCamera,
+}
+
+impl Image {
+    /// Whether a point at pixel (x, y) and depth z is in front of the rendered surfaces, up to
+    /// a relative depth tolerance `tol` (points lying on a surface need a small positive one).
+    fn visible(&self, x: usize, y: usize, z: f64, tol: Option<f64>) -> bool {
+        tol.is_none_or(|t| z <= self.depth[y * self.width as usize + x] * (1.0 + t))
+    }
+
+    fn blend(&mut self, x: usize, y: usize, colour: [u8; 3], alpha: f64) {
+        let i = (y * self.width as usize + x) * 3;
+        for ch in 0..3 {
+            let old = f64::from(self.pixels[i + ch]);
+            let new = old + alpha * (f64::from(colour[ch]) - old);
+            self.pixels[i + ch] = new.round().clamp(0.0, 255.0) as u8;
+        }
+    }
+
+    /// Draws every world point of `points` as a disc of `radius` pixels in `colour`, blended
+    /// with opacity `alpha` ∈ [0, 1]. With `depth_tol = Some(t)` a point is drawn only where its
+    /// depth is at most (1 + t) times the rendered depth at its pixel (hidden points are left
+    /// out); `None` draws all points in front of the camera.
+    pub fn draw_points(
+        &mut self,
+        points: &[DVec3],
+        radius: f64,
+        colour: [u8; 3],
+        alpha: f64,
+        depth_tol: Option<f64>,
+    ) {
+        let frame = Frame::new(&self.camera);
+        let (w, h) = (f64::from(self.width), f64::from(self.height));
+        let r = radius.max(0.5);
+        for &p in points {
+            let c = frame.to_camera(p);
+            if c.z <= 0.0 {
+                continue;
+            }
+            let s = frame.to_screen(c, w, h);
+            let inside = s.x >= 0.0 && s.x < w && s.y >= 0.0 && s.y < h;
+            if !inside || !self.visible(s.x as usize, s.y as usize, s.z, depth_tol) {
+                continue;
+            }
+            let (x0, x1) = ((s.x - r).floor().max(0.0), (s.x + r).ceil().min(w));
+            let (y0, y1) = ((s.y - r).floor().max(0.0), (s.y + r).ceil().min(h));
+            for y in y0 as usize..y1 as usize {
+                for x in x0 as usize..x1 as usize {
+                    let (dx, dy) = (x as f64 + 0.5 - s.x, y as f64 + 0.5 - s.y);
+                    if dx * dx + dy * dy <= r * r {
+                        self.blend(x, y, colour, alpha);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Draws the world-space segments `(a, b)` as one-pixel lines in `colour`, blended with
+    /// opacity `alpha`. Each segment is clipped to the front of the camera and sampled every
+    /// half pixel; `depth_tol` hides the hidden parts as in [`Image::draw_points`] (per sample,
+    /// so a segment running behind an occluder is interrupted there).
+    pub fn draw_lines(
+        &mut self,
+        segments: &[(DVec3, DVec3)],
+        colour: [u8; 3],
+        alpha: f64,
+        depth_tol: Option<f64>,
+    ) {
+        let frame = Frame::new(&self.camera);
+        let (w, h) = (f64::from(self.width), f64::from(self.height));
+        let near = 1e-9;
+        for &(a, b) in segments {
+            let (mut ca, mut cb) = (frame.to_camera(a), frame.to_camera(b));
+            if ca.z < near && cb.z < near {
+                continue;
+            }
+            if ca.z < near {
+                ca = ca + (near - ca.z) / (cb.z - ca.z) * (cb - ca);
+            } else if cb.z < near {
+                cb = cb + (near - cb.z) / (ca.z - cb.z) * (ca - cb);
+            }
+            let (sa, sb) = (frame.to_screen(ca, w, h), frame.to_screen(cb, w, h));
+            let len = (sb.truncate() - sa.truncate()).length();
+            // Guard against segments that project to absurd lengths near the eye.
+            let n = (2.0 * len.min(8.0 * (w + h))).ceil() as usize + 1;
+            let mut last = usize::MAX;
+            for k in 0..=n {
+                // Interpolate in camera space: perspective-correct positions and depths.
+                let c = ca.lerp(cb, k as f64 / n as f64);
+                let s = frame.to_screen(c, w, h);
+                if !(s.x >= 0.0 && s.x < w && s.y >= 0.0 && s.y < h) {
+                    continue;
+                }
+                let (x, y) = (s.x as usize, s.y as usize);
+                let idx = y * self.width as usize + x;
+                if idx == last || !self.visible(x, y, s.z, depth_tol) {
+                    continue;
+                }
+                last = idx;
+                self.blend(x, y, colour, alpha);
+            }
+        }
+    }
+}
+
 /// Renders `mesh` to an 8-bit sRGB RGB image of `width × height`, row-major, top row first.
 /// Each pixel averages `ss × ss` sub-samples (anti-aliasing). The background is black.
 pub fn render(
@@ -31,15 +205,24 @@ pub fn render(
     height: u32,
     ss: u32,
 ) -> Vec<u8> {
+    render_image(mesh, camera, exposure, width, height, ss).pixels
+}
+
+/// [`render`], keeping the depth buffer (at the output resolution) for overlays.
+pub fn render_image(
+    mesh: &ShadedMesh,
+    camera: &PinholeCamera,
+    exposure: &Exposure,
+    width: u32,
+    height: u32,
+    ss: u32,
+) -> Image {
     let ss = ss.max(1);
     let (w, h) = ((width * ss) as usize, (height * ss) as usize);
     let mut depth = vec![f64::INFINITY; w * h];
     let mut colour = vec![[0.0f64; 3]; w * h];
 
-    let forward = (camera.target - camera.eye).normalize_or(DVec3::NEG_Z);
-    let right = forward.cross(camera.up).normalize_or(DVec3::X);
-    let up = right.cross(forward);
-    let f = 1.0 / (camera.fov_y_degrees.to_radians() * 0.5).tan();
+    let frame = Frame::new(camera);
     let aspect = w as f64 / h as f64;
     let near = 1e-4
         * mesh
@@ -54,19 +237,15 @@ pub fn render(
         let normal = (world[1] - world[0]).cross(world[2] - world[0]);
         let front = normal.dot(camera.eye - world[0]) > 0.0;
         let rad = idx.map(|i| if front { mesh.radiosity[i] } else { [0.0; 3] });
-        // Camera space: x right, y up, z forward (distance along the view direction).
         let cam: Vec<(DVec3, [f64; 3])> = (0..3)
-            .map(|k| {
-                let d = world[k] - camera.eye;
-                (DVec3::new(d.dot(right), d.dot(up), d.dot(forward)), rad[k])
-            })
+            .map(|k| (frame.to_camera(world[k]), rad[k]))
             .collect();
         if let Some(poly) = clip_near(&cam, near) {
             // Fan-triangulate the clipped polygon (3 or 4 vertices).
             for k in 1..poly.len() - 1 {
                 raster_triangle(
                     [poly[0], poly[k], poly[k + 1]],
-                    f,
+                    frame.f,
                     aspect,
                     w,
                     h,
@@ -78,10 +257,12 @@ pub fn render(
     }
 
     let mut out = vec![0u8; (width * height * 3) as usize];
+    let mut out_depth = vec![f64::INFINITY; (width * height) as usize];
     let n = (ss * ss) as f64;
     for py in 0..height as usize {
         for px in 0..width as usize {
             let mut acc = [0.0; 3];
+            let mut near = f64::INFINITY;
             for sy in 0..ss as usize {
                 for sx in 0..ss as usize {
                     let i = (py * ss as usize + sy) * w + px * ss as usize + sx;
@@ -89,15 +270,23 @@ pub fn render(
                     for ch in 0..3 {
                         acc[ch] += lin[ch];
                     }
+                    near = near.min(depth[i]);
                 }
             }
             for ch in 0..3 {
                 let v = crate::output::tonemap::srgb_encode(acc[ch] / n);
                 out[(py * width as usize + px) * 3 + ch] = (v * 255.0).round() as u8;
             }
+            out_depth[py * width as usize + px] = near;
         }
     }
-    out
+    Image {
+        width,
+        height,
+        pixels: out,
+        depth: out_depth,
+        camera: *camera,
+    }
 }
 
 /// Sutherland–Hodgman clip of a camera-space polygon against the plane z = near.
@@ -249,5 +438,44 @@ mod tests {
             fov_y_degrees: 90.0,
         };
         let _ = render(&mesh, &cam, &Exposure { scale: 1.0 }, 16, 16, 1);
+    }
+
+    #[test]
+    fn overlays_are_hidden_behind_surfaces_and_drawn_in_front_of_them() {
+        let mesh = quad([0.0; 3]); // black square
+        let cam = PinholeCamera {
+            eye: DVec3::new(0.0, 0.0, 4.0),
+            target: DVec3::ZERO,
+            up: DVec3::Y,
+            fov_y_degrees: 30.0,
+        };
+        let mut img = render_image(&mesh, &cam, &Exposure { scale: 1.0 }, 32, 32, 2);
+        let centre = project(&cam, 32, 32, DVec3::ZERO).unwrap();
+        assert!((centre.x - 16.0).abs() < 1e-9 && (centre.y - 16.0).abs() < 1e-9);
+        assert!((img.depth[16 * 32 + 16] - 4.0).abs() < 1e-6);
+        // A point behind the square is hidden; one on it (within the tolerance) is drawn.
+        img.draw_points(
+            &[DVec3::new(0.0, 0.0, -1.0)],
+            1.0,
+            [255, 0, 0],
+            1.0,
+            Some(1e-3),
+        );
+        assert_eq!(&img.pixels[(16 * 32 + 16) * 3..][..3], &[0, 0, 0]);
+        img.draw_points(&[DVec3::ZERO], 1.0, [255, 0, 0], 1.0, Some(1e-3));
+        assert_eq!(&img.pixels[(16 * 32 + 16) * 3..][..3], &[255, 0, 0]);
+        // A horizontal line through the middle, on the square: drawn across it.
+        img.draw_lines(
+            &[(DVec3::new(-0.5, 0.5, 0.0), DVec3::new(0.5, 0.5, 0.0))],
+            [0, 255, 0],
+            1.0,
+            Some(1e-3),
+        );
+        let row = project(&cam, 32, 32, DVec3::new(0.0, 0.5, 0.0)).unwrap().y as usize;
+        let green = (0..32)
+            .filter(|&x| img.pixels[(row * 32 + x) * 3 + 1] == 255)
+            .count();
+        // 1 unit at distance 4 spans 32 / (2·4·tan 15°) ≈ 14.9 pixels.
+        assert!((14..=17).contains(&green), "{green} green pixels");
     }
 }

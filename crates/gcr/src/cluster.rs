@@ -37,24 +37,29 @@ pub const LEAF: usize = 8;
 /// to its face centres, edge midpoints and corners.
 pub const BINS: usize = 26;
 
-/// A node of the tree.
+/// A node of the tree: what a traversal reads at every visit.
 #[derive(Clone, Debug)]
 struct Node {
     lo: DVec3,
     hi: DVec3,
     /// Squared radius about the centroid: max |v − m|² over the elements' corners.
     radius2: f64,
-    /// The six-point rule: points and the common weight A/6.
-    points: [DVec3; 6],
-    weight: f64,
-    /// Area per direction bin.
-    bins: [f32; BINS],
     /// Element range in `order` (all of the subtree's elements).
     first: u32,
     count: u32,
     /// Children, or `u32::MAX` for a leaf.
     left: u32,
     right: u32,
+}
+
+/// What a traversal reads only where a node replaces its elements.
+#[derive(Clone, Debug)]
+struct NodeRule {
+    /// The six-point rule: points and the common weight A/6.
+    points: [DVec3; 6],
+    weight: f64,
+    /// Area per direction bin.
+    bins: [f32; BINS],
 }
 
 /// Area, first and second moments of a set of elements (about the origin).
@@ -157,6 +162,7 @@ fn bin_of(n: DVec3, dirs: &[DVec3; BINS]) -> usize {
 #[derive(Clone, Debug)]
 pub struct ClusterTree {
     nodes: Vec<Node>,
+    rules: Vec<NodeRule>,
     /// Per element: its own three-point rule, for elements small enough on their own.
     small: Vec<SmallRule>,
     /// Element ids, grouped by leaf.
@@ -182,6 +188,7 @@ impl ClusterTree {
             .collect();
         let mut tree = ClusterTree {
             nodes: Vec::with_capacity(2 * elements.len() / LEAF + 1),
+            rules: Vec::with_capacity(2 * elements.len() / LEAF + 1),
             small,
             order: Vec::new(),
             dirs,
@@ -234,13 +241,15 @@ impl ClusterTree {
             .flat_map(|&e| corners(&d.elements[e as usize]))
             .map(|v| v.distance_squared(centre))
             .fold(0.0, f64::max);
+        self.rules.push(NodeRule {
+            points,
+            weight,
+            bins,
+        });
         self.nodes.push(Node {
             lo,
             hi,
             radius2,
-            points,
-            weight,
-            bins,
             first: first as u32,
             count: ids.len() as u32,
             left: u32::MAX,
@@ -282,21 +291,27 @@ impl ClusterTree {
             return 0.0;
         }
         let mut sum = 0.0;
-        let mut stack = vec![0u32];
-        while let Some(i) = stack.pop() {
+        // Median splits keep the depth near log2(elements / LEAF); 128 levels is far beyond any
+        // surface that fits in memory.
+        let mut stack = [0u32; 128];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let i = stack[top];
             let node = &self.nodes[i as usize];
             if c.clamp(node.lo, node.hi).distance_squared(c) > r * r {
                 continue;
             }
             if a * node.radius2 <= self.theta {
-                let share = mask.share(&node.bins, &self.dirs);
+                let rule = &self.rules[i as usize];
+                let share = mask.share(&rule.bins, &self.dirs);
                 if share > 0.0 {
-                    let f: f64 = node
+                    let f: f64 = rule
                         .points
                         .iter()
                         .map(|p| (-a * p.distance_squared(c)).exp())
                         .sum();
-                    sum += share * node.weight * f;
+                    sum += share * rule.weight * f;
                 }
             } else if node.left == u32::MAX {
                 let range = node.first as usize..(node.first + node.count) as usize;
@@ -316,8 +331,9 @@ impl ClusterTree {
                     }
                 }
             } else {
-                stack.push(node.right);
-                stack.push(node.left);
+                stack[top] = node.right;
+                stack[top + 1] = node.left;
+                top += 2;
             }
         }
         sum

@@ -113,7 +113,7 @@ impl Default for SurfaceClusters {
     fn default() -> Self {
         Self {
             min_elements: 4096,
-            theta: 0.25,
+            theta: 0.05,
         }
     }
 }

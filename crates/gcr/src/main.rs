@@ -4,6 +4,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use gcr::config::{GatherMode, OutputFit, SolveConfig};
 use gcr::domain::Domain;
+use gcr::fem::SurfaceClusters;
 use gcr::gather::Emitters;
 use gcr::output::tonemap::Exposure;
 use gcr::pipeline::{output_mesh, radiosity_at};
@@ -55,6 +56,13 @@ enum Command {
         /// (by default they are skipped: same result, less time).
         #[arg(long)]
         keep_base: bool,
+        /// Surfaces with at least this many elements get a cluster tree for the FEM integrals
+        /// (nodes stand in for their elements where a Gaussian cannot resolve them).
+        #[arg(long, default_value_t = SurfaceClusters::default().min_elements)]
+        cluster_min_elements: usize,
+        /// Cluster criterion θ: a node replaces its elements when a·R² ≤ θ (0: exact).
+        #[arg(long, default_value_t = SurfaceClusters::default().theta)]
+        cluster_theta: f64,
         /// PNG image from the scene's camera.
         #[arg(long)]
         image: Option<PathBuf>,
@@ -137,6 +145,8 @@ fn run() -> Result<()> {
             gather,
             output_fit,
             keep_base,
+            cluster_min_elements,
+            cluster_theta,
             image,
             kernel_image,
             mesh,
@@ -154,6 +164,10 @@ fn run() -> Result<()> {
                 gather,
                 output_fit,
                 skip_unused_base: !keep_base,
+                surface_clusters: SurfaceClusters {
+                    min_elements: cluster_min_elements,
+                    theta: cluster_theta,
+                },
                 ..SolveConfig::default()
             };
             config.validate()?;

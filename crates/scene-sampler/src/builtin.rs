@@ -16,44 +16,67 @@ pub const BUILTIN_NAMES: &[&str] = &[
     "flatland-blocker",
 ];
 
-/// The generated large scene's name pattern: `random-boxes-<N>` is [`random_boxes`]`(N, 1)`.
+/// Name prefix of the generated clutter scene: `random-boxes-<N>` is [`random_boxes`]`(N, 1)`.
 pub const RANDOM_BOXES_PREFIX: &str = "random-boxes-";
 
-/// Largest `N` accepted in `random-boxes-<N>` (about 1.5 GB of scene and BVH at 20 M triangles).
-pub const RANDOM_BOXES_MAX: usize = 20_000_000;
+/// Name prefix of the generated tessellated scene: `tessellated-cornell-<N>` is
+/// [`tessellated_cornell`]`(N)`.
+pub const TESSELLATED_CORNELL_PREFIX: &str = "tessellated-cornell-";
 
-/// Parses `random-boxes-<N>` into `N`; `None` when `name` does not follow the pattern (so that a file such as
+/// Largest `N` accepted in the generated scenes' names (about 1.5 GB of scene and BVH at 20 M
+/// triangles).
+pub const GENERATED_MAX: usize = 20_000_000;
+
+/// Parses a generated scene's name (`random-boxes-<N>`, `tessellated-cornell-<N>`) into the
+/// scene; `None` when `name` does not follow either pattern (so that a file such as
 /// `random-boxes-7.obj` still loads as a file), an error when `N` is out of range.
-pub fn parse_random_boxes(name: &str) -> Option<Result<usize>> {
-    let digits = name.strip_prefix(RANDOM_BOXES_PREFIX)?.replace('_', "");
+fn parse_generated(name: &str) -> Option<Result<Scene>> {
+    type Generator = fn(usize) -> Scene;
+    let generators: [(&str, Generator); 2] = [
+        (RANDOM_BOXES_PREFIX, |n| random_boxes(n, 1)),
+        (TESSELLATED_CORNELL_PREFIX, tessellated_cornell),
+    ];
+    let (prefix, generate, digits) = generators
+        .iter()
+        .find_map(|(p, g)| name.strip_prefix(p).map(|d| (*p, *g, d.replace('_', ""))))?;
     if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
         return None;
     }
     Some(match digits.parse::<usize>().ok() {
-        Some(n) if (36..=RANDOM_BOXES_MAX).contains(&n) => Ok(n),
+        Some(n) if (40..=GENERATED_MAX).contains(&n) => Ok(generate(n)),
         _ => Err(SceneError::UnknownBuiltin {
             name: name.into(),
             known: format!(
-                "{} (and random-boxes-<N> for N from 36 to {RANDOM_BOXES_MAX} triangles)",
+                "{} (and {prefix}<N> for N from 40 to {GENERATED_MAX} triangles)",
                 BUILTIN_NAMES.join(", ")
             ),
         }),
     })
 }
 
-/// Whether [`builtin`] accepts `name`: one of [`BUILTIN_NAMES`], or `random-boxes-<N>`.
+/// Whether [`builtin`] accepts `name`: one of [`BUILTIN_NAMES`], `random-boxes-<N>` or
+/// `tessellated-cornell-<N>`.
 pub fn is_builtin(name: &str) -> bool {
-    BUILTIN_NAMES.contains(&name) || parse_random_boxes(name).is_some()
+    let generated = |prefix: &str| {
+        name.strip_prefix(prefix).is_some_and(|d| {
+            let d = d.replace('_', "");
+            !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit())
+        })
+    };
+    BUILTIN_NAMES.contains(&name)
+        || generated(RANDOM_BOXES_PREFIX)
+        || generated(TESSELLATED_CORNELL_PREFIX)
 }
 
 /// Builds a built-in scene by name (see [`BUILTIN_NAMES`] and `docs/scene-sampler.md` for their geometry).
 ///
-/// Besides the fixed names, `random-boxes-<N>` (e.g. `random-boxes-1000000`) generates the Cornell box
-/// filled with small random boxes, about `N` triangles in all ([`random_boxes`] with seed 1): the
-/// large-scene benchmark.
+/// Besides the fixed names, two generated scenes of about `N` triangles: `random-boxes-<N>` (e.g.
+/// `random-boxes-1000000`), the Cornell box filled with small random boxes ([`random_boxes`] with
+/// seed 1; a dense clutter), and `tessellated-cornell-<N>`, the Cornell box with every face cut into
+/// small triangles ([`tessellated_cornell`]; the same light transport as `cornell-box`).
 pub fn builtin(name: &str) -> Result<AnyScene> {
-    if let Some(n) = parse_random_boxes(name) {
-        return Ok(AnyScene::ThreeD(random_boxes(n?, 1)));
+    if let Some(scene) = parse_generated(name) {
+        return Ok(AnyScene::ThreeD(scene?));
     }
     Ok(match name {
         "cornell-box" => AnyScene::ThreeD(cornell_box()),
@@ -65,7 +88,10 @@ pub fn builtin(name: &str) -> Result<AnyScene> {
         _ => {
             return Err(SceneError::UnknownBuiltin {
                 name: name.into(),
-                known: format!("{}, random-boxes-<N>", BUILTIN_NAMES.join(", ")),
+                known: format!(
+                    "{}, random-boxes-<N>, tessellated-cornell-<N>",
+                    BUILTIN_NAMES.join(", ")
+                ),
             });
         }
     })
@@ -538,6 +564,42 @@ pub fn flatland_blocker() -> FlatlandScene {
     .expect("valid")
 }
 
+/// The Cornell box ([`cornell_box`]) with every triangle cut into a uniform grid of k² smaller
+/// ones (k per face, so that they all have about the same area), about `n` triangles in all.
+/// Same geometry, materials and light as `cornell-box`, so the same radiosity: a solver whose cost
+/// or error depends on the polygon count shows it here.
+pub fn tessellated_cornell(n: usize) -> Scene {
+    let base = cornell_box();
+    let total: f64 = base.faces.iter().map(|f| f.area).sum();
+    let target = total / n.max(1) as f64;
+    let mut faces = Vec::with_capacity(n + n / 4);
+    for f in &base.faces {
+        let k = ((f.area / target).sqrt().round() as usize).max(1);
+        let [p0, p1, p2] = f.v;
+        let (e1, e2) = ((p1 - p0) / k as f64, (p2 - p0) / k as f64);
+        let v = |i: usize, j: usize| p0 + e1 * i as f64 + e2 * j as f64;
+        for i in 0..k {
+            for j in 0..k - i {
+                // The upward and downward triangles of the grid keep p0, p1, p2's winding.
+                let up = [v(i, j), v(i + 1, j), v(i, j + 1)];
+                faces.push(Face::new(up, f.rho, f.emission, f.object, f.surface));
+                if i + j + 1 < k {
+                    let down = [v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)];
+                    faces.push(Face::new(down, f.rho, f.emission, f.object, f.surface));
+                }
+            }
+        }
+    }
+    Scene::new(
+        &format!("tessellated-cornell-{n}"),
+        "generated:tessellated-cornell",
+        faces,
+        base.objects.clone(),
+        Some(base.camera),
+    )
+    .expect("generated scene is valid")
+}
+
 /// A large test scene of about `n` triangles: the Cornell box (walls, light, blocks) plus a field of randomly
 /// placed, randomly rotated small boxes (12 triangles each) filling the lower half of the room, deterministic
 /// per `seed`. For BVH and sampler benchmarks at 100k and 1M triangles.
@@ -621,9 +683,25 @@ mod random_boxes_name_tests {
         };
         assert!((990..=1000).contains(&s.faces.len()), "{}", s.faces.len());
         assert!(is_builtin("random-boxes-1_000"));
+        let AnyScene::ThreeD(t) = builtin("tessellated-cornell-10000").unwrap() else {
+            panic!("3-D scene expected")
+        };
+        let cornell = cornell_box();
+        let area = |s: &Scene| s.faces.iter().map(|f| f.area).sum::<f64>();
+        assert!((8000..=12_000).contains(&t.faces.len()), "{}", t.faces.len());
+        assert!((area(&t) - area(&cornell)).abs() < 1e-9 * area(&cornell));
+        let emitting = |s: &Scene| {
+            s.faces
+                .iter()
+                .filter(|f| !f.emission.is_zero())
+                .map(|f| f.area)
+                .sum::<f64>()
+        };
+        assert!((emitting(&t) - emitting(&cornell)).abs() < 1e-9 * emitting(&cornell));
         assert!(!is_builtin("random-boxes-7.obj"));
         assert!(!is_builtin("random-boxes-"));
         assert!(builtin("random-boxes-5").is_err());
+        assert!(builtin("tessellated-cornell-7").is_err());
         assert!(builtin("random-boxes-999999999999").is_err());
     }
 }

@@ -1,0 +1,119 @@
+//! GCR on a generated large scene (`tessellated-cornell-<N>`: the Cornell box cut into about N
+//! triangles; `random-boxes-<N>`: the Cornell box filled with small random boxes), against the
+//! path-traced reference at 200 area-uniform probes, for several cluster criteria θ
+//! ([`gcr::cluster`]).
+//!
+//! `cargo run --release -p gcr --example large_scene -- tessellated-cornell-1000000 300 1 0.5`
+//! (scene, kernel cells, then the θ values; default: the configuration's θ).
+
+use gcr::config::{GatherMode, SolveConfig};
+use gcr::domain::Domain;
+use gcr::fem::SurfaceClusters;
+use gcr::gather::Emitters;
+use gcr::pipeline::radiosity_at;
+use rayon::prelude::*;
+use scene_sampler::{KernelSampler, SceneBvh, SurfaceSampler};
+use std::time::Instant;
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    let name = args
+        .get(1)
+        .map_or("tessellated-cornell-1000000", |s| s.as_str());
+    let cells: usize = args.get(2).map_or(Ok(300), |s| s.parse())?;
+    let thetas: Vec<f64> = if args.len() > 3 {
+        args[3..].iter().map(|s| s.parse()).collect::<Result<_, _>>()?
+    } else {
+        vec![SurfaceClusters::default().theta]
+    };
+    let t = Instant::now();
+    let scene = scene_sampler::builtin(name)?.into_3d()?;
+    let t_scene = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let bvh = SceneBvh::new(&scene);
+    let t_bvh = t.elapsed().as_secs_f64();
+    println!(
+        "{name}: {} triangles, generated in {t_scene:.1} s, BVH {t_bvh:.1} s",
+        scene.faces.len()
+    );
+    // 200 probes, area-uniform over the non-emitting faces (as `cargo xtask bench`).
+    let sampler = SurfaceSampler::new(&scene);
+    let mut points = Vec::new();
+    let mut i = 0u64;
+    while points.len() < 200 {
+        i += 1;
+        let u = [
+            (i as f64 * 0.754_877_666_246_692_7).fract(),
+            (i as f64 * 0.569_840_290_998_053_3).fract(),
+        ];
+        let p = sampler.sample(u);
+        if scene.faces[p.face as usize].emission.is_zero() {
+            points.push(p);
+        }
+    }
+    let t = Instant::now();
+    let reference = baselines::pointwise::radiosity_at(&scene, &bvh, &points, 20_000, 7);
+    println!(
+        "reference: 200 probes, 20000 paths each, {:.1} s",
+        t.elapsed().as_secs_f64()
+    );
+    let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+    let emitters = Emitters::new(&domain);
+    for theta in thetas {
+        let config = SolveConfig {
+            kernel_cells: cells,
+            shading_cells: cells / 2,
+            surface_clusters: SurfaceClusters {
+                theta,
+                ..SurfaceClusters::default()
+            },
+            projection_rejection: std::env::var("REJ").map_or(1e-6, |v| v.parse().unwrap()),
+            output_fit: if std::env::var("DELTA").is_ok() {
+                gcr::config::OutputFit::DeltaRule
+            } else {
+                gcr::config::OutputFit::Projection
+            },
+            ..SolveConfig::default()
+        };
+        let t = Instant::now();
+        let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+        let seconds = t.elapsed().as_secs_f64();
+        print!(
+            "θ = {theta}: solve {seconds:.1} s (FEM {:.1} s), energy factor {:?}",
+            trained.metrics.seconds.fem, trained.metrics.energy_balance
+        );
+        for gather in [GatherMode::Kernel, GatherMode::Rays] {
+            let config = SolveConfig { gather, ..config };
+            let t = Instant::now();
+            let values: Vec<[f64; 3]> = points
+                .par_iter()
+                .enumerate()
+                .map_init(Vec::new, |scratch, (i, p)| {
+                    radiosity_at(
+                        &domain, &trained, &emitters, &config, p.point, p.normal, p.face,
+                        i as u64, scratch,
+                    )
+                    .radiosity
+                })
+                .collect();
+            let (mut num, mut den) = (0.0, 0.0);
+            for (v, r) in values.iter().zip(&reference) {
+                for b in 0..3 {
+                    num += (v[b] - r.mean[b]).powi(2);
+                    den += r.mean[b].powi(2);
+                }
+            }
+            print!(
+                " | {}: rel L2 {:.3} ({:.1} s)",
+                gather.name(),
+                (num / den).sqrt(),
+                t.elapsed().as_secs_f64()
+            );
+        }
+        println!();
+    }
+    if let Some(peak) = gcr::metrics::peak_memory_bytes() {
+        println!("peak resident memory {:.0} MiB", peak as f64 / 1048576.0);
+    }
+    Ok(())
+}

@@ -329,7 +329,7 @@ fn r_outside(eps: f64, u: f64) -> f64 {
 /// `R(ε, u)` for `ε ≥ 0` and any `u` (odd in `u`), absolute error below ~3e−16.
 #[inline]
 pub fn r(eps: f64, u: f64) -> f64 {
-    if !(eps < L && eps >= 0.0 && u.is_finite()) {
+    if !((0.0..L).contains(&eps) && u.is_finite()) {
         return r_outside(eps, u);
     }
     if eps == 0.0 {
@@ -343,7 +343,7 @@ pub fn r(eps: f64, u: f64) -> f64 {
 /// patch row and the ε powers.
 #[inline(always)]
 pub fn r_diff(eps: f64, u0: f64, u1: f64) -> f64 {
-    if !(eps < L && eps >= 0.0 && u0.is_finite() && u1.is_finite()) {
+    if !((0.0..L).contains(&eps) && u0.is_finite() && u1.is_finite()) {
         return r(eps, u1) - r(eps, u0);
     }
     if eps == 0.0 {

@@ -32,7 +32,7 @@
 //! assert_eq!(o.rejected(), 0);
 //! ```
 
-use crate::closed_form::{product, segment, triangle, triangle_fast};
+use crate::closed_form::{Tri, product, segment, triangle};
 use crate::criteria::Integration;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
@@ -108,6 +108,8 @@ pub struct Domain {
     elements: Vec<[u32; 3]>,
     /// Bounding-sphere centre and radius per element.
     spheres: Vec<(V, f64)>,
+    /// Per triangle (3-D), its Gaussian-independent geometry (`None`: degenerate, integral 0).
+    tris: Vec<Option<Tri>>,
     cell: f64,
     buckets: HashMap<[i64; 3], Vec<u32>>,
 }
@@ -174,11 +176,22 @@ impl Domain {
                 }
             }
         }
+        let tris = match dim {
+            Dim::Three => elements
+                .iter()
+                .map(|e| {
+                    let [p, q, r] = e.map(|v| vertices[v as usize]);
+                    Tri::new(p, q, r)
+                })
+                .collect(),
+            Dim::Two => Vec::new(),
+        };
         Ok(Self {
             dim,
             vertices,
             elements,
             spheres,
+            tris,
             cell,
             buckets,
         })
@@ -241,7 +254,7 @@ impl Domain {
 
     /// `∫_S exp(−a|x − c|²) dx` over the elements among `candidates` (all when `None`) that come
     /// within `√(ln(1/tol)/a)` of `c`; each element in closed form (MATH.md §2): [`segment`] in
-    /// 2-D, [`triangle_fast`] (or the relative-accuracy [`triangle`] when `accurate`) in 3-D.
+    /// 2-D, [`triangle_fast`](crate::triangle_fast) (or the relative-accuracy [`triangle`] when `accurate`) in 3-D.
     pub fn integrate(
         &self,
         c: V,
@@ -275,6 +288,7 @@ impl Domain {
         }
         let mut sum = 0.0;
         let mut n = 0;
+        let sa = a.sqrt();
         for k in ids {
             let k = k as usize;
             let (ec, er) = self.spheres[k];
@@ -282,12 +296,18 @@ impl Domain {
             if d > r {
                 continue;
             }
-            let [p, q, s] = self.element(k);
             n += 1;
             sum += match (self.dim, accurate) {
-                (Dim::Two, _) => segment(c, a, p, q),
-                (Dim::Three, false) => triangle_fast(c, a, p, q, s),
-                (Dim::Three, true) => triangle(c, a, p, q, s),
+                (Dim::Two, _) => {
+                    let [p, q, _] = self.element(k);
+                    segment(c, a, p, q)
+                }
+                // The precomputed geometry: the same signed edge sum as `triangle_fast`.
+                (Dim::Three, false) => self.tris[k].as_ref().map_or(0.0, |t| t.integral(c, a, sa)),
+                (Dim::Three, true) => {
+                    let [p, q, s] = self.element(k);
+                    triangle(c, a, p, q, s)
+                }
             };
         }
         (sum, n)
@@ -376,7 +396,7 @@ pub fn flat_inner_product(dim: Dim, wi: V, di: f64, wj: V, dj: f64) -> f64 {
 pub struct GramConfig {
     /// Support cut-off: Gaussian (products) below `tol` times their maximum count as 0.
     pub tol: f64,
-    /// Use the relative-accuracy [`triangle`] per element instead of [`triangle_fast`]
+    /// Use the relative-accuracy [`triangle`] per element instead of [`triangle_fast`](crate::triangle_fast)
     /// (absolute error ≲ 2e−15/a per element, what a Gram matrix needs; the accurate one is
     /// much slower for elements in the Gaussian's tail).
     pub accurate: bool,
@@ -770,6 +790,7 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::closed_form::triangle_fast;
     use crate::cubature::triangle_cubature;
     use crate::orthonormal::Orthonormal;
     use proptest::prelude::*;

@@ -17,7 +17,10 @@ fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
     let name = args.get(1).map_or("random-boxes-100000", |s| s.as_str());
     let thetas: Vec<f64> = if args.len() > 2 {
-        args[2..].iter().map(|s| s.parse()).collect::<Result<_, _>>()?
+        args[2..]
+            .iter()
+            .map(|s| s.parse())
+            .collect::<Result<_, _>>()?
     } else {
         vec![1.0, 0.25, 0.05]
     };
@@ -35,7 +38,10 @@ fn main() -> anyhow::Result<()> {
             0.5 * (lo + hi)
         })
         .collect();
-    println!("{name}: {} elements, diagonal {diag:.3}", exact.elements.len());
+    println!(
+        "{name}: {} elements, diagonal {diag:.3}",
+        exact.elements.len()
+    );
     let mut scratch = Vec::new();
     for frac in [0.02, 0.05, 0.1, 0.2] {
         let d = frac * diag;

@@ -22,7 +22,10 @@ fn main() -> anyhow::Result<()> {
         .map_or("tessellated-cornell-1000000", |s| s.as_str());
     let cells: usize = args.get(2).map_or(Ok(300), |s| s.parse())?;
     let thetas: Vec<f64> = if args.len() > 3 {
-        args[3..].iter().map(|s| s.parse()).collect::<Result<_, _>>()?
+        args[3..]
+            .iter()
+            .map(|s| s.parse())
+            .collect::<Result<_, _>>()?
     } else {
         vec![SurfaceClusters::default().theta]
     };
@@ -90,8 +93,8 @@ fn main() -> anyhow::Result<()> {
                 .enumerate()
                 .map_init(Vec::new, |scratch, (i, p)| {
                     radiosity_at(
-                        &domain, &trained, &emitters, &config, p.point, p.normal, p.face,
-                        i as u64, scratch,
+                        &domain, &trained, &emitters, &config, p.point, p.normal, p.face, i as u64,
+                        scratch,
                     )
                     .radiosity
                 })

@@ -688,7 +688,11 @@ mod random_boxes_name_tests {
         };
         let cornell = cornell_box();
         let area = |s: &Scene| s.faces.iter().map(|f| f.area).sum::<f64>();
-        assert!((8000..=12_000).contains(&t.faces.len()), "{}", t.faces.len());
+        assert!(
+            (8000..=12_000).contains(&t.faces.len()),
+            "{}",
+            t.faces.len()
+        );
         assert!((area(&t) - area(&cornell)).abs() < 1e-9 * area(&cornell));
         let emitting = |s: &Scene| {
             s.faces

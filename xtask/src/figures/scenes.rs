@@ -1,5 +1,6 @@
 //! Figures of the `scenes` group: the built-in scenes as seen from their default cameras (ray cast through
-//! `SceneBvh::closest_hit`), and the Flatland kernel goal functions over `(s, t)` (figs. 4.1b and 4.6b).
+//! `SceneBvh::closest_hit`), the Flatland scenes' geometry (`scene-flatland-*.png`, figs. 4.1a and 4.6a),
+//! and the Flatland kernel goal functions over `(s, t)` (figs. 4.1b and 4.6b).
 
 use crate::Ctx;
 use anyhow::Result;
@@ -18,10 +19,60 @@ pub fn run(ctx: &Ctx) -> Result<()> {
             AnyScene::Flatland(s) => {
                 let n = if ctx.quick { 96 } else { 400 };
                 kernel_image(&s, n, &ctx.out.join(format!("kernel-{name}.png")))?;
+                let side = if ctx.quick { 200 } else { 480 };
+                flatland_geometry(&s, side, &ctx.out.join(format!("scene-{name}.png")))?;
             }
         }
     }
     Ok(())
+}
+
+/// A Flatland scene's geometry (figs. 4.1a, 4.6a): every segment as a line, emitters orange and thick,
+/// reflectors grey with their shade darker for lower ρ, and a short tick at each segment's midpoint
+/// along its normal (the side that reflects and emits).
+fn flatland_geometry(scene: &FlatlandScene, side: u32, path: &std::path::Path) -> Result<()> {
+    use plotters::prelude::*;
+    let (mut lo, mut hi) = (glam::DVec2::splat(f64::INFINITY), glam::DVec2::splat(f64::NEG_INFINITY));
+    for seg in &scene.segments {
+        lo = lo.min(seg.a).min(seg.b);
+        hi = hi.max(seg.a).max(seg.b);
+    }
+    let pad = 0.08 * (hi - lo).max_element().max(1e-9);
+    let (lo, hi) = (lo - glam::DVec2::splat(pad), hi + glam::DVec2::splat(pad));
+    let tick = 0.04 * (hi - lo).max_element();
+    let e = |m: String| anyhow::anyhow!("plotting: {m}");
+    crate::plot::png(path, side, side, |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(scene.name.as_str(), ("sans-serif", 16))
+            .margin(8)
+            .x_label_area_size(24)
+            .y_label_area_size(32)
+            .build_cartesian_2d(lo.x..hi.x, lo.y..hi.y)
+            .map_err(|x| e(x.to_string()))?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .draw()
+            .map_err(|x| e(x.to_string()))?;
+        for seg in &scene.segments {
+            let emits = seg.emission.max() > 0.0;
+            let style = if emits {
+                RGBColor(230, 120, 0).stroke_width(4)
+            } else {
+                let g = (200.0 * (1.0 - seg.rho.max())).round() as u8;
+                RGBColor(g, g, g).stroke_width(2)
+            };
+            chart
+                .draw_series(LineSeries::new([(seg.a.x, seg.a.y), (seg.b.x, seg.b.y)], style))
+                .map_err(|x| e(x.to_string()))?;
+            let m = 0.5 * (seg.a + seg.b);
+            let t = m + seg.normal * tick;
+            chart
+                .draw_series(LineSeries::new([(m.x, m.y), (t.x, t.y)], BLUE.stroke_width(1)))
+                .map_err(|x| e(x.to_string()))?;
+        }
+        Ok(())
+    })
 }
 
 /// A flat-shaded view from the scene's camera: colour = ρ·(0.25 + 0.75·|cos|), emitters white, back faces

@@ -126,6 +126,12 @@ fn run() -> Result<()> {
             for name in scene_sampler::BUILTIN_NAMES {
                 println!("{name}");
             }
+            println!(
+                "random-boxes-<N>            (generated: the Cornell box filled with small random boxes, about N triangles)"
+            );
+            println!(
+                "tessellated-cornell-<N>     (generated: the Cornell box cut into about N triangles)"
+            );
             Ok(())
         }
         Command::Reference {

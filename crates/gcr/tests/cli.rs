@@ -162,3 +162,15 @@ fn flatland_solve_writes_the_kernel_image() {
     assert!(dark(264) > 50, "network panel nearly white: {}", dark(264));
     assert!(red > 100, "{red} training rays marked");
 }
+
+#[test]
+fn generated_scene_names_out_of_range_and_bad_cluster_theta_are_clear_errors() {
+    let out = gcr(&["solve", "random-boxes-5", "--quiet"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("random-boxes-5"), "{err}");
+    let out = gcr(&["solve", "cornell-box", "--quiet", "--cluster-theta", "nan"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("θ"), "{err}");
+}

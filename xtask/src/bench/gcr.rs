@@ -234,7 +234,17 @@ pub fn plot_curves(path: &std::path::Path, title: &str, curves: &[Curve]) -> Res
     let (emin, emax) = all.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
         (a.min(p.error), b.max(p.error))
     });
-    let colours = [RED, BLUE, GREEN, BLACK, MAGENTA, CYAN];
+    // One colour per curve position (8 distinct), so that a solver keeps its colour in every plot.
+    let colours = [
+        RED,
+        BLUE,
+        GREEN,
+        BLACK,
+        MAGENTA,
+        CYAN,
+        RGBColor(230, 120, 0),
+        RGBColor(120, 80, 40),
+    ];
     crate::plot::png(path, 900, 600, |root| {
         let mut chart = ChartBuilder::on(root)
             .caption(title, ("sans-serif", 22))
@@ -250,11 +260,22 @@ pub fn plot_curves(path: &std::path::Path, title: &str, curves: &[Curve]) -> Res
             .configure_mesh()
             .x_desc("seconds (2 threads)")
             .x_label_formatter(&|v| format!("{v:.0e}"))
-            .y_label_formatter(&|v| format!("{v:.3}"))
+            .y_label_formatter(&|v| {
+                if *v >= 10.0 {
+                    format!("{v:.0}")
+                } else if *v >= 1.0 {
+                    format!("{v:.1}")
+                } else {
+                    format!("{v:.3}")
+                }
+            })
             .y_desc("relative L2 error of B at the probes")
             .draw()
             .map_err(|e| anyhow::anyhow!("{e}"))?;
         for (curve, colour) in curves.iter().zip(colours.iter().cycle()) {
+            if curve.points.is_empty() {
+                continue; // not run on this scene: no legend entry either
+            }
             let pts: Vec<(f64, f64)> = curve
                 .points
                 .iter()

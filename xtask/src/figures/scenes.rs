@@ -32,7 +32,10 @@ pub fn run(ctx: &Ctx) -> Result<()> {
 /// along its normal (the side that reflects and emits).
 fn flatland_geometry(scene: &FlatlandScene, side: u32, path: &std::path::Path) -> Result<()> {
     use plotters::prelude::*;
-    let (mut lo, mut hi) = (glam::DVec2::splat(f64::INFINITY), glam::DVec2::splat(f64::NEG_INFINITY));
+    let (mut lo, mut hi) = (
+        glam::DVec2::splat(f64::INFINITY),
+        glam::DVec2::splat(f64::NEG_INFINITY),
+    );
     for seg in &scene.segments {
         lo = lo.min(seg.a).min(seg.b);
         hi = hi.max(seg.a).max(seg.b);
@@ -63,12 +66,18 @@ fn flatland_geometry(scene: &FlatlandScene, side: u32, path: &std::path::Path) -
                 RGBColor(g, g, g).stroke_width(2)
             };
             chart
-                .draw_series(LineSeries::new([(seg.a.x, seg.a.y), (seg.b.x, seg.b.y)], style))
+                .draw_series(LineSeries::new(
+                    [(seg.a.x, seg.a.y), (seg.b.x, seg.b.y)],
+                    style,
+                ))
                 .map_err(|x| e(x.to_string()))?;
             let m = 0.5 * (seg.a + seg.b);
             let t = m + seg.normal * tick;
             chart
-                .draw_series(LineSeries::new([(m.x, m.y), (t.x, t.y)], BLUE.stroke_width(1)))
+                .draw_series(LineSeries::new(
+                    [(m.x, m.y), (t.x, t.y)],
+                    BLUE.stroke_width(1),
+                ))
                 .map_err(|x| e(x.to_string()))?;
         }
         Ok(())

@@ -146,3 +146,71 @@ pub fn measure(scene: &Scene, queries: usize, threads: usize, seed: u64) -> Thro
         visible_fraction: vis_n as f64 / q,
     }
 }
+
+/// CPU time of the calling thread (ns) from `/proc/thread-self/schedstat` (0 where that file does not exist).
+/// Unlike wall time it does not count the time the thread waits for a core on a shared machine.
+pub fn thread_cpu_ns() -> u64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next().and_then(|v| v.parse().ok()))
+        .unwrap_or(0)
+}
+
+/// [`measure`]'s three timings on one thread in thread CPU time ([`thread_cpu_ns`]), for comparisons on a
+/// loaded machine: the three passes (bare, kernel, visible) alternate `rounds` times over the same facing pairs
+/// and each keeps its fastest round. Returns `(bare, kernel, visible)` ns per query; `kernel / bare` is the
+/// ratio of [`Throughput::kernel_over_bare`]. Driver: `examples/kernel_cpu_ratio.rs`.
+pub fn cpu_ratio(scene: &Scene, queries: usize, rounds: usize, seed: u64) -> (f64, f64, f64) {
+    let bvh = SceneBvh::with_quality(scene, BuildQuality::High);
+    let sampler = SurfaceSampler::new(scene);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut us: Vec<[f64; 4]> = Vec::with_capacity(queries);
+    while us.len() < queries {
+        let u: [f64; 4] = rng.random();
+        let (x, y) = (sampler.sample([u[0], u[1]]), sampler.sample([u[2], u[3]]));
+        let d = y.point - x.point;
+        if x.face != y.face && x.normal.dot(d) > 0.0 && y.normal.dot(d) < 0.0 {
+            us.push(u);
+        }
+    }
+    let pairs: Vec<(SurfacePoint, SurfacePoint)> = us
+        .iter()
+        .map(|u| (sampler.sample([u[0], u[1]]), sampler.sample([u[2], u[3]])))
+        .collect();
+    let eps = bvh.epsilon() as f32;
+    let back = bvh.backoff() as f32;
+    let rays: Vec<Ray> = pairs
+        .iter()
+        .map(|(x, y)| {
+            let o = x.point.as_vec3a();
+            let d = (y.point - x.point).as_vec3a();
+            let len = d.length();
+            let u = d / len.max(f32::MIN_POSITIVE);
+            Ray::new(
+                o - u * back,
+                u,
+                back + eps,
+                (back + len - eps).max(back + eps),
+            )
+        })
+        .collect();
+    let k = KernelSampler::new(scene, &bvh);
+    let (mut b, mut kk, mut v) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
+    let q = queries as f64;
+    for _ in 0..rounds {
+        let t = thread_cpu_ns();
+        let n = rays.iter().filter(|r| bvh.bare_miss(r)).count();
+        b = b.min((thread_cpu_ns() - t) as f64 / q);
+        let t = thread_cpu_ns();
+        let n2 = us
+            .iter()
+            .filter(|u| k.sample(**u).kernel().0[0] > 0.0)
+            .count();
+        kk = kk.min((thread_cpu_ns() - t) as f64 / q);
+        let t = thread_cpu_ns();
+        let n3 = pairs.iter().filter(|(x, y)| bvh.visible(x, y)).count();
+        v = v.min((thread_cpu_ns() - t) as f64 / q);
+        std::hint::black_box((n, n2, n3));
+    }
+    (b, kk, v)
+}

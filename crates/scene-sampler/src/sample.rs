@@ -4,7 +4,7 @@
 //! `1 / total_area`), [`FlatSampler`] maps `s ∈ [0,1]` to a point uniform by arc length over all segments. Both
 //! are invertible, which the Flatland kernel plots over `(s, t)` (figs. 4.1b, 4.6b) need.
 
-use crate::{FlatlandScene, Scene};
+use crate::{FlatlandScene, Scene, Spectrum};
 use glam::{DVec2, DVec3};
 
 /// A point on a 3-D scene's surface.
@@ -78,6 +78,7 @@ impl SurfaceSampler {
                 v0: f.v[0],
                 e1: f.v[1] - f.v[0],
                 e2: f.v[2] - f.v[0],
+                rho: f.rho,
             })
             .collect();
         SurfaceSampler {
@@ -91,15 +92,35 @@ impl SurfaceSampler {
     /// The face whose parameter interval `[cdf[i], cdf[i+1])` contains `u` (the last face for `u = 1`).
     #[inline]
     pub fn face_of(&self, u: f64) -> usize {
+        let (lo, hi) = self.bucket(u);
+        let first = &self.recs[lo];
+        self.face_in(u, lo, hi, first.lo, first.hi)
+    }
+
+    /// The guide-table bucket of `u`: the first and last face it can lie in.
+    #[inline]
+    fn bucket(&self, u: f64) -> (usize, usize) {
         let n = self.recs.len();
         let k = ((u * n as f64) as usize).min(n - 1);
-        let (lo, hi) = (self.guide[k] as usize, self.guide[k + 1] as usize);
-        if self.recs[lo].lo > u {
+        (self.guide[k] as usize, self.guide[k + 1] as usize)
+    }
+
+    /// The search of [`SurfaceSampler::face_of`] within bucket faces `lo..=hi`, given face `lo`'s parameter
+    /// interval `[first_lo, first_hi)` (read by the caller, so that two look-ups can overlap their loads).
+    #[inline]
+    fn face_in(&self, u: f64, lo: usize, hi: usize, first_lo: f64, first_hi: f64) -> usize {
+        let n = self.recs.len();
+        if first_lo > u {
             // u·n rounded up across a bucket boundary: fall back to the full search
             return (self.cdf.partition_point(|&c| c <= u).saturating_sub(1)).min(n - 1);
         }
-        // faces lo..=hi; the first i in there with cdf[i+1] > u
-        let i = lo + self.recs[lo..=hi].partition_point(|r| r.hi <= u);
+        // faces lo..=hi; the first i in there with cdf[i+1] > u. Face `lo` is the common answer: test it
+        // alone first, so the usual look-up touches one record (the `hi`s are non-decreasing, so this is
+        // what the search over the whole range returns)
+        if first_hi > u {
+            return lo;
+        }
+        let i = lo + 1 + self.recs[lo + 1..=hi].partition_point(|r| r.hi <= u);
         i.min(n - 1)
     }
 
@@ -117,7 +138,28 @@ impl SurfaceSampler {
     pub fn sample(&self, u: [f64; 2]) -> SurfacePoint {
         let ux = u[0].clamp(0.0, 1.0);
         let uy = u[1].clamp(0.0, 1.0);
-        let i = self.face_of(ux);
+        self.point_on(self.face_of(ux), ux, uy)
+    }
+
+    /// `[sample(u[0..2]), sample(u[2..4])]`, bit for bit, with the two look-ups interleaved: both guide
+    /// entries and both first records are requested before either search branches on one of them, so their
+    /// cache misses overlap instead of queueing (the kernel sampler's hot path).
+    #[inline]
+    pub(crate) fn sample_pair(&self, u: [f64; 4]) -> (SurfacePoint, SurfacePoint) {
+        let (ax, ay) = (u[0].clamp(0.0, 1.0), u[1].clamp(0.0, 1.0));
+        let (bx, by) = (u[2].clamp(0.0, 1.0), u[3].clamp(0.0, 1.0));
+        let (alo, ahi) = self.bucket(ax);
+        let (blo, bhi) = self.bucket(bx);
+        let (ra, rb) = (&self.recs[alo], &self.recs[blo]);
+        let (a_lo, a_hi, b_lo, b_hi) = (ra.lo, ra.hi, rb.lo, rb.hi);
+        let ia = self.face_in(ax, alo, ahi, a_lo, a_hi);
+        let ib = self.face_in(bx, blo, bhi, b_lo, b_hi);
+        (self.point_on(ia, ax, ay), self.point_on(ib, bx, by))
+    }
+
+    /// The point of face `i` at clamped parameters `(ux, uy)` (`ux` in the face's interval).
+    #[inline]
+    fn point_on(&self, i: usize, ux: f64, uy: f64) -> SurfacePoint {
         let r = &self.recs[i];
         let up = ((ux - r.lo) / (r.hi - r.lo)).clamp(0.0, 1.0);
         // the normal exactly as `Face::new` computes it (same operations, same bits)
@@ -132,6 +174,13 @@ impl SurfaceSampler {
             normal,
             face: i as u32,
         }
+    }
+
+    /// ρ of face `face` (stored in the face's sampling record: the kernel sampler reads it from the cache line
+    /// [`SurfaceSampler::sample`] just loaded).
+    #[inline]
+    pub(crate) fn rho(&self, face: u32) -> Spectrum {
+        self.recs[face as usize].rho
     }
 
     /// Inverse of [`SurfaceSampler::sample`]: the parameters of a point lying on face `face`
@@ -151,15 +200,20 @@ impl SurfaceSampler {
     }
 }
 
-/// What [`SurfaceSampler`] needs of one face, stored together (88 bytes; the normal is recomputed from the
-/// edges, bit-identical to `Face::normal`) so that a look-up touches one place.
+/// What [`SurfaceSampler`] and the kernel sampler need of one face, stored together so that a look-up touches
+/// one place: 112 bytes padded to two whole cache lines (128 bytes, aligned), where a packed 88-byte record
+/// plus a separate ρ array spread one sample over 3–4 lines. The normal is recomputed from the edges,
+/// bit-identical to `Face::normal`.
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
 struct FaceRec {
     lo: f64,
     hi: f64,
     v0: DVec3,
     e1: DVec3,
     e2: DVec3,
+    /// ρ of the face (read by [`crate::KernelSampler`] for the receiver).
+    rho: Spectrum,
 }
 
 /// Barycentric weights `(b1, b2)` of `p` projected onto the plane of triangle `v` (weights of v1 and v2).

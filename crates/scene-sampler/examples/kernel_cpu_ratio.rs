@@ -1,0 +1,19 @@
+//! Kernel-sample vs bare-ray time in thread CPU time, one thread (see `scene_sampler::bench::cpu_ratio`): less
+//! disturbed by other jobs than the wall-time `ray_throughput`, for before/after comparisons on a shared machine.
+//!
+//! `cargo run --release -p scene-sampler --example kernel_cpu_ratio -- [triangles] [queries] [rounds]`
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let tris: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(100_000);
+    let queries: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(200_000);
+    let rounds: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(5);
+    let scene = scene_sampler::random_boxes(tris, 1);
+    let (b, k, v) = scene_sampler::bench::cpu_ratio(&scene, queries, rounds, 7);
+    println!(
+        "{} triangles: bare {b:.0} ns | visible {v:.0} ns | kernel {k:.0} ns | visible/bare {:.3} | kernel/bare {:.3}",
+        scene.faces.len(),
+        v / b,
+        k / b
+    );
+}

@@ -99,17 +99,21 @@ fn main() -> anyhow::Result<()> {
                     .radiosity
                 })
                 .collect();
-            let (mut num, mut den) = (0.0, 0.0);
+            let (mut num, mut den, mut sum_v, mut sum_r) = (0.0, 0.0, 0.0, 0.0);
             for (v, r) in values.iter().zip(&reference) {
                 for b in 0..3 {
                     num += (v[b] - r.mean[b]).powi(2);
                     den += r.mean[b].powi(2);
+                    sum_v += v[b];
+                    sum_r += r.mean[b];
                 }
             }
+            // bias: Σ B / Σ B_ref − 1 over probes and bands (a systematic offset, not noise).
             print!(
-                " | {}: rel L2 {:.3} ({:.1} s)",
+                " | {}: rel L2 {:.3}, bias {:+.3} ({:.1} s)",
                 gather.name(),
                 (num / den).sqrt(),
+                sum_v / sum_r - 1.0,
                 t.elapsed().as_secs_f64()
             );
         }

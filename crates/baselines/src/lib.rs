@@ -22,3 +22,8 @@ mod stats;
 
 pub use error::BaselineError;
 pub use stats::{Adaptive, Estimate};
+
+/// The README's code, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

@@ -22,3 +22,8 @@ pub mod shooting;
 pub mod solve;
 pub mod solver;
 pub mod spatial;
+
+/// The README's code, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

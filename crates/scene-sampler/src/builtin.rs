@@ -27,22 +27,25 @@ pub const TESSELLATED_CORNELL_PREFIX: &str = "tessellated-cornell-";
 /// triangles).
 pub const GENERATED_MAX: usize = 20_000_000;
 
-/// Parses a generated scene's name (`random-boxes-<N>`, `tessellated-cornell-<N>`) into the
-/// scene; `None` when `name` does not follow either pattern (so that a file such as
-/// `random-boxes-7.obj` still loads as a file), an error when `N` is out of range.
-fn parse_generated(name: &str) -> Option<Result<Scene>> {
-    type Generator = fn(usize) -> Scene;
-    let generators: [(&str, Generator); 2] = [
+/// A generated scene's generator and its size, when `name` is `<prefix><digits>` for one of the generated
+/// scenes' prefixes (`_` allowed between digits); `None` otherwise (so that a file such as
+/// `random-boxes-7.obj` still loads as a file). The size is `None` when the digits overflow.
+fn generated_name(name: &str) -> Option<(&'static str, fn(usize) -> Scene, Option<usize>)> {
+    const GENERATORS: [(&str, fn(usize) -> Scene); 2] = [
         (RANDOM_BOXES_PREFIX, |n| random_boxes(n, 1)),
         (TESSELLATED_CORNELL_PREFIX, tessellated_cornell),
     ];
-    let (prefix, generate, digits) = generators
-        .iter()
-        .find_map(|(p, g)| name.strip_prefix(p).map(|d| (*p, *g, d.replace('_', ""))))?;
-    if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
-        return None;
-    }
-    Some(match digits.parse::<usize>().ok() {
+    GENERATORS.iter().find_map(|&(prefix, generate)| {
+        let digits = name.strip_prefix(prefix)?.replace('_', "");
+        (!digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()))
+            .then(|| (prefix, generate, digits.parse().ok()))
+    })
+}
+
+/// The generated scene `name` names ([`generated_name`]), or an error when its size is out of range.
+fn parse_generated(name: &str) -> Option<Result<Scene>> {
+    let (prefix, generate, n) = generated_name(name)?;
+    Some(match n {
         Some(n) if (40..=GENERATED_MAX).contains(&n) => Ok(generate(n)),
         _ => Err(SceneError::UnknownBuiltin {
             name: name.into(),
@@ -57,15 +60,7 @@ fn parse_generated(name: &str) -> Option<Result<Scene>> {
 /// Whether [`builtin`] accepts `name`: one of [`BUILTIN_NAMES`], `random-boxes-<N>` or
 /// `tessellated-cornell-<N>`.
 pub fn is_builtin(name: &str) -> bool {
-    let generated = |prefix: &str| {
-        name.strip_prefix(prefix).is_some_and(|d| {
-            let d = d.replace('_', "");
-            !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit())
-        })
-    };
-    BUILTIN_NAMES.contains(&name)
-        || generated(RANDOM_BOXES_PREFIX)
-        || generated(TESSELLATED_CORNELL_PREFIX)
+    BUILTIN_NAMES.contains(&name) || generated_name(name).is_some()
 }
 
 /// Builds a built-in scene by name (see [`BUILTIN_NAMES`] and `docs/scene-sampler.md` for their geometry).
@@ -346,52 +341,12 @@ pub fn wall_floor() -> Scene {
 /// blockers: a 0.4 × 0.3 × 0.4 box on the floor and a thin 0.5 × 0.05 × 0.3 plate floating at height 0.8.
 /// ρ = 0.6 everywhere, E = 20 (grey).
 pub fn two_blockers() -> Scene {
-    let mut b = Builder::new();
-    let rho = Spectrum::grey(0.6);
-    let z = Spectrum::ZERO;
-    let floor = b.object("floor");
-    b.poly(floor, &rect_xz(0.0, 2.0, 0.0, 2.0, 0.0), DVec3::Y, rho, z);
-    let wall = b.object("wall");
-    let p = [
-        DVec3::new(0.0, 0.0, 0.0),
-        DVec3::new(2.0, 0.0, 0.0),
-        DVec3::new(2.0, 1.5, 0.0),
-        DVec3::new(0.0, 1.5, 0.0),
-    ];
-    b.poly(wall, &p, DVec3::Z, rho, z);
-    let light = b.object("light");
-    b.poly(
-        light,
-        &rect_xz(0.75, 1.25, 0.75, 1.25, 1.5),
-        -DVec3::Y,
-        Spectrum::ZERO,
-        Spectrum::grey(20.0),
-    );
-    let box1 = b.object("blocker 1 (box)");
-    b.block(
-        box1,
-        rect_xz(0.5, 0.9, 0.6, 1.0, 0.0),
-        rect_xz(0.5, 0.9, 0.6, 1.0, 0.3),
-        rho,
-        false,
-    );
-    let plate = b.object("blocker 2 (plate)");
-    b.block(
-        plate,
-        rect_xz(1.0, 1.5, 1.0, 1.3, 0.8),
-        rect_xz(1.0, 1.5, 1.0, 1.3, 0.85),
-        rho,
-        true,
-    );
-    b.finish(
-        "two-blockers",
-        Camera {
-            eye: DVec3::new(1.0, 1.2, 4.2),
-            target: DVec3::new(1.0, 0.5, 0.8),
-            up: DVec3::Y,
-            fov_y_deg: 45.0,
-        },
-    )
+    two_blockers_with(TwoBlockers {
+        name: "two-blockers",
+        light: (0.75, 1.25, 20.0),
+        block: (rect_xz(0.5, 0.9, 0.6, 1.0, 0.0), 0.3),
+        plate: (rect_xz(1.0, 1.5, 1.0, 1.3, 0.8), 0.85),
+    })
 }
 
 /// Fig. 4.19a/b: the second two-blocker geometry, built for sharp shadows. The floor, wall and camera of
@@ -401,6 +356,28 @@ pub fn two_blockers() -> Scene {
 ///
 /// Not in [`BUILTIN_NAMES`] (it has no files in `scenes/`): call it directly.
 pub fn two_blockers_sharp() -> Scene {
+    two_blockers_with(TwoBlockers {
+        name: "two-blockers-sharp",
+        light: (0.9, 1.1, 125.0),
+        block: (rect_xz(0.55, 0.85, 0.9, 1.2, 0.0), 0.6),
+        plate: (rect_xz(1.1, 1.6, 1.1, 1.5, 0.45), 0.5),
+    })
+}
+
+/// What differs between the two-blocker scenes of figs. 4.15 and 4.19.
+struct TwoBlockers {
+    name: &'static str,
+    /// The square light's extent `[lo, hi]` in x and z at height 1.5, and its emission (grey).
+    light: (f64, f64, f64),
+    /// The box standing on the floor: its bottom rectangle and the height of its top.
+    block: ([DVec3; 4], f64),
+    /// The floating plate: its bottom rectangle and the height of its top.
+    plate: ([DVec3; 4], f64),
+}
+
+/// The floor `[0,2]×{0}×[0,2]`, the wall at z = 0 (1.5 high), a ceiling light, a box on the floor and a
+/// floating plate; ρ = 0.6 everywhere, the camera of fig. 4.15.
+fn two_blockers_with(t: TwoBlockers) -> Scene {
     let mut b = Builder::new();
     let rho = Spectrum::grey(0.6);
     let z = Spectrum::ZERO;
@@ -415,31 +392,23 @@ pub fn two_blockers_sharp() -> Scene {
     ];
     b.poly(wall, &p, DVec3::Z, rho, z);
     let light = b.object("light");
+    let (lo, hi, e) = t.light;
     b.poly(
         light,
-        &rect_xz(0.9, 1.1, 0.9, 1.1, 1.5),
+        &rect_xz(lo, hi, lo, hi, 1.5),
         -DVec3::Y,
         Spectrum::ZERO,
-        Spectrum::grey(125.0),
+        Spectrum::grey(e),
     );
+    let lift = |(r, top): ([DVec3; 4], f64)| (r, r.map(|v| DVec3::new(v.x, top, v.z)));
     let box1 = b.object("blocker 1 (box)");
-    b.block(
-        box1,
-        rect_xz(0.55, 0.85, 0.9, 1.2, 0.0),
-        rect_xz(0.55, 0.85, 0.9, 1.2, 0.6),
-        rho,
-        false,
-    );
+    let (bottom, top) = lift(t.block);
+    b.block(box1, bottom, top, rho, false);
     let plate = b.object("blocker 2 (plate)");
-    b.block(
-        plate,
-        rect_xz(1.1, 1.6, 1.1, 1.5, 0.45),
-        rect_xz(1.1, 1.6, 1.1, 1.5, 0.5),
-        rho,
-        true,
-    );
+    let (bottom, top) = lift(t.plate);
+    b.block(plate, bottom, top, rho, true);
     b.finish(
-        "two-blockers-sharp",
+        t.name,
         Camera {
             eye: DVec3::new(1.0, 1.2, 4.2),
             target: DVec3::new(1.0, 0.5, 0.8),

@@ -27,11 +27,14 @@ pub const TESSELLATED_CORNELL_PREFIX: &str = "tessellated-cornell-";
 /// triangles).
 pub const GENERATED_MAX: usize = 20_000_000;
 
+/// Builds a generated scene of about `n` triangles.
+type Generator = fn(usize) -> Scene;
+
 /// A generated scene's generator and its size, when `name` is `<prefix><digits>` for one of the generated
 /// scenes' prefixes (`_` allowed between digits); `None` otherwise (so that a file such as
 /// `random-boxes-7.obj` still loads as a file). The size is `None` when the digits overflow.
-fn generated_name(name: &str) -> Option<(&'static str, fn(usize) -> Scene, Option<usize>)> {
-    const GENERATORS: [(&str, fn(usize) -> Scene); 2] = [
+fn generated_name(name: &str) -> Option<(&'static str, Generator, Option<usize>)> {
+    const GENERATORS: [(&str, Generator); 2] = [
         (RANDOM_BOXES_PREFIX, |n| random_boxes(n, 1)),
         (TESSELLATED_CORNELL_PREFIX, tessellated_cornell),
     ];

@@ -43,6 +43,63 @@ pub struct Throughput {
     pub visible_fraction: f64,
 }
 
+/// The queries every timing of this module runs on: `queries` random parameter vectors whose two points face
+/// each other (those are the ones the kernel traces, so all timings trace the same rays; back-facing pairs
+/// would give bare rays that stop at once, flattering the bare number), their point pairs, and the same
+/// segments as bare f32 rays, trimmed like [`SceneBvh::visible`] trims them.
+struct Queries {
+    us: Vec<[f64; 4]>,
+    pairs: Vec<(SurfacePoint, SurfacePoint)>,
+    rays: Vec<Ray>,
+    /// Uniform vectors drawn to find the facing ones.
+    drawn: usize,
+}
+
+impl Queries {
+    fn new(scene: &Scene, bvh: &SceneBvh, queries: usize, seed: u64) -> Self {
+        let sampler = SurfaceSampler::new(scene);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut us: Vec<[f64; 4]> = Vec::with_capacity(queries);
+        let mut drawn = 0usize;
+        while us.len() < queries {
+            let u: [f64; 4] = rng.random();
+            drawn += 1;
+            let (x, y) = (sampler.sample([u[0], u[1]]), sampler.sample([u[2], u[3]]));
+            let d = y.point - x.point;
+            if x.face != y.face && x.normal.dot(d) > 0.0 && y.normal.dot(d) < 0.0 {
+                us.push(u);
+            }
+        }
+        let pairs: Vec<(SurfacePoint, SurfacePoint)> = us
+            .iter()
+            .map(|u| (sampler.sample([u[0], u[1]]), sampler.sample([u[2], u[3]])))
+            .collect();
+        let eps = bvh.epsilon() as f32;
+        let back = bvh.backoff() as f32;
+        let rays = pairs
+            .iter()
+            .map(|(x, y)| {
+                let o = x.point.as_vec3a();
+                let d = (y.point - x.point).as_vec3a();
+                let len = d.length();
+                let u = d / len.max(f32::MIN_POSITIVE);
+                Ray::new(
+                    o - u * back,
+                    u,
+                    back + eps,
+                    (back + len - eps).max(back + eps),
+                )
+            })
+            .collect();
+        Queries {
+            us,
+            pairs,
+            rays,
+            drawn,
+        }
+    }
+}
+
 /// Times the three query kinds on `queries` random pairs that face each other, with `threads` rayon threads
 /// (best of three runs each).
 /// The BVH is built once with [`BuildQuality::High`] (timed) outside the pool.
@@ -50,42 +107,12 @@ pub fn measure(scene: &Scene, queries: usize, threads: usize, seed: u64) -> Thro
     let t = Instant::now();
     let bvh = SceneBvh::with_quality(scene, BuildQuality::High);
     let build_high_s = t.elapsed().as_secs_f64();
-    let sampler = SurfaceSampler::new(scene);
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    // Only pairs that face each other: those are the ones the kernel traces, so all three timings trace the
-    // same rays (back-facing pairs would give bare rays that stop at once, flattering the bare number).
-    let mut us: Vec<[f64; 4]> = Vec::with_capacity(queries);
-    let mut drawn = 0usize;
-    while us.len() < queries {
-        let u: [f64; 4] = rng.random();
-        drawn += 1;
-        let (x, y) = (sampler.sample([u[0], u[1]]), sampler.sample([u[2], u[3]]));
-        let d = y.point - x.point;
-        if x.face != y.face && x.normal.dot(d) > 0.0 && y.normal.dot(d) < 0.0 {
-            us.push(u);
-        }
-    }
-    let pairs: Vec<(SurfacePoint, SurfacePoint)> = us
-        .iter()
-        .map(|u| (sampler.sample([u[0], u[1]]), sampler.sample([u[2], u[3]])))
-        .collect();
-    let eps = bvh.epsilon() as f32;
-    let back = bvh.backoff() as f32;
-    let rays: Vec<Ray> = pairs
-        .iter()
-        .map(|(x, y)| {
-            let o = x.point.as_vec3a();
-            let d = (y.point - x.point).as_vec3a();
-            let len = d.length();
-            let u = d / len.max(f32::MIN_POSITIVE);
-            Ray::new(
-                o - u * back,
-                u,
-                back + eps,
-                (back + len - eps).max(back + eps),
-            )
-        })
-        .collect();
+    let Queries {
+        us,
+        pairs,
+        rays,
+        drawn,
+    } = Queries::new(scene, &bvh, queries, seed);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -162,38 +189,9 @@ pub fn thread_cpu_ns() -> u64 {
 /// ratio of [`Throughput::kernel_over_bare`]. Driver: `examples/kernel_cpu_ratio.rs`.
 pub fn cpu_ratio(scene: &Scene, queries: usize, rounds: usize, seed: u64) -> (f64, f64, f64) {
     let bvh = SceneBvh::with_quality(scene, BuildQuality::High);
-    let sampler = SurfaceSampler::new(scene);
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let mut us: Vec<[f64; 4]> = Vec::with_capacity(queries);
-    while us.len() < queries {
-        let u: [f64; 4] = rng.random();
-        let (x, y) = (sampler.sample([u[0], u[1]]), sampler.sample([u[2], u[3]]));
-        let d = y.point - x.point;
-        if x.face != y.face && x.normal.dot(d) > 0.0 && y.normal.dot(d) < 0.0 {
-            us.push(u);
-        }
-    }
-    let pairs: Vec<(SurfacePoint, SurfacePoint)> = us
-        .iter()
-        .map(|u| (sampler.sample([u[0], u[1]]), sampler.sample([u[2], u[3]])))
-        .collect();
-    let eps = bvh.epsilon() as f32;
-    let back = bvh.backoff() as f32;
-    let rays: Vec<Ray> = pairs
-        .iter()
-        .map(|(x, y)| {
-            let o = x.point.as_vec3a();
-            let d = (y.point - x.point).as_vec3a();
-            let len = d.length();
-            let u = d / len.max(f32::MIN_POSITIVE);
-            Ray::new(
-                o - u * back,
-                u,
-                back + eps,
-                (back + len - eps).max(back + eps),
-            )
-        })
-        .collect();
+    let Queries {
+        us, pairs, rays, ..
+    } = Queries::new(scene, &bvh, queries, seed);
     let k = KernelSampler::new(scene, &bvh);
     let (mut b, mut kk, mut v) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
     let q = queries as f64;

@@ -95,8 +95,15 @@ pub struct SceneSurface {
     pub elements: Vec<Element>,
     /// Unit normal of each element.
     pub normals: Vec<DVec3>,
-    grid: BoxGrid,
-    tree: Option<ClusterTree>,
+    index: SurfaceIndex,
+}
+
+/// How a [`SceneSurface`] finds the elements under a Gaussian: a hash grid for exact sums, or the
+/// cluster tree of a large surface (which needs no grid).
+#[derive(Clone, Debug)]
+enum SurfaceIndex {
+    Grid(BoxGrid),
+    Tree(Box<ClusterTree>),
 }
 
 /// When and how finely a large surface is clustered ([`crate::cluster`]).
@@ -141,20 +148,31 @@ impl SceneSurface {
         clusters: SurfaceClusters,
     ) -> Self {
         assert_eq!(elements.len(), normals.len(), "one normal per element");
-        let tree = (elements.len() >= clusters.min_elements)
-            .then(|| ClusterTree::new(&elements, &normals, clusters.theta));
-        let grid = BoxGrid::new(elements.iter().map(Element::bounds).collect(), cell);
+        let index = if elements.len() >= clusters.min_elements {
+            SurfaceIndex::Tree(Box::new(ClusterTree::new(
+                &elements,
+                &normals,
+                clusters.theta,
+            )))
+        } else {
+            SurfaceIndex::Grid(BoxGrid::new(
+                elements.iter().map(Element::bounds).collect(),
+                cell,
+            ))
+        };
         Self {
             elements,
             normals,
-            grid,
-            tree,
+            index,
         }
     }
 
     /// The cluster tree, when the surface is large enough to have one.
     pub fn clusters(&self) -> Option<&ClusterTree> {
-        self.tree.as_ref()
+        match &self.index {
+            SurfaceIndex::Tree(tree) => Some(tree),
+            SurfaceIndex::Grid(_) => None,
+        }
     }
 
     /// ∫_S exp(−a|x − c|²) dx over the elements within the support (relative cut-off `tol`).
@@ -165,11 +183,10 @@ impl SceneSurface {
     /// Elements whose bounding boxes meet the ball (centre, radius), ascending. Empty on a
     /// clustered surface, whose integrals do not take candidate lists.
     pub fn elements_near(&self, centre: DVec3, radius: f64, out: &mut Vec<u32>) {
-        if self.tree.is_some() {
-            out.clear();
-            return;
+        match &self.index {
+            SurfaceIndex::Grid(grid) => grid.query_ball(centre, radius, out),
+            SurfaceIndex::Tree(_) => out.clear(),
         }
-        self.grid.query_ball(centre, radius, out);
     }
 
     /// [`SceneSurface::gaussian_integral`] with the support query answered from `candidates`
@@ -178,14 +195,17 @@ impl SceneSurface {
     /// order, hence the same sum, without a grid query. A clustered surface ignores the list.
     pub fn gaussian_integral_among(&self, c: DVec3, a: f64, tol: f64, candidates: &[u32]) -> f64 {
         let r = support_radius(1.0 / a.sqrt(), tol);
-        if let Some(tree) = &self.tree {
-            return tree.integral(c, a, r, &Mask::ALL, &mut |e| {
-                self.elements[e as usize].gaussian_integral(c, a)
-            });
-        }
+        let grid = match &self.index {
+            SurfaceIndex::Tree(tree) => {
+                return tree.integral(c, a, r, &Mask::ALL, &mut |e| {
+                    self.elements[e as usize].gaussian_integral(c, a)
+                });
+            }
+            SurfaceIndex::Grid(grid) => grid,
+        };
         candidates
             .iter()
-            .filter(|&&e| self.grid.box_hits(e, c, r))
+            .filter(|&&e| grid.box_hits(e, c, r))
             .map(|&e| self.elements[e as usize].gaussian_integral(c, a))
             .sum()
     }
@@ -203,16 +223,19 @@ impl SceneSurface {
     ) -> f64 {
         let r = support_radius(1.0 / a.sqrt(), tol);
         let mask = Mask { facing, cos_min };
-        if let Some(tree) = &self.tree {
-            return tree.integral(c, a, r, &mask, &mut |e| {
-                if mask.accepts(self.normals[e as usize]) {
-                    self.elements[e as usize].gaussian_integral(c, a)
-                } else {
-                    0.0
-                }
-            });
-        }
-        self.grid.query_ball(c, r, scratch);
+        let grid = match &self.index {
+            SurfaceIndex::Tree(tree) => {
+                return tree.integral(c, a, r, &mask, &mut |e| {
+                    if mask.accepts(self.normals[e as usize]) {
+                        self.elements[e as usize].gaussian_integral(c, a)
+                    } else {
+                        0.0
+                    }
+                });
+            }
+            SurfaceIndex::Grid(grid) => grid,
+        };
+        grid.query_ball(c, r, scratch);
         scratch
             .iter()
             .filter(|&&e| mask.accepts(self.normals[e as usize]))

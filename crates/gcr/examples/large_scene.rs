@@ -70,12 +70,6 @@ fn main() -> anyhow::Result<()> {
                 theta,
                 ..SurfaceClusters::default()
             },
-            projection_rejection: std::env::var("REJ").map_or(1e-6, |v| v.parse().unwrap()),
-            output_fit: if std::env::var("DELTA").is_ok() {
-                gcr::config::OutputFit::DeltaRule
-            } else {
-                gcr::config::OutputFit::Projection
-            },
             ..SolveConfig::default()
         };
         let t = Instant::now();

@@ -184,7 +184,8 @@ impl ClusterTree {
         let small = elements
             .iter()
             .zip(normals)
-            .map(|(e, n)| SmallRule::new(e, *n))
+            .zip(&moments)
+            .map(|((e, n), m)| SmallRule::new(e, *n, m))
             .collect();
         let mut tree = ClusterTree {
             nodes: Vec::with_capacity(2 * elements.len() / LEAF + 1),
@@ -355,9 +356,9 @@ struct SmallRule {
 }
 
 impl SmallRule {
-    fn new(e: &Element, normal: DVec3) -> Self {
+    /// The rule of element `e` with unit `normal` and moments `m` (`Moments::of(e)`).
+    fn new(e: &Element, normal: DVec3, m: &Moments) -> Self {
         let mid = |p: DVec3, q: DVec3| 0.5 * (p + q);
-        let m = Moments::of(e);
         let centre = if m.area > 0.0 {
             m.first / m.area
         } else {
@@ -381,7 +382,7 @@ impl SmallRule {
             Element::Quad(q) => {
                 // Two triangles of possibly different areas: equal weights need equal areas, so
                 // fall back to the quad's own six-point moment rule.
-                let (_, pts, w) = six_point_rule(&m, q[0].min(q[2]), q[0].max(q[2]));
+                let (_, pts, w) = six_point_rule(m, q[0].min(q[2]), q[0].max(q[2]));
                 (pts, w)
             }
         };

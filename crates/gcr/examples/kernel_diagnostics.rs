@@ -32,7 +32,7 @@ fn main() -> anyhow::Result<()> {
         if !e.is_zero() {
             continue;
         }
-        let k = trained.reflected_kernel(p.point);
+        let k = trained.reflected_kernel(p.point, p.normal);
         print!("  ref");
         for b in 0..3 {
             print!(" {:.4}", r.mean[b]);
@@ -111,7 +111,7 @@ fn main() -> anyhow::Result<()> {
         if !scene.faces[p.face as usize].emission.is_zero() {
             continue;
         }
-        let k = gcr::fem::reflected_from_kernel(&ls, &trained.sender, p.point);
+        let k = gcr::fem::reflected_from_kernel(&ls, &trained.sender, p.point, p.normal);
         for b in 0..3 {
             lnum += (k[b] - r.mean[b]).powi(2);
             lden += r.mean[b].powi(2);

@@ -53,6 +53,14 @@ pub struct KernelCells {
     pub width: Vec<f64>,
     /// Outputs v_o per band.
     pub v: Vec<Bands>,
+    /// Facing direction of each sender half: with facing masks
+    /// ([`crate::config::SolveConfig::kernel_facing`]) the Gaussian lives only on surfaces whose
+    /// normal n has n · nx_o > [`KernelCells::facing_cos`]. Empty, or a zero vector: everywhere.
+    pub nx: Vec<DVec3>,
+    /// Facing direction of each receiver half (as [`KernelCells::nx`]).
+    pub ny: Vec<DVec3>,
+    /// Cosine threshold of the facing masks.
+    pub facing_cos: f64,
 }
 
 impl KernelCells {
@@ -66,11 +74,54 @@ impl KernelCells {
         self.wx.is_empty()
     }
 
+    /// The facing direction of cell o's sender half (zero: no mask).
+    pub fn facing_x(&self, o: usize) -> DVec3 {
+        self.nx.get(o).copied().unwrap_or(DVec3::ZERO)
+    }
+
+    /// The facing direction of cell o's receiver half (zero: no mask).
+    pub fn facing_y(&self, o: usize) -> DVec3 {
+        self.ny.get(o).copied().unwrap_or(DVec3::ZERO)
+    }
+
+    /// Whether a half with facing direction `f` lives at a surface point with unit normal `n`.
+    pub fn lives_on(&self, f: DVec3, n: DVec3) -> bool {
+        f == DVec3::ZERO || n == DVec3::ZERO || f.dot(n) > self.facing_cos
+    }
+
+    /// Gives every cell facing masks: each half faces like the surface at the sample nearest to
+    /// the cell's centre in the kernel's input space (x, y). Cells then stop blurring light
+    /// across the edges where surfaces meet (a Gaussian centred on a lit floor no longer puts
+    /// light on the shaded side of a block standing on it) — the kernel's counterpart of the
+    /// breaking operator (sec. 4.4.2) and the sub-network zero rules of fig. 3.6.
+    pub fn assign_facing(&mut self, samples: &[(DVec3, DVec3, DVec3, DVec3)], facing_cos: f64) {
+        self.facing_cos = facing_cos;
+        let (nx, ny): (Vec<DVec3>, Vec<DVec3>) = (0..self.len())
+            .into_par_iter()
+            .map(|o| {
+                let mut best = (f64::INFINITY, DVec3::ZERO, DVec3::ZERO);
+                for (x, nx, y, ny) in samples {
+                    let d = self.wx[o].distance_squared(*x) + self.wy[o].distance_squared(*y);
+                    if d < best.0 {
+                        best = (d, *nx, *ny);
+                    }
+                }
+                (best.1, best.2)
+            })
+            .unzip();
+        self.nx = nx;
+        self.ny = ny;
+    }
+
     /// The network's light flow Ψ(x, y) = Σ_o v_o exp(−(|x − w_o^x|² + |y − w_o^y|²)/d_o²)
-    /// per band (eq. 2.1–2.3 with the kernel's 6-D / 4-D input), summed over every cell.
-    pub fn evaluate(&self, x: DVec3, y: DVec3) -> Bands {
+    /// per band (eq. 2.1–2.3 with the kernel's 6-D / 4-D input), summed over every cell whose
+    /// facing masks accept the normals `nx` at x and `ny` at y.
+    pub fn evaluate(&self, x: DVec3, nx: DVec3, y: DVec3, ny: DVec3) -> Bands {
         let mut out = [0.0; MAX_BANDS];
         for o in 0..self.len() {
+            if !(self.lives_on(self.facing_x(o), nx) && self.lives_on(self.facing_y(o), ny)) {
+                continue;
+            }
             let e = (self.wx[o].distance_squared(x) + self.wy[o].distance_squared(y))
                 / (self.width[o] * self.width[o]);
             let g = (-e).exp();
@@ -194,18 +245,34 @@ impl SceneSurface {
     /// [`SceneSurface::elements_near`] with a larger ball): the same elements in the same
     /// order, hence the same sum, without a grid query. A clustered surface ignores the list.
     pub fn gaussian_integral_among(&self, c: DVec3, a: f64, tol: f64, candidates: &[u32]) -> f64 {
+        self.masked_gaussian_integral_among(c, a, tol, &Mask::ALL, candidates)
+    }
+
+    /// [`SceneSurface::gaussian_integral_among`] over the elements that `mask` accepts.
+    pub fn masked_gaussian_integral_among(
+        &self,
+        c: DVec3,
+        a: f64,
+        tol: f64,
+        mask: &Mask,
+        candidates: &[u32],
+    ) -> f64 {
         let r = support_radius(1.0 / a.sqrt(), tol);
         let grid = match &self.index {
             SurfaceIndex::Tree(tree) => {
-                return tree.integral(c, a, r, &Mask::ALL, &mut |e| {
-                    self.elements[e as usize].gaussian_integral(c, a)
+                return tree.integral(c, a, r, mask, &mut |e| {
+                    if mask.accepts(self.normals[e as usize]) {
+                        self.elements[e as usize].gaussian_integral(c, a)
+                    } else {
+                        0.0
+                    }
                 });
             }
             SurfaceIndex::Grid(grid) => grid,
         };
         candidates
             .iter()
-            .filter(|&&e| grid.box_hits(e, c, r))
+            .filter(|&&e| grid.box_hits(e, c, r) && mask.accepts(self.normals[e as usize]))
             .map(|&e| self.elements[e as usize].gaussian_integral(c, a))
             .sum()
     }
@@ -412,6 +479,44 @@ impl Base {
         self.product_integral_on(k, None, w, b, scratch)
     }
 
+    /// [`Base::product_integral`] restricted further to the surfaces facing like `facing` (the
+    /// facing mask of a kernel half, [`KernelCells::facing_x`]; zero: no restriction).
+    pub fn product_integral_facing(
+        &self,
+        k: usize,
+        w: DVec3,
+        b: f64,
+        facing: DVec3,
+        scratch: &mut Vec<u32>,
+    ) -> f64 {
+        if facing == DVec3::ZERO {
+            return self.product_integral_on(k, None, w, b, scratch);
+        }
+        let nk = self.geo.normals[k];
+        let cos = self.settings.facing_cos;
+        if self.settings.base_domain == BaseDomain::Shading || self.flat[k] {
+            // Ŝ's triangles, or k's tangent plane: one orientation, taken or not as a whole.
+            let takes = nk == DVec3::ZERO || nk.dot(facing) > cos;
+            return if takes {
+                self.product_integral_on(k, None, w, b, scratch)
+            } else {
+                0.0
+            };
+        }
+        let (a, p) = (self.a[k], self.geo.centres[k]);
+        let ab = a + b;
+        let scale = (-(a * b / ab) * p.distance_squared(w)).exp();
+        if scale == 0.0 {
+            return 0.0;
+        }
+        let c = (a * p + b * w) / ab;
+        let tol = self.settings.support_tolerance;
+        scale
+            * self
+                .surface
+                .masked_gaussian_integral(c, ab, tol, &[nk, facing], cos, scratch)
+    }
+
     /// [`Base::product_integral`] on the common domain of cells k and `other` (the Gram entry
     /// ⟨Λ_k|Λ_other⟩ when w, b are other's centre and inverse squared width).
     fn product_integral_on(
@@ -587,7 +692,15 @@ pub fn sender_integrals(kernel: &KernelCells, scene: &SceneSurface, tol: f64) ->
         .into_par_iter()
         .map_init(Vec::new, |scratch, o| {
             let a = 1.0 / (kernel.width[o] * kernel.width[o]);
-            scene.gaussian_integral(kernel.wx[o], a, tol, scratch)
+            let facing = [kernel.facing_x(o)];
+            scene.masked_gaussian_integral(
+                kernel.wx[o],
+                a,
+                tol,
+                &facing,
+                kernel.facing_cos,
+                scratch,
+            )
         })
         .collect()
 }
@@ -600,16 +713,28 @@ pub fn receiver_integrals(kernel: &KernelCells, scene: &SceneSurface, tol: f64) 
         .into_par_iter()
         .map_init(Vec::new, |scratch, o| {
             let a = 1.0 / (kernel.width[o] * kernel.width[o]);
-            scene.gaussian_integral(kernel.wy[o], a, tol, scratch)
+            let facing = [kernel.facing_y(o)];
+            scene.masked_gaussian_integral(
+                kernel.wy[o],
+                a,
+                tol,
+                &facing,
+                kernel.facing_cos,
+                scratch,
+            )
         })
         .collect()
 }
 
 /// B_refl(y) = Σ_o v_o c_o exp(−|y − w_o^y|²/d_o²): the final collection through the kernel
-/// network (fig. 4.13c), with `sender` from [`sender_integrals`].
-pub fn reflected_from_kernel(kernel: &KernelCells, sender: &[f64], y: DVec3) -> Bands {
+/// network (fig. 4.13c), with `sender` from [`sender_integrals`], at a surface point y with unit
+/// normal `n` (only cells whose receiver half faces like `n` contribute; a zero `n` takes all).
+pub fn reflected_from_kernel(kernel: &KernelCells, sender: &[f64], y: DVec3, n: DVec3) -> Bands {
     let mut out = [0.0; MAX_BANDS];
     for o in 0..kernel.len() {
+        if !kernel.lives_on(kernel.facing_y(o), n) {
+            continue;
+        }
         let g = sender[o]
             * (-kernel.wy[o].distance_squared(y) / (kernel.width[o] * kernel.width[o])).exp();
         if g != 0.0 {
@@ -672,7 +797,13 @@ pub fn fem_step(base: Base, kernel: &KernelCells, scene: &SceneSurface) -> FemSo
                         near.iter()
                             .map(|&k| {
                                 gamma_bar[k as usize]
-                                    * base.product_integral(k as usize, kernel.wx[o], b, scratch)
+                                    * base.product_integral_facing(
+                                        k as usize,
+                                        kernel.wx[o],
+                                        b,
+                                        kernel.facing_x(o),
+                                        scratch,
+                                    )
                             })
                             .sum()
                     },
@@ -702,7 +833,13 @@ pub fn fem_step(base: Base, kernel: &KernelCells, scene: &SceneSurface) -> FemSo
                     // collection B_refl(y) = Σ_o v_o c_o g_o(y) sums every cell, and projected
                     // weights cancel each other, so dropping cells made u inconsistent with G
                     // (on wall-floor the base then missed B_refl by 135 %, and by 7 % without it).
-                    let beta = base.product_integral(q, kernel.wy[o], b, &mut scratch);
+                    let beta = base.product_integral_facing(
+                        q,
+                        kernel.wy[o],
+                        b,
+                        kernel.facing_y(o),
+                        &mut scratch,
+                    );
                     for band in 0..MAX_BANDS {
                         acc[q][band] += kernel.v[o][band] * sender[o] * beta;
                     }
@@ -847,6 +984,7 @@ mod tests {
             wy: vec![DVec3::new(3.75, 3.75, 0.0)],
             width: vec![1.5],
             v: vec![[1.0, 0.5, 0.25]],
+            ..KernelCells::default()
         };
         let sender_plane = Element::Triangle([
             DVec3::new(-50.0, -50.0, 4.0),
@@ -869,7 +1007,7 @@ mod tests {
             DVec3::new(5.0, 3.0, 0.0),
         ] {
             let from_base = sol.reflected_from_base(p, DVec3::Z, &mut scratch);
-            let direct = reflected_from_kernel(&kernel, &sol.sender, p);
+            let direct = reflected_from_kernel(&kernel, &sol.sender, p, DVec3::Z);
             for b in 0..3 {
                 assert!(
                     (from_base[b] - direct[b]).abs() < 0.02 * direct[0],

@@ -56,6 +56,11 @@ enum Command {
         /// (by default they are skipped: same result, less time).
         #[arg(long)]
         keep_base: bool,
+        /// Facing masks on the projected kernel's Gaussians: each lives only on surfaces facing
+        /// like the samples it was fitted to, so light does not blur across edges (sharper kernel
+        /// gather on cluttered scenes, mass lost along edges of smooth fields).
+        #[arg(long)]
+        kernel_facing: bool,
         /// Surfaces with at least this many elements get a cluster tree for the FEM integrals
         /// (nodes stand in for their elements where a Gaussian cannot resolve them).
         #[arg(long, default_value_t = SurfaceClusters::default().min_elements)]
@@ -151,6 +156,7 @@ fn run() -> Result<()> {
             gather,
             output_fit,
             keep_base,
+            kernel_facing,
             cluster_min_elements,
             cluster_theta,
             image,
@@ -170,6 +176,7 @@ fn run() -> Result<()> {
                 gather,
                 output_fit,
                 skip_unused_base: !keep_base,
+                kernel_facing,
                 surface_clusters: SurfaceClusters {
                     min_elements: cluster_min_elements,
                     theta: cluster_theta,
@@ -472,10 +479,10 @@ fn flatland_kernel_image(
             let s = (i % n) as f64 / n as f64 + 0.5 / n as f64;
             let t = 1.0 - ((i / n) as f64 + 0.5) / n as f64;
             let ray = domain.ray(&[s, t]);
-            let strength = ray.emission_x[0] + trained.reflected_kernel(ray.x)[0];
+            let strength = ray.emission_x[0] + trained.reflected_kernel(ray.x, ray.nx)[0];
             (
                 ray.kernel[0] * strength,
-                trained.kernel.evaluate(ray.x, ray.y)[0],
+                trained.kernel.evaluate(ray.x, ray.nx, ray.y, ray.ny)[0],
             )
         })
         .collect();

@@ -72,7 +72,7 @@ pub fn radiosity_at(
             );
             reflected(trained.fem.reflected_from_base(y, n, scratch))
         }
-        GatherMode::Kernel => reflected(trained.reflected_kernel(y)),
+        GatherMode::Kernel => reflected(trained.reflected_kernel(y, n)),
         GatherMode::Rays => gather(
             domain,
             emitters,
@@ -81,7 +81,7 @@ pub fn radiosity_at(
             face,
             config.gather_samples,
             seed,
-            &|x, _, _| trained.reflected_kernel(x),
+            &|x, nx, _| trained.reflected_kernel(x, nx),
         ),
     }
 }

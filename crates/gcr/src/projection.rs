@@ -25,6 +25,7 @@
 //! Cholesky factorization of MATH.md §5 ([`gauss_integrals::Orthonormal`]), which drops nearly
 //! dependent cells instead of amplifying the Monte-Carlo noise in b.
 
+use crate::cluster::Mask;
 use crate::element::{Bands, MAX_BANDS};
 use crate::fem::{KernelCells, SceneSurface};
 use crate::solver::Sample;
@@ -51,6 +52,7 @@ fn half_overlap(
     (w1, a1): (DVec3, f64),
     (w2, a2): (DVec3, f64),
     tol: f64,
+    mask: &Mask,
     candidates: &[u32],
 ) -> f64 {
     let a = a1 + a2;
@@ -59,7 +61,7 @@ fn half_overlap(
     if k == 0.0 {
         return 0.0;
     }
-    k * scene.gaussian_integral_among(c, a, tol, candidates)
+    k * scene.masked_gaussian_integral_among(c, a, tol, mask, candidates)
 }
 
 /// Per cell, the elements within twice its support radius of each half: a superset of the
@@ -106,12 +108,22 @@ pub fn kernel_gram(kernel: &KernelCells, scene: &SceneSurface, tol: f64) -> DMat
                     continue;
                 }
                 let (ho, hp) = ((kernel.wx[o], a[o]), (kernel.wx[p], a[p]));
-                let ix = half_overlap(scene, ho, hp, tol, &near_x[shorter(&near_x, o, p)]);
+                let facing = [kernel.facing_x(o), kernel.facing_x(p)];
+                let mask = Mask {
+                    facing: &facing,
+                    cos_min: kernel.facing_cos,
+                };
+                let ix = half_overlap(scene, ho, hp, tol, &mask, &near_x[shorter(&near_x, o, p)]);
                 if ix == 0.0 {
                     continue;
                 }
                 let (ho, hp) = ((kernel.wy[o], a[o]), (kernel.wy[p], a[p]));
-                let iy = half_overlap(scene, ho, hp, tol, &near_y[shorter(&near_y, o, p)]);
+                let facing = [kernel.facing_y(o), kernel.facing_y(p)];
+                let mask = Mask {
+                    facing: &facing,
+                    cos_min: kernel.facing_cos,
+                };
+                let iy = half_overlap(scene, ho, hp, tol, &mask, &near_y[shorter(&near_y, o, p)]);
                 if iy != 0.0 {
                     row.push((p, ix * iy));
                 }
@@ -164,6 +176,11 @@ pub fn kernel_moments(
                     continue;
                 }
                 for o in 0..n {
+                    if !(kernel.lives_on(kernel.facing_x(o), smp.ray.nx)
+                        && kernel.lives_on(kernel.facing_y(o), smp.ray.ny))
+                    {
+                        continue;
+                    }
                     let dx = kernel.wx[o].distance_squared(smp.ray.x);
                     if a[o] * dx > cut {
                         continue;
@@ -334,40 +351,66 @@ mod tests {
             kernel.width.push(diag * [0.05, 0.1, 0.2, 0.3, 0.15][k]);
             kernel.v.push([0.0; MAX_BANDS]);
         }
-        let g = kernel_gram(&kernel, &surface, 1e-14);
-        let half = |w1: DVec3, d1: f64, w2: DVec3, d2: f64| -> f64 {
-            triangles
-                .iter()
-                .map(|&[p, q, r]| {
-                    let f = |x: [f64; 3]| {
-                        let x = DVec3::from_array(x);
-                        (-(x.distance_squared(w1) / (d1 * d1) + x.distance_squared(w2) / (d2 * d2)))
-                            .exp()
-                    };
-                    integrals::cubature::triangle_cubature(
-                        f,
-                        [p.to_array(), q.to_array(), r.to_array()],
-                        1e-13,
-                    )
-                    .value
-                })
-                .sum()
-        };
-        for o in 0..kernel.len() {
-            for p in 0..kernel.len() {
-                let (d1, d2) = (kernel.width[o], kernel.width[p]);
-                let reference = half(kernel.wx[o], d1, kernel.wx[p], d2)
-                    * half(kernel.wy[o], d1, kernel.wy[p], d2);
-                let scale = (g[(o, o)] * g[(p, p)]).sqrt();
+        // Unmasked, then with facing masks from the faces the halves sit on (a Gaussian
+        // restricted to the faces that face like it: the cubature skips the others).
+        for masked in [false, true] {
+            if masked {
+                kernel.facing_cos = 50f64.to_radians().cos();
+                for (i, j) in [(0, 5), (1, 5), (3, 8), (12, 20), (30, 2)] {
+                    kernel.nx.push(scene.faces[i].normal);
+                    kernel.ny.push(scene.faces[j].normal);
+                }
+            }
+            let g = kernel_gram(&kernel, &surface, 1e-14);
+            let half = |w1: DVec3, f1: DVec3, d1: f64, w2: DVec3, f2: DVec3, d2: f64| -> f64 {
+                triangles
+                    .iter()
+                    .zip(&scene.faces)
+                    .filter(|(_, face)| {
+                        kernel.lives_on(f1, face.normal) && kernel.lives_on(f2, face.normal)
+                    })
+                    .map(|(&[p, q, r], _)| {
+                        let f = |x: [f64; 3]| {
+                            let x = DVec3::from_array(x);
+                            (-(x.distance_squared(w1) / (d1 * d1)
+                                + x.distance_squared(w2) / (d2 * d2)))
+                                .exp()
+                        };
+                        integrals::cubature::triangle_cubature(
+                            f,
+                            [p.to_array(), q.to_array(), r.to_array()],
+                            1e-13,
+                        )
+                        .value
+                    })
+                    .sum()
+            };
+            let mut zeros = 0;
+            for o in 0..kernel.len() {
+                for p in 0..kernel.len() {
+                    let (d1, d2) = (kernel.width[o], kernel.width[p]);
+                    let (fx, gx) = (kernel.facing_x(o), kernel.facing_x(p));
+                    let (fy, gy) = (kernel.facing_y(o), kernel.facing_y(p));
+                    let reference = half(kernel.wx[o], fx, d1, kernel.wx[p], gx, d2)
+                        * half(kernel.wy[o], fy, d1, kernel.wy[p], gy, d2);
+                    zeros += usize::from(reference == 0.0);
+                    let scale = (g[(o, o)] * g[(p, p)]).sqrt();
+                    assert!(
+                        (g[(o, p)] - reference).abs() <= 1e-9 * scale,
+                        "masked {masked}: G[{o},{p}] = {} vs cubature {reference}",
+                        g[(o, p)]
+                    );
+                }
+            }
+            if masked {
                 assert!(
-                    (g[(o, p)] - reference).abs() <= 1e-9 * scale,
-                    "G[{o},{p}] = {} vs cubature {reference}",
-                    g[(o, p)]
+                    zeros > 0,
+                    "some pairs face apart: their masks share no face"
                 );
             }
+            // Symmetric positive definite for these well-separated cells.
+            let ortho = integrals::Orthonormal::new(&g, 1e-10);
+            assert_eq!(ortho.rejected(), 0);
         }
-        // Symmetric positive definite for these well-separated cells.
-        let ortho = integrals::Orthonormal::new(&g, 1e-10);
-        assert_eq!(ortho.rejected(), 0);
     }
 }

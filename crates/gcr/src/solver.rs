@@ -72,8 +72,8 @@ pub struct Trained {
 
 impl Trained {
     /// B_refl at a point by the kernel collection (fig. 4.13c).
-    pub fn reflected_kernel(&self, y: DVec3) -> Bands {
-        reflected_from_kernel(&self.kernel, &self.sender, y)
+    pub fn reflected_kernel(&self, y: DVec3, n: DVec3) -> Bands {
+        reflected_from_kernel(&self.kernel, &self.sender, y, n)
     }
 }
 
@@ -506,6 +506,13 @@ fn propagate_at(
     (tol, rejection): (f64, f64),
 ) -> Propagated {
     let mut frozen = freeze_kernel(kernel, domain.dim(), domain.bands());
+    if config.kernel_facing {
+        let ends: Vec<_> = samples
+            .iter()
+            .map(|s| (s.ray.x, s.ray.nx, s.ray.y, s.ray.ny))
+            .collect();
+        frozen.assign_facing(&ends, config.breaking.max_normal_angle.cos());
+    }
     let sender = sender_integrals(&frozen, scene, tol);
     let projection = KernelProjection::new(&frozen, scene, tol, rejection);
     let reflectance = |f| domain.reflectance(f);
@@ -775,7 +782,7 @@ fn strength(ray: &Ray, fem: Option<&FemSolution>, scratch: &mut Vec<u32>) -> Ban
 
 /// s = E(x) + B_refl(x) with B_refl from the kernel collection (fig. 4.13c) at the sender.
 fn kernel_strength(ray: &Ray, kernel: &KernelCells, sender: &[f64]) -> Bands {
-    let b = reflected_from_kernel(kernel, sender, ray.x);
+    let b = reflected_from_kernel(kernel, sender, ray.x, ray.nx);
     let mut s = ray.emission_x;
     for k in 0..MAX_BANDS {
         s[k] += b[k].max(0.0);

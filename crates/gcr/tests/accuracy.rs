@@ -151,7 +151,7 @@ fn base_reproduces_the_kernel_collection() {
             (i as f64 * 0.754_877_7 + 0.3) % 1.0,
         ];
         let p = sampler.sample(u);
-        let kernel = trained.reflected_kernel(p.point)[0];
+        let kernel = trained.reflected_kernel(p.point, p.normal)[0];
         let base = trained
             .fem
             .reflected_from_base(p.point, p.normal, &mut scratch)[0];

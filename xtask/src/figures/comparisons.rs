@@ -152,7 +152,7 @@ fn gcr_run(scene: &FlatlandScene, cells: usize, n: usize, exact: &[f64]) -> Resu
                 (col as f64 + 0.5) / n as f64,
                 1.0 - (row as f64 + 0.5) / n as f64,
             ]);
-            trained.kernel.evaluate(ray.x, ray.y)[0]
+            trained.kernel.evaluate(ray.x, ray.nx, ray.y, ray.ny)[0]
         })
         .collect();
     let error = flow_error(&flow, exact);

@@ -65,11 +65,11 @@ fn flatland_kernel(ctx: &Ctx, name: &str, cells: usize, n: usize) -> Result<Kern
             let s = (col as f64 + 0.5) / n as f64;
             let t = 1.0 - (row as f64 + 0.5) / n as f64;
             let ray = domain.ray(&[s, t]);
-            let strength = ray.emission_x[0] + trained.reflected_kernel(ray.x)[0];
+            let strength = ray.emission_x[0] + trained.reflected_kernel(ray.x, ray.nx)[0];
             let far = ray.x.distance(ray.y) > near;
             (
                 ray.kernel[0] * strength,
-                trained.kernel.evaluate(ray.x, ray.y)[0],
+                trained.kernel.evaluate(ray.x, ray.nx, ray.y, ray.ny)[0],
                 far,
             )
         })

@@ -151,7 +151,7 @@ fn scene_rows(
         let seconds = t.elapsed().as_secs_f64();
         let flow: Vec<f64> = rays
             .par_iter()
-            .flat_map_iter(|r| trained.kernel.evaluate(r.x, r.y))
+            .flat_map_iter(|r| trained.kernel.evaluate(r.x, r.nx, r.y, r.ny))
             .collect();
         let error = flow_error(&flow, &exact);
         let row = |m: &str, n: usize, e: &super::comparisons::FlowError, s: f64| {

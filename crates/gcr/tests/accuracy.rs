@@ -74,7 +74,8 @@ fn config(cells: usize, output_fit: OutputFit) -> SolveConfig {
 }
 
 /// Furnace: every face emits E = 1 and reflects ρ = 0.5, so B = 2 everywhere, of which the
-/// networks carry the reflected half.
+/// networks carry the reflected half. The target is 1 %: the ray gather (measured 0.55 %
+/// since its direct light uses MIS) meets it at 100 cells; the kernel gather (6.5 %) does not.
 #[test]
 fn furnace_radiosity_is_e_over_one_minus_rho() {
     let (scene, points) = scene("furnace");
@@ -88,7 +89,12 @@ fn furnace_radiosity_is_e_over_one_minus_rho() {
     );
     eprintln!("furnace {errs:?}");
     for (gather, e) in errs {
-        assert!(e < 0.08, "furnace {}: {e}", gather.name());
+        let bound = if gather == GatherMode::Rays {
+            0.01
+        } else {
+            0.08
+        };
+        assert!(e < bound, "furnace {}: {e}", gather.name());
     }
 }
 

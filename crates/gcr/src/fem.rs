@@ -476,11 +476,13 @@ impl Base {
     /// integrand into one Gaussian, integrated over k's tangent plane when k is flat, else
     /// exactly over Ŝ or over the part of S that faces like k ([`BaseDomain`]).
     pub fn product_integral(&self, k: usize, w: DVec3, b: f64, scratch: &mut Vec<u32>) -> f64 {
-        self.product_integral_on(k, None, w, b, scratch)
+        self.product_integral_on(k, None, DVec3::ZERO, w, b, scratch)
     }
 
     /// [`Base::product_integral`] restricted further to the surfaces facing like `facing` (the
-    /// facing mask of a kernel half, [`KernelCells::facing_x`]; zero: no restriction).
+    /// facing mask of a kernel half, [`KernelCells::facing_x`]; zero: no restriction). Where k is
+    /// integrated over one orientation only (its tangent plane, or Ŝ), k is taken or not as a
+    /// whole.
     pub fn product_integral_facing(
         &self,
         k: usize,
@@ -489,32 +491,7 @@ impl Base {
         facing: DVec3,
         scratch: &mut Vec<u32>,
     ) -> f64 {
-        if facing == DVec3::ZERO {
-            return self.product_integral_on(k, None, w, b, scratch);
-        }
-        let nk = self.geo.normals[k];
-        let cos = self.settings.facing_cos;
-        if self.settings.base_domain == BaseDomain::Shading || self.flat[k] {
-            // Ŝ's triangles, or k's tangent plane: one orientation, taken or not as a whole.
-            let takes = nk == DVec3::ZERO || nk.dot(facing) > cos;
-            return if takes {
-                self.product_integral_on(k, None, w, b, scratch)
-            } else {
-                0.0
-            };
-        }
-        let (a, p) = (self.a[k], self.geo.centres[k]);
-        let ab = a + b;
-        let scale = (-(a * b / ab) * p.distance_squared(w)).exp();
-        if scale == 0.0 {
-            return 0.0;
-        }
-        let c = (a * p + b * w) / ab;
-        let tol = self.settings.support_tolerance;
-        scale
-            * self
-                .surface
-                .masked_gaussian_integral(c, ab, tol, &[nk, facing], cos, scratch)
+        self.product_integral_on(k, None, facing, w, b, scratch)
     }
 
     /// [`Base::product_integral`] on the common domain of cells k and `other` (the Gram entry
@@ -523,10 +500,17 @@ impl Base {
         &self,
         k: usize,
         other: Option<usize>,
+        facing: DVec3,
         w: DVec3,
         b: f64,
         scratch: &mut Vec<u32>,
     ) -> f64 {
+        let nk = self.geo.normals[k];
+        let cos = self.settings.facing_cos;
+        let whole = self.settings.base_domain == BaseDomain::Shading || self.flat[k];
+        if whole && !(facing == DVec3::ZERO || nk == DVec3::ZERO || nk.dot(facing) > cos) {
+            return 0.0;
+        }
         let (a, p) = (self.a[k], self.geo.centres[k]);
         let ab = a + b;
         let scale = (-(a * b / ab) * p.distance_squared(w)).exp();
@@ -541,18 +525,14 @@ impl Base {
         let tol = self.settings.support_tolerance;
         match self.settings.base_domain {
             BaseDomain::Scene => {
-                let nk = self.geo.normals[k];
-                let facing = match other {
-                    Some(q) => [nk, self.geo.normals[q]],
-                    None => [nk, DVec3::ZERO],
-                };
+                let nq = other.map_or(DVec3::ZERO, |q| self.geo.normals[q]);
                 scale
                     * self.surface.masked_gaussian_integral(
                         c,
                         ab,
                         tol,
-                        &facing,
-                        self.settings.facing_cos,
+                        &[nk, nq, facing],
+                        cos,
                         scratch,
                     )
             }
@@ -594,6 +574,7 @@ impl Base {
                                 self.product_integral_on(
                                     p,
                                     Some(q),
+                                    DVec3::ZERO,
                                     self.geo.centres[q],
                                     self.a[q],
                                     scratch,

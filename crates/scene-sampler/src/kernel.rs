@@ -125,7 +125,6 @@ impl<'a> KernelSampler<'a> {
     pub fn eval(&self, x: SurfacePoint, y: SurfacePoint) -> KernelSample {
         let d = y.point - x.point;
         let r = d.length();
-        // ρ lives in the sampler's face record, which sampling y has just loaded
         let rho_y = self.sampler.rho(y.face);
         let (cos_x, cos_y) = if r > 0.0 {
             (x.normal.dot(d) / r, -y.normal.dot(d) / r)
@@ -346,7 +345,7 @@ mod tests {
         v
     }
 
-    /// The restructured sampler (guide table + interleaved look-ups, ρ in the face record) returns
+    /// The restructured sampler (guide table + interleaved look-ups, stored normals) returns
     /// bit-identical kernel samples: random u, plus u exactly on face boundaries and on
     /// guide-bucket starts (the search's edge cases), on the Cornell box and 100k random boxes.
     #[test]

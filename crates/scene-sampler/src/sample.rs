@@ -183,6 +183,42 @@ impl SurfaceSampler {
         }
     }
 
+    /// Bytes of the face records (what a look-up reads at random).
+    pub(crate) fn recs_bytes(&self) -> usize {
+        std::mem::size_of_val(&self.recs[..])
+    }
+
+    /// Prefetch stage 1 of [`crate::Samples`] for the two points of `u`: requests their guide entries.
+    #[inline]
+    pub(crate) fn prefetch_guide(&self, u: [f64; 4]) {
+        for ux in [u[0], u[2]] {
+            let n = self.recs.len();
+            let k = ((ux.clamp(0.0, 1.0) * n as f64) as usize).min(n - 1);
+            prefetch(&self.guide[k]);
+        }
+    }
+
+    /// Prefetch stage 2: the guide entries are cached now; requests the first face record of each bucket and
+    /// the bucket's stretch of `cdf` (what [`SurfaceSampler::face_of`] reads).
+    #[inline]
+    pub(crate) fn prefetch_bucket(&self, u: [f64; 4]) {
+        for ux in [u[0], u[2]] {
+            let (lo, _) = self.bucket(ux.clamp(0.0, 1.0));
+            self.recs[lo].prefetch();
+            prefetch(&self.cdf[lo + 1]);
+        }
+    }
+
+    /// Prefetch stage 3: the bucket data is cached now; finds each point's face and requests its record, and
+    /// ρ of the second point's face.
+    #[inline]
+    pub(crate) fn prefetch_faces(&self, u: [f64; 4]) {
+        self.recs[self.face_of(u[0].clamp(0.0, 1.0))].prefetch();
+        let y = self.face_of(u[2].clamp(0.0, 1.0));
+        self.recs[y].prefetch();
+        prefetch(&self.rho[y]);
+    }
+
     /// ρ of face `face`.
     #[inline]
     pub(crate) fn rho(&self, face: u32) -> Spectrum {
@@ -220,6 +256,31 @@ struct FaceRec {
     e2: DVec3,
     /// Unit normal, computed once as `Face::new` computes it (bit-identical).
     normal: DVec3,
+}
+
+impl FaceRec {
+    /// Requests both cache lines of the record.
+    #[inline]
+    fn prefetch(&self) {
+        prefetch(&self.lo);
+        prefetch(&self.e2);
+    }
+}
+
+/// A hint to load the cache line holding `r` into all cache levels: the x86 `prefetcht0` instruction (through
+/// `safe_arch`, no `unsafe` here), nothing on other targets. It never faults and never changes a result.
+#[inline(always)]
+fn prefetch<T>(r: &T) {
+    #[cfg(all(
+        any(target_arch = "x86", target_arch = "x86_64"),
+        target_feature = "sse"
+    ))]
+    safe_arch::prefetch_t0(r);
+    #[cfg(not(all(
+        any(target_arch = "x86", target_arch = "x86_64"),
+        target_feature = "sse"
+    )))]
+    let _ = r;
 }
 
 /// Barycentric weights `(b1, b2)` of `p` projected onto the plane of triangle `v` (weights of v1 and v2).

@@ -340,17 +340,18 @@ pub fn train(
                 }
                 metrics.seconds.resampling += tr.elapsed().as_secs_f64();
                 let t0 = Instant::now();
+                // in chunks: `Domain::rays` prefetches ahead within a chunk
                 let new: Vec<Sample> = accepted
-                    .par_iter()
-                    .map_init(Vec::new, |scratch, u| {
-                        let ray = domain.ray(u);
-                        Sample {
-                            s: initial_strength(&ray, config, current, scratch),
+                    .par_chunks(64)
+                    .flat_map_iter(|chunk| {
+                        let mut scratch = Vec::new();
+                        domain.rays(chunk).into_iter().map(move |ray| Sample {
+                            s: initial_strength(&ray, config, current, &mut scratch),
                             ray,
                             kernel_bmu: None,
                             shading_bmu: None,
                             inv_px: 0.0,
-                        }
+                        })
                     })
                     .collect();
                 metrics.rays_traced += new.len() as u64;
@@ -726,42 +727,53 @@ fn add_samples(
     shots: &mut u64,
 ) {
     let seeds: Vec<u64> = (0..count).map(|_| rng.random()).collect();
-    let new: Vec<(u64, Option<Sample>)> = seeds
-        .par_iter()
-        .map_init(Vec::new, |scratch, &seed| {
-            let mut r = ChaCha8Rng::seed_from_u64(seed);
-            match config.output_fit {
-                OutputFit::Projection => {
-                    // Shoot until a ray lands (open scenes lose some).
-                    for tries in 1..=64u64 {
-                        if let Some(shot) = density.shoot(domain, &mut r) {
-                            let smp = Sample {
-                                s: initial_strength(&shot.ray, config, current, scratch),
-                                ray: shot.ray,
-                                kernel_bmu: None,
-                                shading_bmu: None,
-                                inv_px: shot.inv_px,
-                            };
-                            return (tries, Some(smp));
-                        }
+    let new: Vec<(u64, Option<Sample>)> = match config.output_fit {
+        OutputFit::Projection => seeds
+            .par_iter()
+            .map_init(Vec::new, |scratch, &seed| {
+                let mut r = ChaCha8Rng::seed_from_u64(seed);
+                // Shoot until a ray lands (open scenes lose some).
+                for tries in 1..=64u64 {
+                    if let Some(shot) = density.shoot(domain, &mut r) {
+                        let smp = Sample {
+                            s: initial_strength(&shot.ray, config, current, scratch),
+                            ray: shot.ray,
+                            kernel_bmu: None,
+                            shading_bmu: None,
+                            inv_px: shot.inv_px,
+                        };
+                        return (tries, Some(smp));
                     }
-                    (64, None)
                 }
-                OutputFit::DeltaRule => {
-                    let u: Vec<f64> = (0..domain.param_dim()).map(|_| r.random()).collect();
-                    let ray = domain.ray(&u);
+                (64, None)
+            })
+            .collect(),
+        // each sample's parameters from its own seed, as one at a time; in chunks because `Domain::rays`
+        // prefetches ahead within a chunk
+        OutputFit::DeltaRule => seeds
+            .par_chunks(64)
+            .flat_map_iter(|chunk| {
+                let us: Vec<Vec<f64>> = chunk
+                    .iter()
+                    .map(|&seed| {
+                        let mut r = ChaCha8Rng::seed_from_u64(seed);
+                        (0..domain.param_dim()).map(|_| r.random()).collect()
+                    })
+                    .collect();
+                let mut scratch = Vec::new();
+                domain.rays(&us).into_iter().map(move |ray| {
                     let smp = Sample {
-                        s: initial_strength(&ray, config, current, scratch),
+                        s: initial_strength(&ray, config, current, &mut scratch),
                         ray,
                         kernel_bmu: None,
                         shading_bmu: None,
                         inv_px: 0.0,
                     };
                     (1, Some(smp))
-                }
-            }
-        })
-        .collect();
+                })
+            })
+            .collect(),
+    };
     for (tries, smp) in new {
         *shots += tries;
         samples.extend(smp);

@@ -9,11 +9,16 @@ fn main() {
     let queries: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(200_000);
     let rounds: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(5);
     let scene = scene_sampler::random_boxes(tris, 1);
-    let (b, k, v) = scene_sampler::bench::cpu_ratio(&scene, queries, rounds, 7);
+    let t = scene_sampler::bench::cpu_ratio(&scene, queries, rounds, 7);
     println!(
-        "{} triangles: bare {b:.0} ns | visible {v:.0} ns | kernel {k:.0} ns | visible/bare {:.3} | kernel/bare {:.3}",
+        "{} triangles: bare {:.0} ns | visible {:.0} ns | kernel {:.0} ns | samples {:.0} ns | visible/bare {:.3} | kernel/bare {:.3} | samples/bare {:.3}",
         scene.faces.len(),
-        v / b,
-        k / b
+        t.bare,
+        t.visible,
+        t.kernel,
+        t.samples,
+        t.visible / t.bare,
+        t.kernel / t.bare,
+        t.samples / t.bare
     );
 }

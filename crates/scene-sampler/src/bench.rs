@@ -6,7 +6,9 @@
 //! * **[`SceneBvh::visible`]**: the same queries through our API (f64 → f32 conversion, normal offsets, face
 //!   skipping);
 //! * **[`KernelSampler::sample`]**: the whole kernel sample — parameterize 4 numbers to two surface points,
-//!   cosines, the ray when both cosines are positive, G.
+//!   cosines, the ray when both cosines are positive, G — one call per sample;
+//! * **[`KernelSampler::samples`]**: the same samples (bit for bit) through the iterator that prefetches the
+//!   look-ups of the next samples while one traces its ray (what gcr's batch sampling uses).
 
 use crate::{BuildQuality, KernelSampler, Scene, SceneBvh, SurfacePoint, SurfaceSampler};
 use obvhs::ray::Ray;
@@ -39,6 +41,10 @@ pub struct Throughput {
     pub facing_fraction: f64,
     /// Kernel time per sample over bare-ray time per ray, on the same pairs (target ≤ 1.5).
     pub kernel_over_bare: f64,
+    /// Kernel samples per second through [`KernelSampler::samples`] (chunks of 1024 per rayon task).
+    pub samples_per_s: f64,
+    /// [`KernelSampler::samples`] time per sample over bare-ray time per ray.
+    pub samples_over_bare: f64,
     /// Fraction of pairs found visible (sanity: the two APIs must agree on the same pairs).
     pub visible_fraction: f64,
 }
@@ -157,6 +163,15 @@ pub fn measure(scene: &Scene, queries: usize, threads: usize, seed: u64) -> Thro
             .filter(|u| k.sample(**u).kernel().0[0] > 0.0)
             .count()
     });
+    let (samples_s, _) = best(&|| {
+        us.par_chunks(1024)
+            .map(|c| {
+                k.samples(c.iter().copied())
+                    .filter(|s| s.kernel().0[0] > 0.0)
+                    .count()
+            })
+            .sum()
+    });
     let q = queries as f64;
     Throughput {
         triangles: scene.faces.len(),
@@ -170,45 +185,78 @@ pub fn measure(scene: &Scene, queries: usize, threads: usize, seed: u64) -> Thro
         kernel_samples_per_s: q / ker_s,
         facing_fraction: q / drawn as f64,
         kernel_over_bare: ker_s / bare_s,
+        samples_per_s: q / samples_s,
+        samples_over_bare: samples_s / bare_s,
         visible_fraction: vis_n as f64 / q,
     }
 }
 
-/// CPU time of the calling thread (ns) from `/proc/thread-self/schedstat` (0 where that file does not exist).
-/// Unlike wall time it does not count the time the thread waits for a core on a shared machine.
+/// CPU time of the calling thread (ns): `clock_gettime(CLOCK_THREAD_CPUTIME_ID)` on Linux, 0 elsewhere.
+/// Unlike wall time it does not count the time the thread waits for a core on a shared machine. (It used to be
+/// read from `/proc/thread-self/schedstat`, which on this machine's kernel advances in scheduler ticks: a 4 ms
+/// step, ±25 % of a 150k-query pass on the 38-triangle scene.)
 pub fn thread_cpu_ns() -> u64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next().and_then(|v| v.parse().ok()))
-        .unwrap_or(0)
+    #[cfg(target_os = "linux")]
+    {
+        let t = rustix::time::clock_gettime(rustix::time::ClockId::ThreadCPUTime);
+        t.tv_sec as u64 * 1_000_000_000 + t.tv_nsec as u64
+    }
+    #[cfg(not(target_os = "linux"))]
+    0
 }
 
-/// [`measure`]'s three timings on one thread in thread CPU time ([`thread_cpu_ns`]), for comparisons on a
-/// loaded machine: the three passes (bare, kernel, visible) alternate `rounds` times over the same facing pairs
-/// and each keeps its fastest round. Returns `(bare, kernel, visible)` ns per query; `kernel / bare` is the
-/// ratio of [`Throughput::kernel_over_bare`]. Driver: `examples/kernel_cpu_ratio.rs`.
-pub fn cpu_ratio(scene: &Scene, queries: usize, rounds: usize, seed: u64) -> (f64, f64, f64) {
+/// Per-query thread CPU times (ns) of [`cpu_ratio`].
+#[derive(Clone, Copy, Debug)]
+pub struct CpuTimes {
+    /// Bare obvhs occlusion ray.
+    pub bare: f64,
+    /// [`KernelSampler::sample`].
+    pub kernel: f64,
+    /// [`KernelSampler::samples`] (one iterator over all queries).
+    pub samples: f64,
+    /// [`SceneBvh::visible`].
+    pub visible: f64,
+}
+
+/// [`measure`]'s timings on one thread in thread CPU time ([`thread_cpu_ns`]), for comparisons on a loaded
+/// machine: the four passes (bare, kernel, samples, visible) alternate `rounds` times over the same facing
+/// pairs and each keeps its fastest round. `kernel / bare` is the ratio of [`Throughput::kernel_over_bare`],
+/// `samples / bare` that of [`Throughput::samples_over_bare`]. Driver: `examples/kernel_cpu_ratio.rs`.
+pub fn cpu_ratio(scene: &Scene, queries: usize, rounds: usize, seed: u64) -> CpuTimes {
     let bvh = SceneBvh::with_quality(scene, BuildQuality::High);
     let Queries {
         us, pairs, rays, ..
     } = Queries::new(scene, &bvh, queries, seed);
     let k = KernelSampler::new(scene, &bvh);
-    let (mut b, mut kk, mut v) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
+    let mut t = CpuTimes {
+        bare: f64::INFINITY,
+        kernel: f64::INFINITY,
+        samples: f64::INFINITY,
+        visible: f64::INFINITY,
+    };
     let q = queries as f64;
+    let time = |best: &mut f64, f: &dyn Fn() -> usize| {
+        let t0 = thread_cpu_ns();
+        std::hint::black_box(f());
+        *best = best.min((thread_cpu_ns() - t0) as f64 / q);
+    };
     for _ in 0..rounds {
-        let t = thread_cpu_ns();
-        let n = rays.iter().filter(|r| bvh.bare_miss(r)).count();
-        b = b.min((thread_cpu_ns() - t) as f64 / q);
-        let t = thread_cpu_ns();
-        let n2 = us
-            .iter()
-            .filter(|u| k.sample(**u).kernel().0[0] > 0.0)
-            .count();
-        kk = kk.min((thread_cpu_ns() - t) as f64 / q);
-        let t = thread_cpu_ns();
-        let n3 = pairs.iter().filter(|(x, y)| bvh.visible(x, y)).count();
-        v = v.min((thread_cpu_ns() - t) as f64 / q);
-        std::hint::black_box((n, n2, n3));
+        time(&mut t.bare, &|| {
+            rays.iter().filter(|r| bvh.bare_miss(r)).count()
+        });
+        time(&mut t.kernel, &|| {
+            us.iter()
+                .filter(|u| k.sample(**u).kernel().0[0] > 0.0)
+                .count()
+        });
+        time(&mut t.samples, &|| {
+            k.samples(us.iter().copied())
+                .filter(|s| s.kernel().0[0] > 0.0)
+                .count()
+        });
+        time(&mut t.visible, &|| {
+            pairs.iter().filter(|(x, y)| bvh.visible(x, y)).count()
+        });
     }
-    (b, kk, v)
+    t
 }

@@ -43,7 +43,7 @@ pub use builtin::{BUILTIN_NAMES, builtin, is_builtin, random_boxes};
 pub use bvh::{BuildQuality, FlatHit, FlatVisibility, Hit, SceneBvh};
 pub use error::{Result, SceneError};
 pub use flatland::{FlatView, FlatlandScene, Segment};
-pub use kernel::{FlatKernelSample, FlatKernelSampler, KernelSample, KernelSampler};
+pub use kernel::{FlatKernelSample, FlatKernelSampler, KernelSample, KernelSampler, Samples};
 pub use load::{
     load, load_flatland, load_gltf, load_obj, load_or_builtin, to_gltf, to_obj, write_flatland,
     write_gltf, write_obj,

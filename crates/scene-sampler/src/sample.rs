@@ -49,6 +49,8 @@ pub struct SurfaceSampler {
     guide: Vec<u32>,
     /// Per face: its parameter interval and geometry in one record, so a look-up touches one place.
     recs: Vec<FaceRec>,
+    /// ρ per face (the kernel sampler reads it for the receiver only).
+    rho: Vec<Spectrum>,
     total_area: f64,
 }
 
@@ -72,19 +74,25 @@ impl SurfaceSampler {
             .faces
             .iter()
             .enumerate()
-            .map(|(i, f)| FaceRec {
-                lo: cdf[i],
-                hi: cdf[i + 1],
-                v0: f.v[0],
-                e1: f.v[1] - f.v[0],
-                e2: f.v[2] - f.v[0],
-                rho: f.rho,
+            .map(|(i, f)| {
+                let (e1, e2) = (f.v[1] - f.v[0], f.v[2] - f.v[0]);
+                // the normal exactly as `Face::new` computes it (same operations, same bits)
+                let c = e1.cross(e2);
+                FaceRec {
+                    lo: cdf[i],
+                    hi: cdf[i + 1],
+                    v0: f.v[0],
+                    e1,
+                    e2,
+                    normal: c / c.length(),
+                }
             })
             .collect();
         SurfaceSampler {
             cdf,
             guide,
             recs,
+            rho: scene.faces.iter().map(|f| f.rho).collect(),
             total_area: total,
         }
     }
@@ -116,11 +124,12 @@ impl SurfaceSampler {
         }
         // faces lo..=hi; the first i in there with cdf[i+1] > u. Face `lo` is the common answer: test it
         // alone first, so the usual look-up touches one record (the `hi`s are non-decreasing, so this is
-        // what the search over the whole range returns)
+        // what the search over the whole range returns); the rest is searched in the compact `cdf`
+        // (`cdf[i + 1]` is `recs[i].hi`, bit for bit), not in the 128-byte records
         if first_hi > u {
             return lo;
         }
-        let i = lo + 1 + self.recs[lo + 1..=hi].partition_point(|r| r.hi <= u);
+        let i = lo + 1 + self.cdf[lo + 2..=hi + 1].partition_point(|&c| c <= u);
         i.min(n - 1)
     }
 
@@ -162,9 +171,7 @@ impl SurfaceSampler {
     fn point_on(&self, i: usize, ux: f64, uy: f64) -> SurfacePoint {
         let r = &self.recs[i];
         let up = ((ux - r.lo) / (r.hi - r.lo)).clamp(0.0, 1.0);
-        // the normal exactly as `Face::new` computes it (same operations, same bits)
-        let c = r.e1.cross(r.e2);
-        let normal = c / c.length();
+        let normal = r.normal;
         let su = up.sqrt();
         let b1 = uy * su; // weight of v1
         let b2 = 1.0 - su; // weight of v2; v0 gets su·(1 − uy)
@@ -176,11 +183,46 @@ impl SurfaceSampler {
         }
     }
 
-    /// ρ of face `face` (stored in the face's sampling record: the kernel sampler reads it from the cache line
-    /// [`SurfaceSampler::sample`] just loaded).
+    /// Bytes of the face records (what a look-up reads at random).
+    pub(crate) fn recs_bytes(&self) -> usize {
+        std::mem::size_of_val(&self.recs[..])
+    }
+
+    /// Prefetch stage 1 of [`crate::Samples`] for the two points of `u`: requests their guide entries.
+    #[inline]
+    pub(crate) fn prefetch_guide(&self, u: [f64; 4]) {
+        for ux in [u[0], u[2]] {
+            let n = self.recs.len();
+            let k = ((ux.clamp(0.0, 1.0) * n as f64) as usize).min(n - 1);
+            prefetch(&self.guide[k]);
+        }
+    }
+
+    /// Prefetch stage 2: the guide entries are cached now; requests the first face record of each bucket and
+    /// the bucket's stretch of `cdf` (what [`SurfaceSampler::face_of`] reads).
+    #[inline]
+    pub(crate) fn prefetch_bucket(&self, u: [f64; 4]) {
+        for ux in [u[0], u[2]] {
+            let (lo, _) = self.bucket(ux.clamp(0.0, 1.0));
+            self.recs[lo].prefetch();
+            prefetch(&self.cdf[lo + 1]);
+        }
+    }
+
+    /// Prefetch stage 3: the bucket data is cached now; finds each point's face and requests its record, and
+    /// ρ of the second point's face.
+    #[inline]
+    pub(crate) fn prefetch_faces(&self, u: [f64; 4]) {
+        self.recs[self.face_of(u[0].clamp(0.0, 1.0))].prefetch();
+        let y = self.face_of(u[2].clamp(0.0, 1.0));
+        self.recs[y].prefetch();
+        prefetch(&self.rho[y]);
+    }
+
+    /// ρ of face `face`.
     #[inline]
     pub(crate) fn rho(&self, face: u32) -> Spectrum {
-        self.recs[face as usize].rho
+        self.rho[face as usize]
     }
 
     /// Inverse of [`SurfaceSampler::sample`]: the parameters of a point lying on face `face`
@@ -201,9 +243,9 @@ impl SurfaceSampler {
 }
 
 /// What [`SurfaceSampler`] and the kernel sampler need of one face, stored together so that a look-up touches
-/// one place: 112 bytes padded to two whole cache lines (128 bytes, aligned), where a packed 88-byte record
-/// plus a separate ρ array spread one sample over 3–4 lines. The normal is recomputed from the edges,
-/// bit-identical to `Face::normal`.
+/// one place: 112 bytes padded to two whole cache lines (128 bytes, aligned; a packed 88-byte record would
+/// straddle 2–3 lines). The normal is stored, not recomputed from the edges (that cost two square roots and six
+/// divisions per sample pair); ρ, which only the receiver needs, lives in a separate array.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 struct FaceRec {
@@ -212,8 +254,33 @@ struct FaceRec {
     v0: DVec3,
     e1: DVec3,
     e2: DVec3,
-    /// ρ of the face (read by [`crate::KernelSampler`] for the receiver).
-    rho: Spectrum,
+    /// Unit normal, computed once as `Face::new` computes it (bit-identical).
+    normal: DVec3,
+}
+
+impl FaceRec {
+    /// Requests both cache lines of the record.
+    #[inline]
+    fn prefetch(&self) {
+        prefetch(&self.lo);
+        prefetch(&self.e2);
+    }
+}
+
+/// A hint to load the cache line holding `r` into all cache levels: the x86 `prefetcht0` instruction (through
+/// `safe_arch`, no `unsafe` here), nothing on other targets. It never faults and never changes a result.
+#[inline(always)]
+fn prefetch<T>(r: &T) {
+    #[cfg(all(
+        any(target_arch = "x86", target_arch = "x86_64"),
+        target_feature = "sse"
+    ))]
+    safe_arch::prefetch_t0(r);
+    #[cfg(not(all(
+        any(target_arch = "x86", target_arch = "x86_64"),
+        target_feature = "sse"
+    )))]
+    let _ = r;
 }
 
 /// Barycentric weights `(b1, b2)` of `p` projected onto the plane of triangle `v` (weights of v1 and v2).

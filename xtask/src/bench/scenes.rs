@@ -112,11 +112,14 @@ pub fn run(ctx: &Ctx) -> Result<()> {
          (Cornell box plus random boxes; N = 0 gives the bare Cornell box). Queries: random area-uniform surface-point pairs that face each other \
          (the ones the kernel traces); best of 3 runs each. *bare obvhs* = prepared f32 rays through \
          `CwBvh::ray_traverse_miss` + `Triangle::intersect`, as obvhs's examples drive it; *visible* = \
-         `SceneBvh::visible`; *kernel* = `KernelSampler::sample` (parameterize 4 numbers, cosines, ray, G); the last two columns: the same bare rays \
+         `SceneBvh::visible`; *kernel* = `KernelSampler::sample` (parameterize 4 numbers, cosines, ray, G), one call per sample; \
+         *samples* = the same samples, bit for bit, through the iterator `KernelSampler::samples` (chunks of 1024 per rayon task), which \
+         prefetches the surface look-ups of the next three samples while one traces its ray (what gcr's batched sampling, \
+         `Domain::rays`, uses); the last two columns: the same bare rays \
          through a BVH built with `medium_build` instead of `very_slow_build`. The machine is shared (2 cores): \
          numbers move by ±10 % between runs.\n\n\
-         | triangles | threads | build (s) | bare obvhs (M rays/s) | visible (M/s) | kernel (M samples/s) | kernel / bare time | facing pairs | visible pairs | medium build (s) | bare obvhs, medium BVH (M rays/s) |\n\
-         |---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+         | triangles | threads | build (s) | bare obvhs (M rays/s) | visible (M/s) | kernel (M samples/s) | kernel / bare time | samples (M/s) | samples / bare time | facing pairs | visible pairs | medium build (s) | bare obvhs, medium BVH (M rays/s) |\n\
+         |---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     let load = || std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     let load_before = load();
@@ -134,7 +137,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         for threads in [1, 2] {
             let r = scene_sampler::bench::measure(&scene, queries, threads, 7);
             let line = format!(
-                "| {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.0} % | {:.1} % | {:.2} | {:.2} |",
+                "| {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.0} % | {:.1} % | {:.2} | {:.2} |",
                 r.triangles,
                 r.threads,
                 r.build_high_s,
@@ -142,6 +145,8 @@ pub fn run(ctx: &Ctx) -> Result<()> {
                 r.visible_per_s / 1e6,
                 r.kernel_samples_per_s / 1e6,
                 r.kernel_over_bare,
+                r.samples_per_s / 1e6,
+                r.samples_over_bare,
                 100.0 * r.facing_fraction,
                 100.0 * r.visible_fraction,
                 r.build_medium_s,
@@ -160,6 +165,11 @@ pub fn run(ctx: &Ctx) -> Result<()> {
                 r.triangles,
                 r.kernel_samples_per_s / 1e6,
             );
+            push(
+                format!("kernel samples (prefetching iterator), {threads} {t}"),
+                r.triangles,
+                r.samples_per_s / 1e6,
+            );
         }
     }
     writeln!(
@@ -169,6 +179,35 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         load_before.trim(),
         load().trim()
     )?;
+    // The same ratios in thread CPU time, less disturbed by other jobs.
+    let (cpu_queries, cpu_rounds) = if ctx.quick { (20_000, 3) } else { (150_000, 5) };
+    writeln!(
+        md,
+        "\n### The same ratios in thread CPU time\n\n\
+         `scene_sampler::bench::cpu_ratio(scene, {cpu_queries}, {cpu_rounds}, 7)` (also \
+         `cargo run --release -p scene-sampler --example kernel_cpu_ratio -- N {cpu_queries} {cpu_rounds}`): one \
+         thread, the four passes alternate {cpu_rounds} times over the same {cpu_queries} facing pairs, each \
+         keeps its fastest round, timed in the thread's CPU time (`clock_gettime(CLOCK_THREAD_CPUTIME_ID)`), which does not \
+         count time spent waiting for a core. Other jobs still share the caches.\n\n\
+         | triangles | bare obvhs (ns/ray) | visible (ns) | kernel (ns/sample) | samples (ns/sample) | kernel / bare | samples / bare |\n\
+         |---:|---:|---:|---:|---:|---:|---:|"
+    )?;
+    for &(tris, _) in sizes {
+        let scene = scene_sampler::random_boxes(tris, 1);
+        let t = scene_sampler::bench::cpu_ratio(&scene, cpu_queries, cpu_rounds, 7);
+        let line = format!(
+            "| {} | {:.0} | {:.0} | {:.0} | {:.0} | {:.2} | {:.2} |",
+            scene.faces.len(),
+            t.bare,
+            t.visible,
+            t.kernel,
+            t.samples,
+            t.kernel / t.bare,
+            t.samples / t.bare
+        );
+        println!("scenes (cpu): {line}");
+        writeln!(md, "{line}")?;
+    }
     let figures = ctx.out.join("figures");
     std::fs::create_dir_all(&figures)?;
     crate::plot::loglog(

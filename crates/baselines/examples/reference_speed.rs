@@ -1,0 +1,83 @@
+//! Speed of the pointwise reference (issue target: 1 % standard error at 100 Cornell-box probes in
+//! under 60 s on 2 cores), at 100 area-uniform points of the non-emitting faces, two ways:
+//!
+//! * adaptive (`gcr reference`'s mode): per point, batches of paths until every colour band has at
+//!   most 1 % relative standard error — the strictest reading: the blue band on the red wall is
+//!   ~1 % of the red one and needs ~10⁶ paths;
+//! * fixed paths per point, reporting the relative standard error of each point's grey value
+//!   (mean over bands) and over all points and bands (relative L2).
+//!
+//! `cargo run --release -p baselines --example reference_speed -- [scene] [points] [rel_error] [paths]`
+
+use baselines::Adaptive;
+use baselines::pointwise::radiosity_adaptive;
+use scene_sampler::{SceneBvh, SurfaceSampler};
+use std::time::Instant;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let name = args.get(1).map_or("cornell-box", |s| s.as_str());
+    let count: usize = args.get(2).map_or(Ok(100), |s| s.parse())?;
+    let rel_error: f64 = args.get(3).map_or(Ok(0.01), |s| s.parse())?;
+    let fixed: usize = args.get(4).map_or(Ok(20_000), |s| s.parse())?;
+    let scene = scene_sampler::builtin(name)?.into_3d()?;
+    let bvh = SceneBvh::new(&scene);
+    let sampler = SurfaceSampler::new(&scene);
+    // A low-discrepancy sequence over the surface, emitters left out.
+    let points: Vec<_> = (1..100 * count as u64)
+        .map(|i| {
+            sampler.sample([
+                (i as f64 * 0.754_877_666_246_692_7).fract(),
+                (i as f64 * 0.569_840_290_998_053_3).fract(),
+            ])
+        })
+        .filter(|p| scene.faces[p.face as usize].emission.is_zero())
+        .take(count)
+        .collect();
+    let adaptive = Adaptive {
+        rel_error,
+        ..Adaptive::default()
+    };
+    let t = Instant::now();
+    let estimates = radiosity_adaptive(&scene, &bvh, &points, &adaptive)?;
+    let seconds = t.elapsed().as_secs_f64();
+    let paths: usize = estimates.iter().map(|e| e.paths).sum();
+    let worst = estimates.iter().map(|e| e.rel_error()).fold(0.0, f64::max);
+    let capped = estimates
+        .iter()
+        .filter(|e| e.paths >= adaptive.max_paths)
+        .count();
+    println!(
+        "{name}: {} points, target {:.2} %: {seconds:.1} s on {} threads, {paths} paths \
+         ({:.0} per point, {:.2} M paths/s), largest relative standard error {:.3} %, {capped} \
+         points at the path cap",
+        points.len(),
+        100.0 * rel_error,
+        rayon::current_num_threads(),
+        paths as f64 / points.len() as f64,
+        paths as f64 / seconds / 1e6,
+        100.0 * worst
+    );
+    let t = Instant::now();
+    let estimates = baselines::pointwise::radiosity_at(&scene, &bvh, &points, fixed, adaptive.seed);
+    let seconds = t.elapsed().as_secs_f64();
+    // Bands come from the same paths, so the grey value's error is at most the sum of theirs.
+    let grey = estimates
+        .iter()
+        .map(|e| e.std_error.iter().sum::<f64>() / e.mean.iter().sum::<f64>())
+        .fold(0.0, f64::max);
+    let (num, den) = estimates.iter().fold((0.0, 0.0), |(n, d), e| {
+        (
+            n + e.std_error.iter().map(|s| s * s).sum::<f64>(),
+            d + e.mean.iter().map(|m| m * m).sum::<f64>(),
+        )
+    });
+    println!(
+        "{name}: {} points, {fixed} paths each: {seconds:.1} s, largest relative standard error of \
+         a point's grey value {:.3} %, relative L2 standard error over all points and bands {:.3} %",
+        points.len(),
+        100.0 * grey,
+        100.0 * (num / den).sqrt()
+    );
+    Ok(())
+}

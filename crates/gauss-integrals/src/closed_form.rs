@@ -221,20 +221,21 @@ impl Tri {
         if damp.is_nan() || damp <= 0.0 {
             return 0.0;
         }
-        let edge = |i| self.edge(c, sa, i);
+        let tab = crate::wedge::table();
+        let edge = |i| self.edge(tab, c, sa, i);
         let sum = (edge(0) + edge(1)) + edge(2);
         (sum * (damp / a)).max(0.0)
     }
 
     /// Edge `i`'s signed pair of right triangles, `sign(ε_i)·[R(|ε_i|, u_i + ℓ_i) − R(|ε_i|, u_i)]`.
     #[inline(always)]
-    fn edge(&self, c: V, sa: f64, i: usize) -> f64 {
+    fn edge(&self, tab: &crate::wedge::Table, c: V, sa: f64, i: usize) -> f64 {
         let d = sub(self.v[i], c);
         // Signed distance of the foot from the edge line (positive: foot on the inner side),
         // and the corner's position along the edge, from the foot's projection.
         let cr = dot(d, self.w[i]);
         let t0 = dot(d, self.e[i]);
-        let w = crate::wedge::r_diff(cr.abs() * sa, t0 * sa, (t0 + self.len[i]) * sa);
+        let w = crate::wedge::r_diff_with(tab, cr.abs() * sa, t0 * sa, (t0 + self.len[i]) * sa);
         if cr >= 0.0 { w } else { -w }
     }
 }

@@ -9,7 +9,8 @@
 //! i.e. `R = ½ atan(u/ε) − π T(√2 ε, u/ε)` with Owen's T (MATH.md §2). The second form shows that
 //! `R` is an entire function of `(ε, u)`, bounded by π/4, with no cancellation near `ε = 0`: it is
 //! tabulated once as piecewise tensor-Chebyshev polynomials (converted to monomials) on
-//! `[0, L)²`, so that one evaluation costs ~`(D+1)²` multiply-adds and no transcendental call.
+//! `[0, L)²`, so that one evaluation costs `(D+1)(D+2)/2 = 55` multiply-adds (two-lane SIMD
+//! over coefficient pairs, see `patch_value`) and no transcendental call.
 //! Outside the table the Gaussian factor `exp(−(ε² + u²))` is below `e^{−L²} < 1e−18` and `R` is
 //! `½ atan(u/ε)` plus a constant (see [`r`]).
 
@@ -38,13 +39,50 @@ const fn row_start(j: usize) -> usize {
 }
 const _: () = assert!(row_start(D + 1) == NT);
 
-struct Table {
-    /// `N·N` patches (ε-major) of `NT` monomial coefficients in the local variables in [−1, 1]
-    /// (see [`row_start`]).
-    coef: Vec<[f64; NT]>,
+/// Stored coefficients per patch: the rows `j = 0..D−1` padded to an even length (so that each is
+/// a run of aligned pairs), then `c_{0,D}` and the patch constant `c_{00}` (whose slot in row 0
+/// holds 0). 60 for `D = 9`: 480 bytes, the whole table 1.30 MB.
+const NP: usize = row_pad(D) + 2;
+
+/// Number of coefficient pairs of the padded row `j < D`: `⌈(D + 1 − j)/2⌉`.
+const fn row_pairs(j: usize) -> usize {
+    (D + 2 - j) / 2
 }
 
-fn table() -> &'static Table {
+/// Offset of the padded row `j ≤ D` in a patch's stored coefficients ([`NP`]).
+const fn row_pad(j: usize) -> usize {
+    let mut o = 0;
+    let mut k = 0;
+    while k < j {
+        o += 2 * row_pairs(k);
+        k += 1;
+    }
+    o
+}
+
+/// Index of `c_{0,D}` and of the patch constant `c_{00}` in the stored coefficients.
+const C0D: usize = NP - 2;
+const C00: usize = NP - 1;
+
+/// The pairs of all padded rows must fit the ε powers `1 … t^{2·row_pairs(0)−1}`.
+const _: () = assert!(2 * row_pairs(0) == D + 1 && D % 2 == 1);
+
+/// One patch's stored coefficients, 16-byte aligned so that every row pair is one aligned load.
+#[derive(Clone, Copy)]
+#[repr(C, align(16))]
+struct Patch([f64; NP]);
+const _: () = assert!(NP % 2 == 0);
+
+/// The tabulated `R` (see [`table`]).
+pub(crate) struct Table {
+    /// `N·N` patches (ε-major) of monomial coefficients `c_ij` of `t_ε^i t_u^j` in the local
+    /// variables in [−1, 1], in the padded layout of [`NP`].
+    coef: Box<[Patch; N * N]>,
+}
+
+/// The table, built on first use.
+#[inline]
+pub(crate) fn table() -> &'static Table {
     static T: OnceLock<Table> = OnceLock::new();
     T.get_or_init(build)
 }
@@ -180,7 +218,8 @@ fn build() -> Table {
     let tk: Vec<f64> = (0..NF * NF)
         .map(|kj| (PI * (kj / NF) as f64 * ((kj % NF) as f64 + 0.5) / NF as f64).cos())
         .collect();
-    let mut coef = vec![[0.0; NT]; N * N];
+    let mut coef = vec![Patch([0.0; NP]); N * N];
+    let mut out = [0.0; NT];
     let mut cc = vec![0.0; NF * NF];
     let mut tmp = vec![0.0; NF * NF];
     for pe in 0..N {
@@ -213,7 +252,6 @@ fn build() -> Table {
                     tmp[ke * NF + m] = (m..=D - ke).map(|ku| cc[ke * NF + ku] * mono[ku][m]).sum();
                 }
             }
-            let out = &mut coef[pe * N + pu];
             for mu in 0..=D {
                 for me in 0..=D - mu {
                     out[row_start(mu) + me] = (me..=D - mu)
@@ -222,9 +260,24 @@ fn build() -> Table {
                 }
             }
             out[0] += mid;
+            // To the padded layout.
+            let stored = &mut coef[pe * N + pu].0;
+            for mu in 0..D {
+                for me in 0..=D - mu {
+                    stored[row_pad(mu) + me] = out[row_start(mu) + me];
+                }
+            }
+            stored[0] = 0.0;
+            stored[C0D] = out[row_start(D)];
+            stored[C00] = out[0];
         }
     }
-    Table { coef }
+    Table {
+        coef: coef
+            .into_boxed_slice()
+            .try_into()
+            .unwrap_or_else(|_| unreachable!("N·N patches")),
+    }
 }
 
 /// Forces the one-time construction of the table (~10⁶ exponentials); optional, the first
@@ -233,82 +286,148 @@ pub fn init() {
     let _ = table();
 }
 
-/// Powers `1, t, …, t^D` of the local ε variable of patch `pe`.
+/// Lane pairs: two `f64` operated on together, one SSE2 register on x86-64 (NEON on aarch64, a
+/// plain pair elsewhere: [`wide`] picks at compile time; each lane is one IEEE multiplication or
+/// addition on every target, so all give the same bits).
+type F2 = wide::f64x2;
+
 #[inline(always)]
-fn eps_powers(eps: f64) -> (usize, [f64; D + 1]) {
-    let pe = ((eps * (1.0 / H)) as usize).min(N - 1);
-    let te = (eps - H * (pe as f64 + 0.5)) * (2.0 / H);
-    let mut pw = [1.0; D + 1];
-    for k in 1..=D {
-        pw[k] = pw[k - 1] * te;
+fn pair(lo: f64, hi: f64) -> F2 {
+    F2::from([lo, hi])
+}
+#[inline(always)]
+fn splat(x: f64) -> F2 {
+    F2::splat(x)
+}
+#[inline(always)]
+fn add2(a: F2, b: F2) -> F2 {
+    a + b
+}
+#[inline(always)]
+fn mul2(a: F2, b: F2) -> F2 {
+    a * b
+}
+/// `lo + hi`.
+#[inline(always)]
+fn hsum(a: F2) -> f64 {
+    let [lo, hi] = a.to_array();
+    lo + hi
+}
+/// The low lane.
+#[inline(always)]
+fn low(a: F2) -> f64 {
+    a.to_array()[0]
+}
+
+/// Lane-wise `a + b·c` (two roundings, as the scalar expression).
+#[inline(always)]
+fn mad2(a: F2, b: F2, c: F2) -> F2 {
+    add2(a, mul2(b, c))
+}
+
+/// The patch of `v ∈ [0, L)` along one axis and its local variable `(v − H(k + ½))·2/H ∈ [−1, 1]`.
+///
+/// `k` is `round(v/H − ½)` by the 1.5·2⁵² trick (adding it leaves the rounded integer in the low
+/// mantissa bits): no float-to-int saturation checks, no int-to-float conversion; at a patch
+/// boundary either neighbour may be chosen, with the local variable exactly ±1.
+#[inline(always)]
+fn cell(v: f64) -> (usize, f64) {
+    const ROUND: f64 = 6_755_399_441_055_744.0;
+    let x = v * (1.0 / H) - 0.5;
+    let r = x + ROUND;
+    let k = r - ROUND;
+    ((r.to_bits() as usize & 0xff).min(N - 1), (x - k) * 2.0)
+}
+
+/// Powers `t^0 … t^9` in pairs `(t^{2k}, t^{2k+1})`, by squaring (four multiplications deep).
+#[inline(always)]
+fn power_pairs(t: f64) -> [F2; 5] {
+    let t2 = t * t;
+    let t4 = t2 * t2;
+    let t8 = t4 * t4;
+    let p = pair(1.0, t);
+    [
+        p,
+        mul2(p, splat(t2)),
+        mul2(p, splat(t4)),
+        mul2(p, splat(t4 * t2)),
+        mul2(p, splat(t8)),
+    ]
+}
+
+const _: () = assert!(D == 9, "power_pairs and patch_value are written for D = 9");
+
+/// Row `j` of a patch against the ε powers: `Σ_i c_ij t_ε^i` as two partial sums (even and odd
+/// `i`), its pairs summed as a balanced tree.
+#[inline(always)]
+fn row<const J: usize>(c: &Patch, pw: &[F2; 5]) -> F2 {
+    let o = row_pad(J);
+    let p = |k: usize| mul2(pair(c.0[o + 2 * k], c.0[o + 2 * k + 1]), pw[k]);
+    match row_pairs(J) {
+        1 => p(0),
+        2 => add2(p(0), p(1)),
+        3 => add2(add2(p(0), p(1)), p(2)),
+        4 => add2(add2(p(0), p(1)), add2(p(2), p(3))),
+        _ => add2(add2(add2(p(0), p(1)), add2(p(2), p(3))), p(4)),
     }
-    (pe, pw)
 }
 
-const _: () = assert!(D == 9, "table_r2's unrolled rows are written for D = 9");
-
-/// `Σ_{k<M} c_l[S + k]·pw[k]` for both lanes `l`, smallest terms first.
+/// The patch polynomial `Σ_{i+j≤9} c_ij t_ε^i t_u^j` at `t_u` (ε powers `pw`).
+///
+/// Evaluated as `c_00 + Σ_j q_j t_u^j` with the rows `q_j = Σ_i c_ij t_ε^i` as dot products over
+/// contiguous coefficient pairs (one aligned load, one multiply and one add per two terms, no
+/// shuffles; the ε powers are shared by both ends of an edge), the sum over `j` in Estrin's form
+/// `(q_0 + q_1 u) + u²(q_2 + q_3 u) + u⁴[(q_4 + q_5 u) + u²(q_6 + q_7 u)] + u⁸(q_8 + q_9 u)` and
+/// every other sum pairwise: the dependency chains are a dozen operations long, where the nested
+/// Horner form had ~20 multiply–adds in a row. The patch constant `c_00` (the large term; its slot
+/// in row 0 holds 0) is added last, alone, so the rounding of the rest scales with the variation
+/// over the patch (|t| ≤ 1, coefficients decaying with the degree).
 #[inline(always)]
-fn row2<const S: usize, const M: usize>(c: [&[f64; NT]; 2], pw: &[f64; D + 1]) -> [f64; 2] {
-    let mut q = [0.0; 2];
-    let mut k = M;
-    while k > 0 {
-        k -= 1;
-        q[0] += c[0][S + k] * pw[k];
-        q[1] += c[1][S + k] * pw[k];
-    }
-    q
+fn patch_value(c: &Patch, pw: &[F2; 5], tu: f64) -> f64 {
+    let u = splat(tu);
+    let u2 = mul2(u, u);
+    let u4 = mul2(u2, u2);
+    let u8 = mul2(u4, u4);
+    let a = mad2(row::<0>(c, pw), row::<1>(c, pw), u);
+    let b = mad2(row::<2>(c, pw), row::<3>(c, pw), u);
+    let d = mad2(row::<4>(c, pw), row::<5>(c, pw), u);
+    let e = mad2(row::<6>(c, pw), row::<7>(c, pw), u);
+    let lo = mad2(a, b, u2);
+    let hi = mad2(d, e, u2);
+    let s = add2(lo, mul2(hi, u4));
+    let q8 = mul2(row::<8>(c, pw), u8);
+    let s = add2(s, q8);
+    c.0[C00] + (hsum(s) + c.0[C0D] * (low(u8) * tu))
 }
 
-/// `q·t + r` lane-wise.
-#[inline(always)]
-fn horner2(q: [f64; 2], t: [f64; 2], r: [f64; 2]) -> [f64; 2] {
-    [q[0] * t[0] + r[0], q[1] * t[1] + r[1]]
+/// Where `|u| ≥ L`: the clamped argument and the exact integral of the integrand ε/(ε² + s²)
+/// from `L` to `|u|` (the Gaussian factor is below `e^{−L²}` there).
+#[cold]
+#[inline(never)]
+fn beyond(eps: f64, u: f64) -> (f64, f64) {
+    (
+        L * (1.0 - f64::EPSILON),
+        0.5 * ((u - L) * eps).atan2(eps * eps + u * L),
+    )
 }
 
-/// `R(ε, u_l)` for `0 < ε < L` and two finite `u_l`, from the patch row `pe` with the ε powers
-/// `pw`: the two evaluations run in lock-step (two independent chains, SIMD lanes).
+/// `R(ε, u)` for `0 < ε < L` and finite `u`, from the patch row `pe` with the ε powers `pw`.
 #[inline(always)]
-fn table_r2(tab: &Table, pe: usize, pw: &[f64; D + 1], eps: f64, u: [f64; 2]) -> [f64; 2] {
-    let prep = |u: f64| {
-        let (sign, u) = if u < 0.0 { (-1.0, -u) } else { (1.0, u) };
-        let (uu, extra) = if u >= L {
-            // Beyond the table the integrand is ε/(ε² + s²) to e^{−L²}: add its exact integral.
-            (
-                L * (1.0 - f64::EPSILON),
-                0.5 * ((u - L) * eps).atan2(eps * eps + u * L),
-            )
-        } else {
-            (u, 0.0)
-        };
-        let pu = ((uu * (1.0 / H)) as usize).min(N - 1);
-        let tu = (uu - H * (pu as f64 + 0.5)) * (2.0 / H);
-        // R(ε, 0) = 0 exactly (the table is ~1e−17 off there).
-        let sign = if u == 0.0 { 0.0 } else { sign };
-        (sign, extra, &tab.coef[pe * N + pu], tu)
-    };
-    let (s0, x0, c0, t0) = prep(u[0]);
-    let (s1, x1, c1, t1) = prep(u[1]);
-    let (c, t) = ([c0, c1], [t0, t1]);
-    // Each power of u: a dot product with the ε powers (independent, so they overlap); then
-    // Horner in u. The patch constant c[0] (the large term) is added last, alone.
-    let s = row2::<{ row_start(9) }, 1>(c, pw);
-    let s = horner2(s, t, row2::<{ row_start(8) }, 2>(c, pw));
-    let s = horner2(s, t, row2::<{ row_start(7) }, 3>(c, pw));
-    let s = horner2(s, t, row2::<{ row_start(6) }, 4>(c, pw));
-    let s = horner2(s, t, row2::<{ row_start(5) }, 5>(c, pw));
-    let s = horner2(s, t, row2::<{ row_start(4) }, 6>(c, pw));
-    let s = horner2(s, t, row2::<{ row_start(3) }, 7>(c, pw));
-    let s = horner2(s, t, row2::<{ row_start(2) }, 8>(c, pw));
-    let s = horner2(s, t, row2::<{ row_start(1) }, 9>(c, pw));
-    let r0 = row2::<1, 9>(
-        c,
-        &[
-            pw[1], pw[2], pw[3], pw[4], pw[5], pw[6], pw[7], pw[8], pw[9], 0.0,
-        ],
-    );
-    let s = horner2(s, t, r0);
-    [s0 * ((c0[0] + s[0]) + x0), s1 * ((c1[0] + s[1]) + x1)]
+fn table_r(tab: &Table, pe: usize, pw: &[F2; 5], eps: f64, u: f64) -> f64 {
+    let au = u.abs();
+    let (uu, extra) = if au >= L { beyond(eps, au) } else { (au, 0.0) };
+    let (pu, tu) = cell(uu);
+    let v = patch_value(&tab.coef[pe * N + pu], pw, tu) + extra;
+    // R is odd in u, and R(ε, 0) = 0 exactly (the table is ~1e−17 off there).
+    if u == 0.0 { 0.0 } else { v.copysign(u) }
+}
+
+/// `R(ε, u1) − R(ε, u0)` for `0 < ε < L` and finite `u0`, `u1`.
+#[inline(always)]
+fn table_diff(tab: &Table, eps: f64, u0: f64, u1: f64) -> f64 {
+    let (pe, te) = cell(eps);
+    let pw = power_pairs(te);
+    table_r(tab, pe, &pw, eps, u1) - table_r(tab, pe, &pw, eps, u0)
 }
 
 /// `R(ε, u)` outside the table's domain: `ε ≥ L`, NaN, negative ε or infinite u.
@@ -335,23 +454,34 @@ pub fn r(eps: f64, u: f64) -> f64 {
     if eps == 0.0 {
         return 0.0;
     }
-    let (pe, pw) = eps_powers(eps);
-    table_r2(table(), pe, &pw, eps, [u, 0.0])[0]
+    let (pe, te) = cell(eps);
+    table_r(table(), pe, &power_pairs(te), eps, u)
 }
 
 /// `R(ε, u1) − R(ε, u0)`: the signed pair of right triangles of one edge (same ε), sharing the
 /// patch row and the ε powers.
-#[inline(always)]
+#[inline]
 pub fn r_diff(eps: f64, u0: f64, u1: f64) -> f64 {
+    r_diff_with(table(), eps, u0, u1)
+}
+
+/// [`r_diff`] with the table at hand (callers that evaluate several edges fetch it once).
+#[inline(always)]
+pub(crate) fn r_diff_with(tab: &Table, eps: f64, u0: f64, u1: f64) -> f64 {
     if !((0.0..L).contains(&eps) && u0.is_finite() && u1.is_finite()) {
-        return r(eps, u1) - r(eps, u0);
+        return r_diff_outside(eps, u0, u1);
     }
     if eps == 0.0 {
         return 0.0;
     }
-    let (pe, pw) = eps_powers(eps);
-    let [r0, r1] = table_r2(table(), pe, &pw, eps, [u0, u1]);
-    r1 - r0
+    table_diff(tab, eps, u0, u1)
+}
+
+/// [`r_diff`] where `ε` or `u` leave the table (rare: the foot ≥ `L` widths from the edge line).
+#[cold]
+#[inline(never)]
+fn r_diff_outside(eps: f64, u0: f64, u1: f64) -> f64 {
+    r(eps, u1) - r(eps, u0)
 }
 
 #[cfg(test)]

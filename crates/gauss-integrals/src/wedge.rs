@@ -67,11 +67,15 @@ const C00: usize = NP - 1;
 /// The pairs of all padded rows must fit the ε powers `1 … t^{2·row_pairs(0)−1}`.
 const _: () = assert!(2 * row_pairs(0) == D + 1 && D % 2 == 1);
 
-/// One patch's stored coefficients, 16-byte aligned so that every row pair is one aligned load.
+/// One patch's stored coefficients: the row pairs as lane pairs (16-byte aligned, so each is one
+/// aligned load, folded into the multiplication), then `[c_{0,D}, c_{00}]`.
 #[derive(Clone, Copy)]
-#[repr(C, align(16))]
-struct Patch([f64; NP]);
-const _: () = assert!(NP % 2 == 0);
+#[repr(C)]
+struct Patch {
+    pairs: [F2; C0D / 2],
+    tail: [f64; 2],
+}
+const _: () = assert!(NP % 2 == 0 && C0D % 2 == 0);
 
 /// The tabulated `R` (see [`table`]).
 pub(crate) struct Table {
@@ -218,7 +222,14 @@ fn build() -> Table {
     let tk: Vec<f64> = (0..NF * NF)
         .map(|kj| (PI * (kj / NF) as f64 * ((kj % NF) as f64 + 0.5) / NF as f64).cos())
         .collect();
-    let mut coef = vec![Patch([0.0; NP]); N * N];
+    let mut coef = vec![
+        Patch {
+            pairs: [splat(0.0); C0D / 2],
+            tail: [0.0; 2],
+        };
+        N * N
+    ];
+    let mut stored = [0.0; NP];
     let mut out = [0.0; NT];
     let mut cc = vec![0.0; NF * NF];
     let mut tmp = vec![0.0; NF * NF];
@@ -261,7 +272,6 @@ fn build() -> Table {
             }
             out[0] += mid;
             // To the padded layout.
-            let stored = &mut coef[pe * N + pu].0;
             for mu in 0..D {
                 for me in 0..=D - mu {
                     stored[row_pad(mu) + me] = out[row_start(mu) + me];
@@ -270,6 +280,11 @@ fn build() -> Table {
             stored[0] = 0.0;
             stored[C0D] = out[row_start(D)];
             stored[C00] = out[0];
+            let patch = &mut coef[pe * N + pu];
+            for (k, p) in patch.pairs.iter_mut().enumerate() {
+                *p = pair(stored[2 * k], stored[2 * k + 1]);
+            }
+            patch.tail = [stored[C0D], stored[C00]];
         }
     }
     Table {
@@ -362,7 +377,7 @@ const _: () = assert!(D == 9, "power_pairs and patch_value are written for D = 9
 #[inline(always)]
 fn row<const J: usize>(c: &Patch, pw: &[F2; 5]) -> F2 {
     let o = row_pad(J);
-    let p = |k: usize| mul2(pair(c.0[o + 2 * k], c.0[o + 2 * k + 1]), pw[k]);
+    let p = |k: usize| mul2(c.pairs[o / 2 + k], pw[k]);
     match row_pairs(J) {
         1 => p(0),
         2 => add2(p(0), p(1)),
@@ -397,7 +412,7 @@ fn patch_value(c: &Patch, pw: &[F2; 5], tu: f64) -> f64 {
     let s = add2(lo, mul2(hi, u4));
     let q8 = mul2(row::<8>(c, pw), u8);
     let s = add2(s, q8);
-    c.0[C00] + (hsum(s) + c.0[C0D] * (low(u8) * tu))
+    c.tail[1] + (hsum(s) + c.tail[0] * (low(u8) * tu))
 }
 
 /// Where `|u| ≥ L`: the clamped argument and the exact integral of the integrand ε/(ε² + s²)

@@ -140,8 +140,8 @@ pub fn quad_fast(c: V, a: f64, [p, q, r, s]: [V; 4]) -> f64 {
 
 /// The exact triangle integral of MATH.md §2 (signed edge decomposition around the centre's foot
 /// c' on the plane) with each right triangle read from the tabulated function `R(ε, u)` of
-/// [`crate::wedge`] instead of two Owen's T calls: about 6 × 81 multiply–adds, one `exp`, four
-/// square roots, no other transcendental call.
+/// [`crate::wedge`] instead of two Owen's T calls: 6 × 45 multiply–adds (in two-lane SIMD), one
+/// `exp`, four square roots and divisions (the frame, see `Tri`), no other transcendental call.
 ///
 /// Absolute error ≲ 2e−15/a (times `exp(−a h²)`); no relative guarantee where the signed parts
 /// cancel or the value is tiny (use [`triangle`] there). What a FEM step needs: its sums are

@@ -140,8 +140,8 @@ pub fn quad_fast(c: V, a: f64, [p, q, r, s]: [V; 4]) -> f64 {
 
 /// The exact triangle integral of MATH.md §2 (signed edge decomposition around the centre's foot
 /// c' on the plane) with each right triangle read from the tabulated function `R(ε, u)` of
-/// [`crate::wedge`] instead of two Owen's T calls: about 6 × 81 multiply–adds, one `exp`, four
-/// square roots, no other transcendental call.
+/// [`crate::wedge`] instead of two Owen's T calls: 6 × 45 multiply–adds (in two-lane SIMD), one
+/// `exp`, four square roots and divisions (the frame, see `Tri`), no other transcendental call.
 ///
 /// Absolute error ≲ 2e−15/a (times `exp(−a h²)`); no relative guarantee where the signed parts
 /// cancel or the value is tiny (use [`triangle`] there). What a FEM step needs: its sums are
@@ -157,92 +157,86 @@ pub fn triangle_fast(c: V, a: f64, p: V, q: V, r: V) -> f64 {
 }
 
 /// A triangle's geometry that does not depend on the Gaussian, computed once per element (the
-/// Gram and transfer sums integrate each element against ~100 Gaussians): its plane frame, its
-/// corners in that frame, its edges' unit directions and lengths.
+/// Gram and transfer sums integrate each element against ~100 Gaussians): its corners, unit
+/// normal, and per edge the unit direction, the in-plane unit normal and the length.
+///
+/// Everything the per-Gaussian sum needs is then a dot product with the centre's offset from a
+/// corner: with `ê_i` the direction of edge `i` (corner `i` to `i + 1`) and `ŵ_i = ê_i × n̂` (in
+/// the plane, pointing to the inside for counter-clockwise corners), the centre's foot `c'` lies
+/// at the signed distance `(v_i − c)·ŵ_i` from the edge line (positive inside), and the edge's
+/// ends lie at `(v_i − c)·ê_i` and that plus its length along it, counted from the foot's
+/// projection. Both hold for the 3-D centre `c` as well as for its foot, since `ŵ_i, ê_i ⊥ n̂`:
+/// no foot and no in-plane frame per call.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Tri {
-    /// First corner.
-    o: V,
-    /// Unit normal.
-    n: V,
-    /// In-plane orthonormal basis (`b2 = n × b1`): the corners are counter-clockwise.
-    b: [V; 2],
     /// Corners.
     v: [V; 3],
-    /// Unit edge directions (corner i to i + 1) in the frame.
-    dir: [[f64; 2]; 3],
+    /// Unit normal (`(q − p) × (r − p)` normalized: the corners are counter-clockwise about it).
+    n: V,
+    /// Unit edge directions, corner `i` to `i + 1`.
+    e: [V; 3],
+    /// In-plane unit normals of the edges, `ŵ_i = ê_i × n̂` (inward).
+    w: [V; 3],
     /// Edge lengths.
     len: [f64; 3],
 }
 
 impl Tri {
     /// `None` for degenerate (zero-area or non-finite) triangles, whose integral is 0.
+    ///
+    /// Four square roots and four divisions, all independent of each other (the normal's and the
+    /// three edges'). A non-degenerate triangle has no zero-length edge: a repeated corner makes
+    /// the cross product exactly 0.
+    #[inline(always)]
     pub(crate) fn new(p: V, q: V, r: V) -> Option<Self> {
-        let e1 = sub(q, p);
-        let n = cross(e1, sub(r, p));
+        let v = [p, q, r];
+        let ed = [sub(q, p), sub(r, q), sub(p, r)];
+        let n = cross(ed[0], sub(r, p));
         let n2 = dot(n, n);
-        if n2 == 0.0 || !n2.is_finite() {
+        let l2 = [dot(ed[0], ed[0]), dot(ed[1], ed[1]), dot(ed[2], ed[2])];
+        if !(n2 > 0.0 && n2.is_finite() && l2.iter().all(|&x| x > 0.0 && x.is_finite())) {
             return None;
         }
         let n = scale(n, 1.0 / n2.sqrt());
-        let b1 = scale(e1, 1.0 / dot(e1, e1).sqrt());
-        let b2 = cross(n, b1);
-        let to2 = |v: V| {
-            let d = sub(v, p);
-            [dot(d, b1), dot(d, b2)]
-        };
-        let xy = [[0.0, 0.0], to2(q), to2(r)];
-        let mut dir = [[0.0; 2]; 3];
-        let mut len = [0.0; 3];
-        for i in 0..3 {
-            let [x0, y0] = xy[i];
-            let [x1, y1] = xy[(i + 1) % 3];
-            let (dx, dy) = (x1 - x0, y1 - y0);
-            len[i] = (dx * dx + dy * dy).sqrt();
-            if len[i] > 0.0 {
-                dir[i] = [dx / len[i], dy / len[i]];
-            }
-        }
-        Some(Self {
-            o: p,
-            n,
-            b: [b1, b2],
-            v: [p, q, r],
-            dir,
-            len,
-        })
+        let len = [l2[0].sqrt(), l2[1].sqrt(), l2[2].sqrt()];
+        let e = [
+            scale(ed[0], 1.0 / len[0]),
+            scale(ed[1], 1.0 / len[1]),
+            scale(ed[2], 1.0 / len[2]),
+        ];
+        let w = [cross(e[0], n), cross(e[1], n), cross(e[2], n)];
+        Some(Self { v, n, e, w, len })
     }
 
     /// `∫ exp(−a|x − c|²) dA` over the triangle (as [`triangle_fast`]; `sa = √a`, `a` finite
-    /// and > 0): the signed edge decomposition around the centre's foot, one
-    /// [`crate::wedge::r_diff`] (two right triangles sharing ε) per edge.
-    #[inline]
+    /// and > 0): the signed edge decomposition around the centre's foot (MATH.md §2), one
+    /// [`crate::wedge::r_diff`] (two right triangles sharing ε) per edge:
+    /// `∫ = (1/a)·exp(−a h²)·Σ_i sign(ε_i)·[R(|ε_i|, u_i + ℓ_i) − R(|ε_i|, u_i)]` with
+    /// `ε_i = √a·(v_i − c)·ŵ_i`, `u_i = √a·(v_i − c)·ê_i`, `ℓ_i = √a·len_i` and `h` the centre's
+    /// distance from the plane.
+    #[inline(always)]
     pub(crate) fn integral(&self, c: V, a: f64, sa: f64) -> f64 {
-        let d = sub(c, self.o);
-        let h = dot(d, self.n);
+        let h = dot(sub(c, self.v[0]), self.n);
         let damp = (-a * h * h).exp();
         if damp.is_nan() || damp <= 0.0 {
             return 0.0;
         }
-        // Corners relative to the centre's foot, from their 3-D offsets (as in `Plane`: this
-        // keeps the rounding relative to the distances from the foot, not from the first corner).
-        let foot = sub(c, scale(self.n, h));
-        let mut sum = 0.0;
-        for i in 0..3 {
-            if self.len[i] == 0.0 {
-                continue;
-            }
-            let v = sub(self.v[i], foot);
-            let (x0, y0) = (dot(v, self.b[0]), dot(v, self.b[1]));
-            let [ux, uy] = self.dir[i];
-            // Signed distance of the foot from the edge line (positive: foot on the inner side),
-            // and the foot's projection onto the edge, from corner i.
-            let cr = x0 * uy - y0 * ux;
-            let t0 = x0 * ux + y0 * uy;
-            let w = crate::wedge::r_diff(cr.abs() * sa, t0 * sa, (t0 + self.len[i]) * sa);
-            sum += if cr >= 0.0 { w } else { -w };
-        }
-        (sum / a * damp).max(0.0)
+        let tab = crate::wedge::table();
+        let edge = |i| self.edge(tab, c, sa, i);
+        let sum = (edge(0) + edge(1)) + edge(2);
+        (sum * (damp / a)).max(0.0)
+    }
+
+    /// Edge `i`'s signed pair of right triangles, `sign(ε_i)·[R(|ε_i|, u_i + ℓ_i) − R(|ε_i|, u_i)]`.
+    #[inline(always)]
+    fn edge(&self, tab: &crate::wedge::Table, c: V, sa: f64, i: usize) -> f64 {
+        let d = sub(self.v[i], c);
+        // Signed distance of the foot from the edge line (positive: foot on the inner side),
+        // and the corner's position along the edge, from the foot's projection.
+        let cr = dot(d, self.w[i]);
+        let t0 = dot(d, self.e[i]);
+        let w = crate::wedge::r_diff_with(tab, cr.abs() * sa, t0 * sa, (t0 + self.len[i]) * sa);
+        if cr >= 0.0 { w } else { -w }
     }
 }
 

@@ -272,6 +272,11 @@ impl SolveConfig {
         if self.gather_samples.direct + self.gather_samples.indirect > 1_000_000 {
             return bad("gather samples per point above 1000000".into());
         }
+        if self.gather == GatherMode::Rays && self.gather_samples.indirect == 0 {
+            // Without cosine rays there is no indirect light, and no direct light either when
+            // there are no shadow rays: B would silently be E (or E + direct).
+            return bad("the ray gather needs at least 1 cosine ray per point".into());
+        }
         let theta = self.surface_clusters.theta;
         if !(0.0..=4.0).contains(&theta) {
             return bad(format!(

@@ -5,7 +5,7 @@ use clap::{Parser, Subcommand};
 use gcr::config::{GatherMode, OutputFit, SolveConfig};
 use gcr::domain::Domain;
 use gcr::fem::SurfaceClusters;
-use gcr::gather::Emitters;
+use gcr::gather::{Emitters, GatherSamples};
 use gcr::output::tonemap::Exposure;
 use gcr::pipeline::{output_mesh, radiosity_at};
 use gcr::retriangulate::RetriangulateLimits;
@@ -52,6 +52,11 @@ enum Command {
         /// `delta-rule` (the dissertation's eq. 2.8).
         #[arg(long, default_value = "projection")]
         output_fit: OutputFit,
+        /// Ray gather: shadow rays and cosine rays per point (each). More rays lower the gather's
+        /// own noise (two-blockers, 200 points: 6.2 % at 64, 4.4 % at 256, 3.9 % at 4096) at a
+        /// proportional cost.
+        #[arg(long, default_value_t = GatherSamples::default().direct)]
+        gather_rays: usize,
         /// Train the shading network and build its base even when the gather does not read it
         /// (by default they are skipped: same result, less time).
         #[arg(long)]
@@ -155,6 +160,7 @@ fn run() -> Result<()> {
             seed,
             gather,
             output_fit,
+            gather_rays,
             keep_base,
             kernel_facing,
             cluster_min_elements,
@@ -175,6 +181,10 @@ fn run() -> Result<()> {
                 seed,
                 gather,
                 output_fit,
+                gather_samples: GatherSamples {
+                    direct: gather_rays,
+                    indirect: gather_rays,
+                },
                 skip_unused_base: !keep_base,
                 kernel_facing,
                 surface_clusters: SurfaceClusters {

@@ -174,3 +174,13 @@ fn generated_scene_names_out_of_range_and_bad_cluster_theta_are_clear_errors() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("θ"), "{err}");
 }
+
+#[test]
+fn gather_ray_counts_out_of_range_are_clear_errors() {
+    for (rays, says) in [("0", "at least 1 cosine ray"), ("2000000", "above 1000000")] {
+        let out = gcr(&["solve", "cornell-box", "--quiet", "--gather-rays", rays]);
+        assert!(!out.status.success(), "--gather-rays {rays} accepted");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(says), "{err}");
+    }
+}

@@ -2,7 +2,7 @@
 //! (`--gather rays`) with more and more shadow and indirect rays per point, against the path-traced
 //! reference at points spread area-uniformly over the non-emitting faces.
 //!
-//! `cargo run --release -p gcr --example gather_samples -- cornell-box 200 [points] [reference paths]`
+//! `cargo run --release -p gcr --example gather_samples -- cornell-box 200 [points] [reference paths] [seed]`
 //!
 //! Prints one line per sample count: relative L2 of B (and of B − E, the part the gather
 //! estimates) and the gather's seconds.
@@ -19,6 +19,7 @@ fn main() -> anyhow::Result<()> {
     let cells: usize = args.get(2).map_or(Ok(200), |s| s.parse())?;
     let count: usize = args.get(3).map_or(Ok(200), |s| s.parse())?;
     let paths: usize = args.get(4).map_or(Ok(100_000), |s| s.parse())?;
+    let seed: u64 = args.get(5).map_or(Ok(1), |s| s.parse())?;
     let scene = scene_sampler::builtin(name)?.into_3d()?;
     let bvh = SceneBvh::new(&scene);
     let sampler = SurfaceSampler::new(&scene);
@@ -40,6 +41,7 @@ fn main() -> anyhow::Result<()> {
     let config = SolveConfig {
         kernel_cells: cells,
         shading_cells: cells / 2,
+        seed,
         ..SolveConfig::default()
     };
     let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;

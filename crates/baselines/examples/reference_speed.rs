@@ -22,18 +22,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let fixed: usize = args.get(4).map_or(Ok(20_000), |s| s.parse())?;
     let scene = scene_sampler::builtin(name)?.into_3d()?;
     let bvh = SceneBvh::new(&scene);
-    let sampler = SurfaceSampler::new(&scene);
-    // A low-discrepancy sequence over the surface, emitters left out.
-    let points: Vec<_> = (1..100 * count as u64)
-        .map(|i| {
-            sampler.sample([
-                (i as f64 * 0.754_877_666_246_692_7).fract(),
-                (i as f64 * 0.569_840_290_998_053_3).fract(),
-            ])
-        })
-        .filter(|p| scene.faces[p.face as usize].emission.is_zero())
-        .take(count)
-        .collect();
+    // Spread evenly over the surface, emitters left out.
+    let points = SurfaceSampler::new(&scene)
+        .spread(count, |p| scene.faces[p.face as usize].emission.is_zero());
     let adaptive = Adaptive {
         rel_error,
         ..Adaptive::default()

@@ -40,20 +40,8 @@ fn main() -> anyhow::Result<()> {
         scene.faces.len()
     );
     // 200 probes, area-uniform over the non-emitting faces (as `cargo xtask bench`).
-    let sampler = SurfaceSampler::new(&scene);
-    let mut points = Vec::new();
-    let mut i = 0u64;
-    while points.len() < 200 {
-        i += 1;
-        let u = [
-            (i as f64 * 0.754_877_666_246_692_7).fract(),
-            (i as f64 * 0.569_840_290_998_053_3).fract(),
-        ];
-        let p = sampler.sample(u);
-        if scene.faces[p.face as usize].emission.is_zero() {
-            points.push(p);
-        }
-    }
+    let points = SurfaceSampler::new(&scene)
+        .spread(200, |p| scene.faces[p.face as usize].emission.is_zero());
     let t = Instant::now();
     let reference = baselines::pointwise::radiosity_at(&scene, &bvh, &points, 20_000, 7);
     println!(

@@ -24,19 +24,11 @@ fn main() -> anyhow::Result<()> {
     let kernel_facing = args.get(6).is_some_and(|s| s == "facing");
     let scene = scene_sampler::builtin(name)?.into_3d()?;
     let bvh = SceneBvh::new(&scene);
-    let sampler = SurfaceSampler::new(&scene);
+    // Non-emitting points, unless every face emits (the furnace).
     let all_emit = scene.faces.iter().all(|f| !f.emission.is_zero());
-    let points: Vec<_> = (1..100 * count as u64)
-        .map(|i| {
-            sampler.sample([
-                (i as f64 * 0.754_877_666_246_692_7).fract(),
-                (i as f64 * 0.569_840_290_998_053_3).fract(),
-            ])
-        })
-        // Non-emitting points, unless every face emits (the furnace).
-        .filter(|p| all_emit || scene.faces[p.face as usize].emission.is_zero())
-        .take(count)
-        .collect();
+    let points = SurfaceSampler::new(&scene).spread(count, |p| {
+        all_emit || scene.faces[p.face as usize].emission.is_zero()
+    });
     let reference = baselines::pointwise::radiosity_at(&scene, &bvh, &points, paths, 0x5EED);
     let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
     let emitters = Emitters::new(&domain);

@@ -143,6 +143,23 @@ impl SurfaceSampler {
         1.0 / self.total_area
     }
 
+    /// Up to `count` points spread evenly over the surface: the images of the low-discrepancy R2
+    /// sequence `u_i = ({i·α₁}, {i·α₂})`, i = 1, 2, … (Roberts' plastic-number constants), that
+    /// `keep` accepts, in order, trying at most `100·count` of them. Deterministic, and denser
+    /// than random points for the same count: the probe sets of benchmarks and examples.
+    pub fn spread(&self, count: usize, keep: impl Fn(&SurfacePoint) -> bool) -> Vec<SurfacePoint> {
+        (1..=100 * count as u64)
+            .map(|i| {
+                self.sample([
+                    (i as f64 * 0.754_877_666_246_692_7).fract(),
+                    (i as f64 * 0.569_840_290_998_053_3).fract(),
+                ])
+            })
+            .filter(|p| keep(p))
+            .take(count)
+            .collect()
+    }
+
     /// Maps `u ∈ [0,1]²` to a point. Inputs are clamped to `[0,1]`.
     pub fn sample(&self, u: [f64; 2]) -> SurfacePoint {
         let ux = u[0].clamp(0.0, 1.0);

@@ -174,3 +174,26 @@ fn cosine_sampling_moments() {
         / m as f64;
     assert!((mean2 - std::f64::consts::PI / 4.0).abs() < 3e-3, "{mean2}");
 }
+
+/// `spread` keeps the R2 points `keep` accepts, in sequence order, and stops at `count`.
+#[test]
+fn spread_points_are_the_kept_r2_points_in_order() {
+    let scene = cornell();
+    let sampler = SurfaceSampler::new(&scene);
+    let dark = |p: &SurfacePoint| scene.faces[p.face as usize].emission.is_zero();
+    let points = sampler.spread(50, dark);
+    assert_eq!(points.len(), 50);
+    let by_hand: Vec<_> = (1..)
+        .map(|i: u64| {
+            sampler.sample([
+                (i as f64 * 0.754_877_666_246_692_7).fract(),
+                (i as f64 * 0.569_840_290_998_053_3).fract(),
+            ])
+        })
+        .filter(dark)
+        .take(50)
+        .collect();
+    assert_eq!(points, by_hand);
+    // Nothing accepted: the search stops after 100·count tries.
+    assert!(sampler.spread(5, |_| false).is_empty());
+}

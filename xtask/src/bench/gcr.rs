@@ -75,20 +75,8 @@ pub fn relative_l2(
 /// points every run): B over the whole scene, not at a few hand-picked spots.
 pub fn scene_and_probes(name: &str, count: usize) -> Result<(Scene, Vec<SurfacePoint>)> {
     let scene = scene_sampler::builtin(name)?.into_3d()?;
-    let sampler = scene_sampler::SurfaceSampler::new(&scene);
-    let mut points = Vec::with_capacity(count);
-    let mut i = 0u64;
-    while points.len() < count && i < 100 * count as u64 {
-        i += 1;
-        let u = [
-            (i as f64 * 0.754_877_666_246_692_7).fract(),
-            (i as f64 * 0.569_840_290_998_053_3).fract(),
-        ];
-        let p = sampler.sample(u);
-        if scene.faces[p.face as usize].emission.is_zero() {
-            points.push(p);
-        }
-    }
+    let points = scene_sampler::SurfaceSampler::new(&scene)
+        .spread(count, |p| scene.faces[p.face as usize].emission.is_zero());
     Ok((scene, points))
 }
 

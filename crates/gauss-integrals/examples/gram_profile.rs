@@ -19,21 +19,7 @@ fn height(x: f64, y: f64) -> f64 {
 }
 
 fn surface(nx: usize, ny: usize) -> Domain {
-    let mut v = Vec::new();
-    for y in 0..=ny {
-        for x in 0..=nx {
-            v.push([x as f64, y as f64, height(x as f64, y as f64)]);
-        }
-    }
-    let id = |x: usize, y: usize| (y * (nx + 1) + x) as u32;
-    let mut t = Vec::new();
-    for y in 0..ny {
-        for x in 0..nx {
-            t.push([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
-            t.push([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
-        }
-    }
-    Domain::triangles(v, &t).unwrap()
+    Domain::height_field(nx, ny, 1.0, height).unwrap()
 }
 
 struct Rng(u64);

@@ -120,6 +120,32 @@ impl Domain {
         Self::build(Dim::Three, vertices, triangles.to_vec())
     }
 
+    /// A height field: the grid of `nx × ny` squares of edge `h` over `[0, nx·h] × [0, ny·h]`, two
+    /// triangles each, lifted to `z = height(x, y)` at the vertices (a test and benchmark surface).
+    pub fn height_field(
+        nx: usize,
+        ny: usize,
+        h: f64,
+        height: impl Fn(f64, f64) -> f64,
+    ) -> Result<Self, GramError> {
+        let mut v = Vec::with_capacity((nx + 1) * (ny + 1));
+        for y in 0..=ny {
+            for x in 0..=nx {
+                let (px, py) = (x as f64 * h, y as f64 * h);
+                v.push([px, py, height(px, py)]);
+            }
+        }
+        let id = |x: usize, y: usize| (y * (nx + 1) + x) as u32;
+        let mut t = Vec::with_capacity(2 * nx * ny);
+        for y in 0..ny {
+            for x in 0..nx {
+                t.push([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
+                t.push([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
+            }
+        }
+        Self::triangles(v, &t)
+    }
+
     /// A segmented curve in the plane (Flatland).
     pub fn segments(vertices: &[[f64; 2]], segments: &[[u32; 2]]) -> Result<Self, GramError> {
         let v = vertices.iter().map(|p| [p[0], p[1], 0.0]).collect();
@@ -798,22 +824,7 @@ mod tests {
     /// A bumpy n×n grid of squares (two triangles each) of edge h over [0, n h]², height
     /// `bump·sin·sin`.
     pub(crate) fn bumpy_grid(n: usize, h: f64, bump: f64) -> Domain {
-        let mut v = Vec::new();
-        for y in 0..=n {
-            for x in 0..=n {
-                let (px, py) = (x as f64 * h, y as f64 * h);
-                v.push([px, py, bump * (1.3 * px).sin() * (0.9 * py).cos()]);
-            }
-        }
-        let id = |x: usize, y: usize| (y * (n + 1) + x) as u32;
-        let mut t = Vec::new();
-        for y in 0..n {
-            for x in 0..n {
-                t.push([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
-                t.push([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
-            }
-        }
-        Domain::triangles(v, &t).unwrap()
+        Domain::height_field(n, n, h, |x, y| bump * (1.3 * x).sin() * (0.9 * y).cos()).unwrap()
     }
 
     fn cubature_entry(domain: &Domain, gi: &Gaussian, gj: &Gaussian) -> f64 {

@@ -55,22 +55,8 @@ fn height(x: f64, y: f64) -> f64 {
 }
 
 /// A bumpy nx×ny grid of unit squares, two triangles each.
-pub fn surface(nx: usize, ny: usize) -> Result<Domain> {
-    let mut v = Vec::new();
-    for y in 0..=ny {
-        for x in 0..=nx {
-            v.push([x as f64, y as f64, height(x as f64, y as f64)]);
-        }
-    }
-    let id = |x: usize, y: usize| (y * (nx + 1) + x) as u32;
-    let mut t = Vec::new();
-    for y in 0..ny {
-        for x in 0..nx {
-            t.push([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
-            t.push([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
-        }
-    }
-    Ok(Domain::triangles(v, &t)?)
+fn surface(nx: usize, ny: usize) -> Result<Domain> {
+    Ok(Domain::height_field(nx, ny, 1.0, height)?)
 }
 
 /// `n` Gaussians on the jittered grid of spacing `h` over `[0, nx]×[0, ny]`, width `1.14 h`

@@ -89,6 +89,20 @@ impl KernelCells {
         f == DVec3::ZERO || n == DVec3::ZERO || f.dot(n) > self.facing_cos
     }
 
+    /// Whether cell o's Gaussian lives at a sender with unit normal `nx` and a receiver with unit
+    /// normal `ny`; one test of an empty vector when there are no masks (the inner loops of the
+    /// moments and the collection run it per cell and point).
+    #[inline]
+    pub fn accepts(&self, o: usize, nx: DVec3, ny: DVec3) -> bool {
+        self.nx.is_empty() || (self.lives_on(self.nx[o], nx) && self.lives_on(self.ny[o], ny))
+    }
+
+    /// [`KernelCells::accepts`] for the receiver half alone.
+    #[inline]
+    pub fn accepts_receiver(&self, o: usize, ny: DVec3) -> bool {
+        self.ny.is_empty() || self.lives_on(self.ny[o], ny)
+    }
+
     /// Gives every cell facing masks: each half faces like the surface at the sample nearest to
     /// the cell's centre in the kernel's input space (x, y). Cells then stop blurring light
     /// across the edges where surfaces meet (a Gaussian centred on a lit floor no longer puts
@@ -119,7 +133,7 @@ impl KernelCells {
     pub fn evaluate(&self, x: DVec3, nx: DVec3, y: DVec3, ny: DVec3) -> Bands {
         let mut out = [0.0; MAX_BANDS];
         for o in 0..self.len() {
-            if !(self.lives_on(self.facing_x(o), nx) && self.lives_on(self.facing_y(o), ny)) {
+            if !self.accepts(o, nx, ny) {
                 continue;
             }
             let e = (self.wx[o].distance_squared(x) + self.wy[o].distance_squared(y))
@@ -713,7 +727,7 @@ pub fn receiver_integrals(kernel: &KernelCells, scene: &SceneSurface, tol: f64) 
 pub fn reflected_from_kernel(kernel: &KernelCells, sender: &[f64], y: DVec3, n: DVec3) -> Bands {
     let mut out = [0.0; MAX_BANDS];
     for o in 0..kernel.len() {
-        if !kernel.lives_on(kernel.facing_y(o), n) {
+        if !kernel.accepts_receiver(o, n) {
             continue;
         }
         let g = sender[o]

@@ -176,9 +176,7 @@ pub fn kernel_moments(
                     continue;
                 }
                 for o in 0..n {
-                    if !(kernel.lives_on(kernel.facing_x(o), smp.ray.nx)
-                        && kernel.lives_on(kernel.facing_y(o), smp.ray.ny))
-                    {
+                    if !kernel.accepts(o, smp.ray.nx, smp.ray.ny) {
                         continue;
                     }
                     let dx = kernel.wx[o].distance_squared(smp.ray.x);

@@ -7,7 +7,7 @@ use gcr::config::{GatherMode, SolveConfig};
 use gcr::domain::Domain;
 use gcr::fem::SurfaceClusters;
 use gcr::gather::Emitters;
-use gcr::pipeline::radiosity_at;
+use gcr::pipeline::radiosity_at_points;
 use scene_sampler::{KernelSampler, SceneBvh};
 
 #[test]
@@ -21,13 +21,14 @@ fn clustered_integrals_give_the_exact_solution_on_a_tessellated_cornell_box() {
     let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
     let emitters = Emitters::new(&domain);
     let sampler = scene_sampler::SurfaceSampler::new(&scene);
-    let points: Vec<_> = (0..60)
+    let at: Vec<_> = (0..60)
         .map(|i| {
             let u = [
                 (i as f64 * 0.618_034) % 1.0,
                 (i as f64 * 0.414_214 + 0.1) % 1.0,
             ];
-            sampler.sample(u)
+            let p = sampler.sample(u);
+            (p.point, p.normal, p.face)
         })
         .collect();
     let run = |min_elements: usize| {
@@ -42,24 +43,9 @@ fn clustered_integrals_give_the_exact_solution_on_a_tessellated_cornell_box() {
             ..SolveConfig::default()
         };
         let trained = gcr::solve::solve(&domain, &config, &mut |_| {}).unwrap();
-        let mut scratch = Vec::new();
-        points
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                radiosity_at(
-                    &domain,
-                    &trained,
-                    &emitters,
-                    &config,
-                    p.point,
-                    p.normal,
-                    p.face,
-                    i as u64,
-                    &mut scratch,
-                )
-                .radiosity
-            })
+        radiosity_at_points(&domain, &trained, &emitters, &config, &at)
+            .into_iter()
+            .map(|g| g.radiosity)
             .collect::<Vec<_>>()
     };
     let exact = run(usize::MAX);

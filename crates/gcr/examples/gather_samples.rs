@@ -2,7 +2,11 @@
 //! (`--gather rays`) with more and more shadow and indirect rays per point, against the path-traced
 //! reference at points spread area-uniformly over the non-emitting faces.
 //!
-//! `cargo run --release -p gcr --example gather_samples -- cornell-box 200 [points] [reference paths] [seed]`
+//! `cargo run --release -p gcr --example gather_samples -- cornell-box 200 [points] [reference paths] [seed] [rays,…] [samples per cell] [min support]`
+//!
+//! `rays,…` lists the ray counts per point to try (default `16,64,256,1024,4096`); the last two
+//! set `SolveConfig::samples_per_cell` and `SolveConfig::projection_min_support` (defaults: the
+//! solver's). The reference is cached in the temporary directory.
 //!
 //! Prints one line per sample count: relative L2 of B (and of B − E, the part the gather
 //! estimates) and the gather's seconds.
@@ -20,6 +24,19 @@ fn main() -> anyhow::Result<()> {
     let count: usize = args.get(3).map_or(Ok(200), |s| s.parse())?;
     let paths: usize = args.get(4).map_or(Ok(100_000), |s| s.parse())?;
     let seed: u64 = args.get(5).map_or(Ok(1), |s| s.parse())?;
+    let rays: Vec<usize> = args
+        .get(6)
+        .map_or("16,64,256,1024,4096", |s| s.as_str())
+        .split(',')
+        .map(|s| s.parse())
+        .collect::<Result<_, _>>()?;
+    let defaults = SolveConfig::default();
+    let samples_per_cell: usize = args
+        .get(7)
+        .map_or(Ok(defaults.samples_per_cell), |s| s.parse())?;
+    let min_support: f64 = args
+        .get(8)
+        .map_or(Ok(defaults.projection_min_support), |s| s.parse())?;
     let scene = scene_sampler::builtin(name)?.into_3d()?;
     let bvh = SceneBvh::new(&scene);
     // Non-emitting points, unless every face emits (the furnace).
@@ -27,14 +44,52 @@ fn main() -> anyhow::Result<()> {
     let points = SurfaceSampler::new(&scene).spread(count, |p| {
         all_emit || scene.faces[p.face as usize].emission.is_zero()
     });
-    let reference = baselines::pointwise::radiosity_at(&scene, &bvh, &points, paths, 0x5EED);
+    // The reference is the slow part of a sweep over seeds or budgets: it is cached in the
+    // system's temporary directory, keyed by everything it depends on.
+    let cache = std::env::temp_dir().join(format!("gcr-gather-samples-{name}-{count}-{paths}.txt"));
+    let reference: Vec<baselines::Estimate> = match std::fs::read_to_string(&cache) {
+        Ok(text) => text
+            .lines()
+            .map(|l| {
+                let v: Vec<f64> = l
+                    .split(' ')
+                    .map(|x| x.parse().unwrap_or(f64::NAN))
+                    .collect();
+                baselines::Estimate {
+                    mean: [v[0], v[1], v[2]],
+                    std_error: [v[3], v[4], v[5]],
+                    paths,
+                }
+            })
+            .collect(),
+        Err(_) => {
+            let r = baselines::pointwise::radiosity_at(&scene, &bvh, &points, paths, 0x5EED);
+            let text: String = r
+                .iter()
+                .map(|e| {
+                    let [a, b, c] = e.mean;
+                    let [d, f, g] = e.std_error;
+                    format!("{a:e} {b:e} {c:e} {d:e} {f:e} {g:e}\n")
+                })
+                .collect();
+            std::fs::write(&cache, text)?;
+            r
+        }
+    };
+    anyhow::ensure!(
+        reference.len() == points.len(),
+        "stale cache {}",
+        cache.display()
+    );
     let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
     let emitters = Emitters::new(&domain);
     let config = SolveConfig {
         kernel_cells: cells,
         shading_cells: cells / 2,
         seed,
-        ..SolveConfig::default()
+        samples_per_cell,
+        projection_min_support: min_support,
+        ..defaults
     };
     let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
     let at: Vec<_> = points.iter().map(|p| (p.point, p.normal, p.face)).collect();
@@ -55,7 +110,7 @@ fn main() -> anyhow::Result<()> {
     );
     println!("| rays per point (direct + indirect) | rel. L2 of B | rel. L2 of B − E | gather s |");
     println!("|---:|---:|---:|---:|");
-    for n in [16, 64, 256, 1024, 4096] {
+    for n in rays {
         let config = SolveConfig {
             gather: GatherMode::Rays,
             gather_samples: GatherSamples {

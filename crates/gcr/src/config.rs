@@ -153,6 +153,15 @@ pub struct SolveConfig {
     /// 1e-4 was fine at 400 cells and unstable at 1400 (B ≈ 1e15, now stopped by the solver's
     /// maximum-principle guard); 1e-3 gave B ≈ 1e123 at 400.
     pub projection_tolerance: f64,
+    /// Kernel cells whose sample support `n_o = Σ_i g_o(ξ_i)` over the shot samples is below this
+    /// get no output weight ([`crate::projection::kernel_support`]). The network grows tiny cells
+    /// where K is singular (surfaces meeting at an edge) that hold a fraction of a sample on
+    /// average: their moment is one sample's noise over a tiny Gram diagonal, and when that
+    /// sample's sender lies in both halves of the cell (at the edge, x ≈ y) it feeds its own
+    /// strength back with a gain far above 1. Measured on cornell-box, seeds 1–5 at 1400 cells
+    /// (docs/gcr-algorithm.md): 0 (every cell projected) lets seed 5 run away and costs seed 2
+    /// twice the error; 1, 2 and 4 are stable for all five seeds. 0 turns it off.
+    pub projection_min_support: f64,
     /// Rescale the projected kernel's weights per band so that it reflects exactly the power the
     /// shot samples carry (`Metrics::energy_balance` reports the factor it corrected). Off: the
     /// plain Galerkin projection, whose bounce iteration can run away when ρ is close to 1.
@@ -195,6 +204,7 @@ impl Default for SolveConfig {
             output_fit: OutputFit::default(),
             projection_rejection: 1e-6,
             projection_tolerance: 1e-6,
+            projection_min_support: 2.0,
             energy_correction: true,
             surface_clusters: SurfaceClusters::default(),
             kernel_facing: false,
@@ -267,6 +277,12 @@ impl SolveConfig {
             return bad(format!(
                 "projection tolerance {} (expected in (0, 1e-6])",
                 self.projection_tolerance
+            ));
+        }
+        if !(self.projection_min_support >= 0.0 && self.projection_min_support <= 1e6) {
+            return bad(format!(
+                "projection minimum support {} (expected 0 to 1e6 samples)",
+                self.projection_min_support
             ));
         }
         if self.gather_samples.direct + self.gather_samples.indirect > 1_000_000 {

@@ -57,6 +57,9 @@ pub struct Metrics {
     /// Projections redone with a higher rejection threshold (0.5, then 0.9) because their
     /// bounces diverged: fewer, nearly orthogonal kernel cells, a stable but coarser fit.
     pub stabilized_projections: usize,
+    /// Kernel cells left out of the last projection for want of samples in their support
+    /// (`SolveConfig::projection_min_support`).
+    pub unsupported_cells: usize,
     /// Kernel output layer: `delta-rule` or `projection`.
     pub output_fit: String,
     /// Kernel training steps executed.

@@ -175,23 +175,11 @@ pub fn kernel_moments(
                 if !any {
                     continue;
                 }
-                for o in 0..n {
-                    if !kernel.accepts(o, smp.ray.nx, smp.ray.ny) {
-                        continue;
-                    }
-                    let dx = kernel.wx[o].distance_squared(smp.ray.x);
-                    if a[o] * dx > cut {
-                        continue;
-                    }
-                    let e = a[o] * (dx + kernel.wy[o].distance_squared(smp.ray.y));
-                    if e > cut {
-                        continue;
-                    }
-                    let g = (-e).exp();
+                for_each_cell_at(kernel, &a, cut, smp, |o, g| {
                     for k in 0..MAX_BANDS {
                         b[o][k] += g * w[k];
                     }
-                }
+                });
             }
             b
         })
@@ -211,6 +199,58 @@ pub fn kernel_moments(
         }
     }
     b
+}
+
+/// Calls `f(o, g_o(ξ))` for every kernel cell `o` whose Gaussian (`a[o] = 1/d_o²`) exceeds
+/// `exp(−cut)` at the sample's ray ξ = (x, y) and whose facing masks accept it.
+fn for_each_cell_at(
+    kernel: &KernelCells,
+    a: &[f64],
+    cut: f64,
+    smp: &Sample,
+    mut f: impl FnMut(usize, f64),
+) {
+    for o in 0..kernel.len() {
+        if !kernel.accepts(o, smp.ray.nx, smp.ray.ny) {
+            continue;
+        }
+        let dx = kernel.wx[o].distance_squared(smp.ray.x);
+        if a[o] * dx > cut {
+            continue;
+        }
+        let e = a[o] * (dx + kernel.wy[o].distance_squared(smp.ray.y));
+        if e > cut {
+            continue;
+        }
+        f(o, (-e).exp());
+    }
+}
+
+/// The sample support of every kernel cell, `n_o = Σ_i g_o(ξ_i)` over the shot samples: how many
+/// samples' worth of data its moment `b_o` averages. A cell with `n_o` well below 1 has a moment
+/// made of at most one or two samples, and its projected weight is that noise divided by its tiny
+/// Gram diagonal ([`KernelProjection::new`]).
+pub fn kernel_support(kernel: &KernelCells, samples: &[Sample], tol: f64) -> Vec<f64> {
+    let n = kernel.len();
+    let cut = (1.0 / tol).ln();
+    let a: Vec<f64> = kernel.width.iter().map(|d| 1.0 / (d * d)).collect();
+    let partial: Vec<Vec<f64>> = samples
+        .par_chunks(1024)
+        .map(|part| {
+            let mut c = vec![0.0; n];
+            for smp in part.iter().filter(|smp| smp.inv_px != 0.0) {
+                for_each_cell_at(kernel, &a, cut, smp, |o, g| c[o] += g);
+            }
+            c
+        })
+        .collect();
+    let mut c = vec![0.0; n];
+    for part in partial {
+        for (acc, v) in c.iter_mut().zip(part) {
+            *acc += v;
+        }
+    }
+    c
 }
 
 /// Reflected power per band that the samples carry: the Monte-Carlo estimate of
@@ -275,7 +315,24 @@ impl KernelProjection {
     /// Builds and factors the Gram matrix of `kernel` on `scene` (support cut-off `tol`, relative
     /// pivot `rejection`).
     pub fn new(kernel: &KernelCells, scene: &SceneSurface, tol: f64, rejection: f64) -> Self {
-        let gram = kernel_gram(kernel, scene, tol);
+        Self::excluding(kernel, scene, tol, rejection, &[])
+    }
+
+    /// [`KernelProjection::new`] with the cells flagged in `excluded` (indexed like the cells;
+    /// missing entries count as `false`) left out of the projection: their weights are 0 and
+    /// they count as rejected.
+    pub fn excluding(
+        kernel: &KernelCells,
+        scene: &SceneSurface,
+        tol: f64,
+        rejection: f64,
+        excluded: &[bool],
+    ) -> Self {
+        let mut gram = kernel_gram(kernel, scene, tol);
+        for (o, _) in excluded.iter().enumerate().filter(|(_, e)| **e) {
+            gram.row_mut(o).fill(0.0);
+            gram.column_mut(o).fill(0.0);
+        }
         let ortho = integrals::Orthonormal::new(&gram, rejection);
         let report = ProjectionReport {
             rejected: ortho.rejected(),
@@ -316,6 +373,108 @@ mod tests {
     use crate::element::Element;
     use glam::DVec3;
     use scene_sampler::{AnyScene, KernelSampler, SceneBvh, builtin};
+
+    /// Shot samples on cornell-box with s = E, as the solver draws them.
+    fn shot_samples(domain: &Domain, count: usize) -> Vec<Sample> {
+        use rand::SeedableRng;
+        let density = crate::shooting::SenderDensity::new(domain);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        (0..count)
+            .filter_map(|_| density.shoot(domain, &mut rng))
+            .map(|shot| Sample {
+                s: shot.ray.emission_x,
+                ray: shot.ray,
+                kernel_bmu: None,
+                shading_bmu: None,
+                inv_px: shot.inv_px,
+            })
+            .collect()
+    }
+
+    /// A wide cell, a tiny one on one sample and one away from every sample: their supports
+    /// against the plain sum of the Gaussian over every sample (no cut-off).
+    #[test]
+    fn kernel_support_counts_the_samples_in_each_cell() {
+        let scene = scene_sampler::builtin("cornell-box")
+            .unwrap()
+            .into_3d()
+            .unwrap();
+        let bvh = SceneBvh::new(&scene);
+        let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+        let samples = shot_samples(&domain, 4000);
+        let on = samples[17].ray;
+        let mut kernel = KernelCells::default();
+        for (wx, wy, d) in [
+            (samples[3].ray.x, samples[3].ray.y, 0.2),
+            (on.x, on.y, 0.003),
+            (DVec3::splat(5.0), DVec3::splat(-5.0), 0.1),
+        ] {
+            kernel.wx.push(wx);
+            kernel.wy.push(wy);
+            kernel.width.push(d);
+            kernel.v.push([0.0; MAX_BANDS]);
+        }
+        let tol = 1e-6;
+        let support = kernel_support(&kernel, &samples, tol);
+        for o in 0..kernel.len() {
+            let plain: f64 = samples
+                .iter()
+                .map(|s| {
+                    let e = (kernel.wx[o].distance_squared(s.ray.x)
+                        + kernel.wy[o].distance_squared(s.ray.y))
+                        / (kernel.width[o] * kernel.width[o]);
+                    (-e).exp()
+                })
+                .sum();
+            assert!(
+                (support[o] - plain).abs() <= tol * samples.len() as f64,
+                "cell {o}: {} vs {plain}",
+                support[o]
+            );
+        }
+        assert!(
+            support[0] > 20.0,
+            "the wide cell holds many samples: {}",
+            support[0]
+        );
+        assert!(
+            (1.0..2.0).contains(&support[1]),
+            "the tiny cell holds its own sample and little else: {}",
+            support[1]
+        );
+        assert_eq!(support[2], 0.0);
+    }
+
+    /// Excluded cells get weight 0 and count as rejected; the others are fitted.
+    #[test]
+    fn excluded_cells_get_no_weight() {
+        let scene = scene_sampler::builtin("cornell-box")
+            .unwrap()
+            .into_3d()
+            .unwrap();
+        let bvh = SceneBvh::new(&scene);
+        let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+        let surface = domain.scene_surface();
+        let samples = shot_samples(&domain, 4000);
+        let mut kernel = KernelCells::default();
+        for i in [3, 40, 90] {
+            kernel.wx.push(samples[i].ray.x);
+            kernel.wy.push(samples[i].ray.y);
+            kernel.width.push(0.2);
+            kernel.v.push([0.0; MAX_BANDS]);
+        }
+        let reflectance = |f| domain.reflectance(f);
+        let shots = samples.len() as u64;
+        let all = KernelProjection::new(&kernel, &surface, 1e-6, 1e-6);
+        all.fit(&mut kernel, &samples, shots, &reflectance);
+        assert_eq!(all.report().rejected, 0);
+        assert!(kernel.v.iter().all(|v| v[0] != 0.0), "{:?}", kernel.v);
+        let some = KernelProjection::excluding(&kernel, &surface, 1e-6, 1e-6, &[false, true]);
+        some.fit(&mut kernel, &samples, shots, &reflectance);
+        assert_eq!(some.report().rejected, 1);
+        assert_eq!(kernel.v[1], [0.0; MAX_BANDS]);
+        assert!(kernel.v[0][0] != 0.0 && kernel.v[2][0] != 0.0);
+    }
 
     /// Every Gram entry against an independent evaluation: both 3-D halves by adaptive cubature
     /// over every triangle of the scene as loaded (no support cut-off, no product rule, no merged

@@ -2,7 +2,7 @@
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
-use gcr::config::{GatherMode, OutputFit, SolveConfig};
+use gcr::config::{GatherMode, NetworkTarget, OutputFit, SolveConfig};
 use gcr::domain::Domain;
 use gcr::fem::SurfaceClusters;
 use gcr::gather::{Emitters, GatherSamples};
@@ -52,6 +52,12 @@ enum Command {
         /// `delta-rule` (the dissertation's eq. 2.8).
         #[arg(long, default_value = "projection")]
         output_fit: OutputFit,
+        /// What the kernel network learns (with the projection it only places the cells):
+        /// `clamped-kernel` (K·s with G's 1/r² clamped at 5 % of the scene's diagonal),
+        /// `kernel-value` (the dissertation's K·s, which crowds cells into the edges where K is
+        /// singular) or `sample-weight` (each shot ray's importance weight ρ·s/p_x).
+        #[arg(long, default_value = "clamped-kernel")]
+        network_target: NetworkTarget,
         /// Ray gather: shadow rays and cosine rays per point (each). More rays lower the gather's
         /// own noise (two-blockers, 200 points: 6.2 % at 64, 4.4 % at 256, 3.9 % at 4096) at a
         /// proportional cost.
@@ -160,6 +166,7 @@ fn run() -> Result<()> {
             seed,
             gather,
             output_fit,
+            network_target,
             gather_rays,
             keep_base,
             kernel_facing,
@@ -181,6 +188,7 @@ fn run() -> Result<()> {
                 seed,
                 gather,
                 output_fit,
+                network_target,
                 gather_samples: GatherSamples {
                     direct: gather_rays,
                     indirect: gather_rays,

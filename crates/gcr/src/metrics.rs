@@ -62,6 +62,8 @@ pub struct Metrics {
     pub unsupported_cells: usize,
     /// Kernel output layer: `delta-rule` or `projection`.
     pub output_fit: String,
+    /// Kernel network training target with the projection: `kernel-value` or `sample-weight`.
+    pub network_target: String,
     /// Kernel training steps executed.
     pub training_steps: u64,
     /// Base components rejected as nearly dependent in the last FEM step.

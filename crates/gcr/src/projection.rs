@@ -84,6 +84,18 @@ fn candidates(centres: &[DVec3], widths: &[f64], scene: &SceneSurface, tol: f64)
 /// The Gram matrix `G_oo' = ∫∫_{S×S} g_o g_o'` of the kernel cells (module docs). Entries whose
 /// Gaussian product is below `tol` everywhere are exactly 0.
 pub fn kernel_gram(kernel: &KernelCells, scene: &SceneSurface, tol: f64) -> DMatrix<f64> {
+    kernel_gram_excluding(kernel, scene, tol, &[])
+}
+
+/// [`kernel_gram`] with the rows and columns of the cells flagged in `excluded` left 0 (not
+/// computed).
+fn kernel_gram_excluding(
+    kernel: &KernelCells,
+    scene: &SceneSurface,
+    tol: f64,
+    excluded: &[bool],
+) -> DMatrix<f64> {
+    let skip = |o: usize| excluded.get(o).copied().unwrap_or(false);
     let n = kernel.len();
     let a: Vec<f64> = kernel.width.iter().map(|d| 1.0 / (d * d)).collect();
     let cut = (1.0 / tol).ln();
@@ -100,7 +112,10 @@ pub fn kernel_gram(kernel: &KernelCells, scene: &SceneSurface, tol: f64) -> DMat
         .into_par_iter()
         .map(|o| {
             let mut row = Vec::new();
-            for p in o..n {
+            if skip(o) {
+                return row;
+            }
+            for p in (o..n).filter(|&p| !skip(p)) {
                 let ab = a[o] * a[p] / (a[o] + a[p]);
                 let d2 = kernel.wx[o].distance_squared(kernel.wx[p])
                     + kernel.wy[o].distance_squared(kernel.wy[p]);
@@ -142,14 +157,15 @@ pub fn kernel_gram(kernel: &KernelCells, scene: &SceneSurface, tol: f64) -> DMat
 }
 
 /// The right-hand sides `b_o` per band (module docs) from the shot samples; samples without an
-/// importance weight (`inv_px == 0`, drawn some other way) are skipped. `shots` is the number of
-/// rays shot, including those that left the scene.
+/// importance weight (`inv_px == 0`, drawn some other way) are skipped, and so are the cells
+/// flagged in `excluded` (their `b_o` stays 0). `shots` is the number of rays shot, including
+/// those that left the scene.
 pub fn kernel_moments(
     kernel: &KernelCells,
     samples: &[Sample],
     shots: u64,
     reflectance: &(impl Fn(u32) -> Bands + Sync),
-    tol: f64,
+    (tol, excluded): (f64, &[bool]),
 ) -> Vec<Bands> {
     let n = kernel.len();
     let cut = (1.0 / tol).ln();
@@ -175,7 +191,7 @@ pub fn kernel_moments(
                 if !any {
                     continue;
                 }
-                for_each_cell_at(kernel, &a, cut, smp, |o, g| {
+                for_each_cell_at(kernel, (&a, cut), excluded, smp, |o, g| {
                     for k in 0..MAX_BANDS {
                         b[o][k] += g * w[k];
                     }
@@ -201,17 +217,18 @@ pub fn kernel_moments(
     b
 }
 
-/// Calls `f(o, g_o(ξ))` for every kernel cell `o` whose Gaussian (`a[o] = 1/d_o²`) exceeds
-/// `exp(−cut)` at the sample's ray ξ = (x, y) and whose facing masks accept it.
+/// Calls `f(o, g_o(ξ))` for every kernel cell `o` not flagged in `excluded` whose Gaussian
+/// (`a[o] = 1/d_o²`) exceeds `exp(−cut)` at the sample's ray ξ = (x, y) and whose facing masks
+/// accept it.
 fn for_each_cell_at(
     kernel: &KernelCells,
-    a: &[f64],
-    cut: f64,
+    (a, cut): (&[f64], f64),
+    excluded: &[bool],
     smp: &Sample,
     mut f: impl FnMut(usize, f64),
 ) {
     for o in 0..kernel.len() {
-        if !kernel.accepts(o, smp.ray.nx, smp.ray.ny) {
+        if excluded.get(o) == Some(&true) || !kernel.accepts(o, smp.ray.nx, smp.ray.ny) {
             continue;
         }
         let dx = kernel.wx[o].distance_squared(smp.ray.x);
@@ -239,7 +256,7 @@ pub fn kernel_support(kernel: &KernelCells, samples: &[Sample], tol: f64) -> Vec
         .map(|part| {
             let mut c = vec![0.0; n];
             for smp in part.iter().filter(|smp| smp.inv_px != 0.0) {
-                for_each_cell_at(kernel, &a, cut, smp, |o, g| c[o] += g);
+                for_each_cell_at(kernel, (&a, cut), &[], smp, |o, g| c[o] += g);
             }
             c
         })
@@ -307,6 +324,7 @@ pub fn kernel_reflected_power(kernel: &KernelCells, sender: &[f64], receiver: &[
 /// Gram matrix does not).
 pub struct KernelProjection {
     ortho: integrals::Orthonormal,
+    excluded: Vec<bool>,
     tol: f64,
     report: ProjectionReport,
 }
@@ -328,17 +346,18 @@ impl KernelProjection {
         rejection: f64,
         excluded: &[bool],
     ) -> Self {
-        let mut gram = kernel_gram(kernel, scene, tol);
-        for (o, _) in excluded.iter().enumerate().filter(|(_, e)| **e) {
-            gram.row_mut(o).fill(0.0);
-            gram.column_mut(o).fill(0.0);
-        }
+        let gram = kernel_gram_excluding(kernel, scene, tol, excluded);
         let ortho = integrals::Orthonormal::new(&gram, rejection);
         let report = ProjectionReport {
             rejected: ortho.rejected(),
             gram_entries: gram.iter().filter(|v| **v != 0.0).count(),
         };
-        Self { ortho, tol, report }
+        Self {
+            ortho,
+            excluded: excluded.to_vec(),
+            tol,
+            report,
+        }
     }
 
     /// Rejections and Gram size.
@@ -355,7 +374,13 @@ impl KernelProjection {
         shots: u64,
         reflectance: &(impl Fn(u32) -> Bands + Sync),
     ) {
-        let b = kernel_moments(kernel, samples, shots, reflectance, self.tol);
+        let b = kernel_moments(
+            kernel,
+            samples,
+            shots,
+            reflectance,
+            (self.tol, &self.excluded),
+        );
         for k in 0..MAX_BANDS {
             let rhs: Vec<f64> = b.iter().map(|v| v[k]).collect();
             let v = self.ortho.solve(&rhs);

@@ -2,7 +2,7 @@
 //! shading network on the receivers, run a FEM step every N kernel insertions and update every
 //! sample's emitting strength, resample critical regions, stop at the budget.
 
-use crate::config::{OutputFit, SolveConfig, StrengthFrom};
+use crate::config::{NetworkTarget, OutputFit, SolveConfig, StrengthFrom};
 use crate::domain::{Domain, Ray};
 use crate::element::{Bands, MAX_BANDS};
 use crate::fem::{
@@ -79,24 +79,46 @@ impl Trained {
     }
 }
 
-fn kernel_target(ray: &Ray, s: &Bands, bands: usize, out: &mut Vec<f64>) {
+/// The kernel network's training target for a sample ([`NetworkTarget`]).
+fn kernel_target(smp: &Sample, config: &SolveConfig, domain: &Domain, out: &mut Vec<f64>) {
+    let (ray, s) = (&smp.ray, &smp.s);
+    let bands = domain.bands();
     out.clear();
-    out.extend((0..bands).map(|b| ray.kernel[b] * s[b]));
+    match config.network_target {
+        NetworkTarget::SampleWeight if smp.inv_px != 0.0 => {
+            let rho = domain.reflectance(ray.face_y);
+            out.extend((0..bands).map(|b| {
+                if ray.kernel[b] > 0.0 {
+                    rho[b] * s[b] * smp.inv_px
+                } else {
+                    0.0
+                }
+            }));
+        }
+        NetworkTarget::ClampedKernel => {
+            // G·r² / max(r², r_c²): G with 1/r² clamped at r_c.
+            let rc = config.network_clamp_radius * domain.diagonal();
+            let f = (ray.x.distance_squared(ray.y) / (rc * rc)).min(1.0);
+            out.extend((0..bands).map(|b| ray.kernel[b] * s[b] * f));
+        }
+        _ => out.extend((0..bands).map(|b| ray.kernel[b] * s[b])),
+    }
 }
 
-/// One kernel training step on a sample: input (x, y), target K·s, cached BMU (sec. 2.6).
+/// One kernel training step on a sample: input (x, y), target ([`kernel_target`]), cached BMU
+/// (sec. 2.6).
 fn train_kernel_on(
     kernel: &mut impl GrowingNetwork,
     smp: &mut Sample,
-    dim: usize,
-    bands: usize,
+    (domain, config): (&Domain, &SolveConfig),
     input: &mut Vec<f64>,
     target: &mut Vec<f64>,
 ) {
+    let dim = domain.dim();
     input.clear();
     input.extend_from_slice(&smp.ray.x.to_array()[..dim]);
     input.extend_from_slice(&smp.ray.y.to_array()[..dim]);
-    kernel_target(&smp.ray, &smp.s, bands, target);
+    kernel_target(smp, config, domain, target);
     let hint = smp
         .kernel_bmu
         .filter(|(_, e)| *e == kernel.epoch())
@@ -206,6 +228,7 @@ pub fn train(
         seed: config.seed,
         threads: rayon::current_num_threads(),
         output_fit: config.output_fit.name().into(),
+        network_target: config.network_target.name().into(),
         ..Default::default()
     };
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
@@ -257,6 +280,7 @@ pub fn train(
     let mut last_report = Instant::now();
     let (mut t_kernel, mut t_shading) = (0.0, 0.0);
     let base_used = config.needs_base();
+    let to_target = (domain, config);
 
     loop {
         let stop_cells = kernel.cell_count() >= config.kernel_cells;
@@ -277,7 +301,7 @@ pub fn train(
         let mut shading_batch = Vec::with_capacity(batch);
         for _ in 0..batch {
             let i = rng.random_range(0..samples.len());
-            train_kernel_on(kernel, &mut samples[i], dim, bands, &mut input, &mut target);
+            train_kernel_on(kernel, &mut samples[i], to_target, &mut input, &mut target);
             shading_batch.push(i);
         }
         t_kernel += tk.elapsed().as_secs_f64();
@@ -462,7 +486,7 @@ pub fn train(
             // Re-learn the new targets without growing: a sweep over the samples.
             for _ in 0..samples.len() {
                 let i = rng.random_range(0..samples.len());
-                train_kernel_on(kernel, &mut samples[i], dim, bands, &mut input, &mut target);
+                train_kernel_on(kernel, &mut samples[i], to_target, &mut input, &mut target);
             }
         }
         let frozen = freeze_kernel(kernel, dim, bands);

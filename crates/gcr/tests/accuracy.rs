@@ -74,8 +74,9 @@ fn config(cells: usize, output_fit: OutputFit) -> SolveConfig {
 }
 
 /// Furnace: every face emits E = 1 and reflects ρ = 0.5, so B = 2 everywhere, of which the
-/// networks carry the reflected half. The target is 1 %: the ray gather (measured 0.90 %
-/// since its direct light uses MIS) meets it at 100 cells; the kernel gather (6.5 %) does not.
+/// networks carry the reflected half. The target is 1 %: the ray gather (measured 0.89 %)
+/// meets it at 100 cells; the kernel gather (9.4 %; 6.5 % with the network trained on the
+/// unclamped K·s, `NetworkTarget::KernelValue`) does not.
 #[test]
 fn furnace_radiosity_is_e_over_one_minus_rho() {
     let (scene, points) = scene("furnace");
@@ -92,7 +93,7 @@ fn furnace_radiosity_is_e_over_one_minus_rho() {
         let bound = if gather == GatherMode::Rays {
             0.01
         } else {
-            0.08
+            0.12
         };
         assert!(e < bound, "furnace {}: {e}", gather.name());
     }
@@ -126,7 +127,8 @@ fn cornell_box_matches_the_path_traced_reference() {
     eprintln!("projection {projected:?}\ndelta rule {delta:?}");
     let (kernel, rays) = (projected[0].1, projected[1].1);
     assert!(rays < 0.2, "rays gather {rays}");
-    assert!(kernel < 0.65, "kernel gather {kernel}");
+    // measured 0.315 (the ray gather 0.104)
+    assert!(kernel < 0.45, "kernel gather {kernel}");
     assert!(kernel < delta[0].1 && rays < delta[1].1);
 }
 

@@ -3,7 +3,7 @@
 //! breaks naive code (a sliver triangle, a face coincident with another, corners where the kernel
 //! is singular).
 
-use gcr::config::{GatherMode, SolveConfig};
+use gcr::config::{GatherMode, NetworkTarget, SolveConfig};
 use gcr::domain::Domain;
 use gcr::gather::Emitters;
 use gcr::pipeline::radiosity_at;
@@ -140,7 +140,10 @@ fn radiosity_does_not_depend_on_the_scene_scale() {
 
 /// A furnace that hardly absorbs: ρ = 0.95 everywhere, E = 1, so B = E/(1 − ρ) = 20, of which
 /// the networks carry 19. Many bounces; the projection's bounce loop must converge, not blow up
-/// (without `energy_correction` it ran away to B ≈ 300).
+/// (without `energy_correction` it ran away to B ≈ 300). Measured at 200 cells: mean B 19.73
+/// (kernel gather, 19 % pointwise) and 20.03 (ray gather, 5.9 %). At 80 cells the network
+/// trained on the clamped kernel (the default) leaves the mean 17 % low (ray gather 17 %); trained
+/// on the unclamped K·s it was 0.6 % (4.3 %): the furnace's K·s has no structure but G's.
 #[test]
 fn a_nearly_white_furnace_converges_to_e_over_one_minus_rho() {
     let furnace = scene_sampler::builtin("furnace")
@@ -155,7 +158,7 @@ fn a_nearly_white_furnace_converges_to_e_over_one_minus_rho() {
     );
     let pts = points(&white, 40);
     for gather in [GatherMode::Kernel, GatherMode::Rays] {
-        let b = solve_at(&white, &small(80), gather, &pts);
+        let b = solve_at(&white, &small(200), gather, &pts);
         let err = relative_l2(&b, &vec![[20.0; 3]; b.len()]);
         let mean = b.iter().map(|v| v[0]).sum::<f64>() / b.len() as f64;
         eprintln!(
@@ -169,7 +172,12 @@ fn a_nearly_white_furnace_converges_to_e_over_one_minus_rho() {
             "{}: mean {mean}",
             gather.name()
         );
-        assert!(err < 0.2, "{}: {err}", gather.name());
+        let bound = if gather == GatherMode::Rays {
+            0.08
+        } else {
+            0.25
+        };
+        assert!(err < bound, "{}: {err}", gather.name());
     }
 }
 
@@ -303,6 +311,8 @@ fn cells_without_samples_do_not_feed_their_noise_back() {
         let config = SolveConfig {
             seed: 5,
             projection_min_support,
+            // the dissertation's target, which grows the edge cells (the default clamps G)
+            network_target: NetworkTarget::KernelValue,
             ..small(600)
         };
         let trained = gcr::solve::solve(&domain, &config, &mut |_| {}).unwrap();

@@ -397,7 +397,7 @@ mod tests {
     use crate::domain::Domain;
     use crate::element::Element;
     use glam::DVec3;
-    use scene_sampler::{AnyScene, KernelSampler, SceneBvh, builtin};
+    use scene_sampler::{KernelSampler, SceneBvh, builtin};
 
     /// Shot samples on cornell-box with s = E, as the solver draws them.
     fn shot_samples(domain: &Domain, count: usize) -> Vec<Sample> {
@@ -416,29 +416,37 @@ mod tests {
             .collect()
     }
 
-    /// A wide cell, a tiny one on one sample and one away from every sample: their supports
-    /// against the plain sum of the Gaussian over every sample (no cut-off).
-    #[test]
-    fn kernel_support_counts_the_samples_in_each_cell() {
-        let scene = scene_sampler::builtin("cornell-box")
-            .unwrap()
-            .into_3d()
-            .unwrap();
-        let bvh = SceneBvh::new(&scene);
-        let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
-        let samples = shot_samples(&domain, 4000);
-        let on = samples[17].ray;
+    /// The built-in Cornell box.
+    fn cornell() -> scene_sampler::Scene {
+        builtin("cornell-box").unwrap().into_3d().unwrap()
+    }
+
+    /// Kernel cells with the given halves `(w_x, w_y, width)` and zero weights.
+    fn cells(halves: impl IntoIterator<Item = (DVec3, DVec3, f64)>) -> KernelCells {
         let mut kernel = KernelCells::default();
-        for (wx, wy, d) in [
-            (samples[3].ray.x, samples[3].ray.y, 0.2),
-            (on.x, on.y, 0.003),
-            (DVec3::splat(5.0), DVec3::splat(-5.0), 0.1),
-        ] {
+        for (wx, wy, d) in halves {
             kernel.wx.push(wx);
             kernel.wy.push(wy);
             kernel.width.push(d);
             kernel.v.push([0.0; MAX_BANDS]);
         }
+        kernel
+    }
+
+    /// A wide cell, a tiny one on one sample and one away from every sample: their supports
+    /// against the plain sum of the Gaussian over every sample (no cut-off).
+    #[test]
+    fn kernel_support_counts_the_samples_in_each_cell() {
+        let scene = cornell();
+        let bvh = SceneBvh::new(&scene);
+        let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+        let samples = shot_samples(&domain, 4000);
+        let on = samples[17].ray;
+        let kernel = cells([
+            (samples[3].ray.x, samples[3].ray.y, 0.2),
+            (on.x, on.y, 0.003),
+            (DVec3::splat(5.0), DVec3::splat(-5.0), 0.1),
+        ]);
         let tol = 1e-6;
         let support = kernel_support(&kernel, &samples, tol);
         for o in 0..kernel.len() {
@@ -473,21 +481,12 @@ mod tests {
     /// Excluded cells get weight 0 and count as rejected; the others are fitted.
     #[test]
     fn excluded_cells_get_no_weight() {
-        let scene = scene_sampler::builtin("cornell-box")
-            .unwrap()
-            .into_3d()
-            .unwrap();
+        let scene = cornell();
         let bvh = SceneBvh::new(&scene);
         let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
         let surface = domain.scene_surface();
         let samples = shot_samples(&domain, 4000);
-        let mut kernel = KernelCells::default();
-        for i in [3, 40, 90] {
-            kernel.wx.push(samples[i].ray.x);
-            kernel.wy.push(samples[i].ray.y);
-            kernel.width.push(0.2);
-            kernel.v.push([0.0; MAX_BANDS]);
-        }
+        let mut kernel = cells([3, 40, 90].map(|i| (samples[i].ray.x, samples[i].ray.y, 0.2)));
         let reflectance = |f| domain.reflectance(f);
         let shots = samples.len() as u64;
         let all = KernelProjection::new(&kernel, &surface, 1e-6, 1e-6);
@@ -506,9 +505,7 @@ mod tests {
     /// quadrilaterals).
     #[test]
     fn gram_entries_match_cubature_of_both_halves() {
-        let AnyScene::ThreeD(scene) = builtin("cornell-box").unwrap() else {
-            panic!()
-        };
+        let scene = cornell();
         let bvh = SceneBvh::new(&scene);
         let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
         let surface = domain.scene_surface();
@@ -523,16 +520,15 @@ mod tests {
         let triangles: Vec<[DVec3; 3]> = scene.faces.iter().map(|f| f.v).collect();
         // Cells near the surfaces: centres on face centroids, widths from narrow to wide.
         let centroid = |i: usize| triangles[i].iter().sum::<DVec3>() / 3.0;
-        let mut kernel = KernelCells::default();
-        for (k, (i, j)) in [(0, 5), (1, 5), (3, 8), (12, 20), (30, 2)]
-            .into_iter()
-            .enumerate()
-        {
-            kernel.wx.push(centroid(i) + DVec3::splat(0.01 * k as f64));
-            kernel.wy.push(centroid(j));
-            kernel.width.push(diag * [0.05, 0.1, 0.2, 0.3, 0.15][k]);
-            kernel.v.push([0.0; MAX_BANDS]);
-        }
+        let mut kernel = cells(
+            [(0, 5), (1, 5), (3, 8), (12, 20), (30, 2)]
+                .into_iter()
+                .enumerate()
+                .map(|(k, (i, j))| {
+                    let d = diag * [0.05, 0.1, 0.2, 0.3, 0.15][k];
+                    (centroid(i) + DVec3::splat(0.01 * k as f64), centroid(j), d)
+                }),
+        );
         // Unmasked, then with facing masks from the faces the halves sit on (a Gaussian
         // restricted to the faces that face like it: the cubature skips the others).
         for masked in [false, true] {

@@ -89,7 +89,7 @@ pub fn kernel_gram(kernel: &KernelCells, scene: &SceneSurface, tol: f64) -> DMat
 
 /// [`kernel_gram`] with the rows and columns of the cells flagged in `excluded` left 0 (not
 /// computed).
-fn kernel_gram_excluding(
+pub fn kernel_gram_excluding(
     kernel: &KernelCells,
     scene: &SceneSurface,
     tol: f64,
@@ -347,7 +347,13 @@ impl KernelProjection {
         excluded: &[bool],
     ) -> Self {
         let gram = kernel_gram_excluding(kernel, scene, tol, excluded);
-        let ortho = integrals::Orthonormal::new(&gram, rejection);
+        Self::from_gram(&gram, tol, rejection, excluded)
+    }
+
+    /// Factors a Gram matrix computed by [`kernel_gram_excluding`] with the same `tol` and
+    /// `excluded`: a projection redone at another `rejection` need not recompute it.
+    pub fn from_gram(gram: &DMatrix<f64>, tol: f64, rejection: f64, excluded: &[bool]) -> Self {
+        let ortho = integrals::Orthonormal::new(gram, rejection);
         let report = ProjectionReport {
             rejected: ortho.rejected(),
             gram_entries: gram.iter().filter(|v| **v != 0.0).count(),

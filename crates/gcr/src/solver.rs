@@ -12,7 +12,8 @@ use crate::fem::{
 use crate::metrics::Metrics;
 use crate::network::GrowingNetwork;
 use crate::projection::{
-    KernelProjection, kernel_reflected_power, kernel_support, sampled_reflected_power,
+    KernelProjection, kernel_gram_excluding, kernel_reflected_power, kernel_support,
+    sampled_reflected_power,
 };
 use crate::shading::ShadingGeometry;
 use crate::shooting::SenderDensity;
@@ -519,51 +520,94 @@ const FINAL_BOUNCES: usize = 200;
 /// Relative change of the total strength below which the bounces stop.
 const BOUNCE_TOLERANCE: f64 = 1e-5;
 
-/// Freezes the kernel network, projects K·s onto its Gaussians ([`crate::projection`]) and
-/// iterates `s ← E + B_refl(s)` with the kernel collection (one light bounce per iteration) until
-/// the total strength changes by less than [`BOUNCE_TOLERANCE`] or `max_bounces` is reached.
-/// Returns the projected kernel, its sender integrals and the bounces run.
-#[allow(clippy::too_many_arguments)]
+/// The frozen kernel network with everything a projection needs that does not depend on the
+/// rejection threshold: computed once per network state, reused when [`propagate`] redoes the
+/// projection at a higher rejection.
+struct Frozen {
+    /// The cells (their weights are overwritten by every fit).
+    kernel: KernelCells,
+    /// Sender integrals c_o.
+    sender: Vec<f64>,
+    /// Receiver integrals (empty without the energy correction).
+    receiver: Vec<f64>,
+    /// Cells left out for want of samples in their support.
+    excluded: Vec<bool>,
+    /// Their Gram matrix ([`crate::projection::kernel_gram_excluding`]).
+    gram: nalgebra::DMatrix<f64>,
+}
+
+impl Frozen {
+    fn new(
+        kernel: &impl GrowingNetwork,
+        domain: &Domain,
+        config: &SolveConfig,
+        samples: &[Sample],
+        scene: &SceneSurface,
+    ) -> Self {
+        let tol = config.projection_tolerance;
+        let mut frozen = freeze_kernel(kernel, domain.dim(), domain.bands());
+        if config.kernel_facing {
+            let ends: Vec<_> = samples
+                .iter()
+                .map(|s| (s.ray.x, s.ray.nx, s.ray.y, s.ray.ny))
+                .collect();
+            frozen.assign_facing(&ends, config.breaking.max_normal_angle.cos());
+        }
+        let sender = sender_integrals(&frozen, scene, tol);
+        // Cells without data (the tiny ones the network grows along edges) are left out: their
+        // moment would be one sample's noise ([`SolveConfig::projection_min_support`]).
+        let min_support = config.projection_min_support;
+        let excluded: Vec<bool> = if min_support > 0.0 {
+            kernel_support(&frozen, samples, tol)
+                .iter()
+                .map(|&c| c < min_support)
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let receiver = if config.energy_correction {
+            receiver_integrals(&frozen, scene, tol)
+        } else {
+            Vec::new()
+        };
+        let gram = kernel_gram_excluding(&frozen, scene, tol, &excluded);
+        Self {
+            kernel: frozen,
+            sender,
+            receiver,
+            excluded,
+            gram,
+        }
+    }
+}
+
+/// Projects K·s onto the frozen kernel's Gaussians ([`crate::projection`]) at the relative pivot
+/// threshold `rejection` and iterates `s ← E + B_refl(s)` with the kernel collection (one light
+/// bounce per iteration) until the total strength changes by less than [`BOUNCE_TOLERANCE`] or
+/// `max_bounces` is reached. Returns the projected kernel, its sender integrals and the bounces
+/// run.
 fn propagate_at(
-    kernel: &impl GrowingNetwork,
+    prepared: &Frozen,
     domain: &Domain,
     config: &SolveConfig,
-    samples: &mut [Sample],
-    shots: u64,
-    scene: &SceneSurface,
+    (samples, shots): (&mut [Sample], u64),
     max_bounces: usize,
-    (tol, rejection): (f64, f64),
+    rejection: f64,
 ) -> Propagated {
-    let mut frozen = freeze_kernel(kernel, domain.dim(), domain.bands());
-    if config.kernel_facing {
-        let ends: Vec<_> = samples
-            .iter()
-            .map(|s| (s.ray.x, s.ray.nx, s.ray.y, s.ray.ny))
-            .collect();
-        frozen.assign_facing(&ends, config.breaking.max_normal_angle.cos());
-    }
-    let sender = sender_integrals(&frozen, scene, tol);
-    // Cells without data (the tiny ones the network grows along edges) are left out: their
-    // moment would be one sample's noise ([`SolveConfig::projection_min_support`]).
-    let min_support = config.projection_min_support;
-    let excluded: Vec<bool> = if min_support > 0.0 {
-        kernel_support(&frozen, samples, tol)
-            .iter()
-            .map(|&c| c < min_support)
-            .collect()
-    } else {
-        Vec::new()
-    };
+    let Frozen {
+        kernel,
+        sender,
+        receiver,
+        excluded,
+        gram,
+    } = prepared;
+    let mut frozen = kernel.clone();
     let unsupported = excluded.iter().filter(|e| **e).count();
-    let projection = KernelProjection::excluding(&frozen, scene, tol, rejection, &excluded);
+    let projection =
+        KernelProjection::from_gram(gram, config.projection_tolerance, rejection, excluded);
     let reflectance = |f| domain.reflectance(f);
     let total =
         |samples: &[Sample]| -> f64 { samples.iter().map(|s| s.s.iter().sum::<f64>()).sum() };
-    let receiver = if config.energy_correction {
-        receiver_integrals(&frozen, scene, tol)
-    } else {
-        Vec::new()
-    };
     let mut balance = 1.0;
     // The projection conserves energy only up to its fit error and the cells it rejects; with ρ
     // near 1 the bounce iteration amplifies any excess (a ρ = 0.95 furnace ran away to 15× the
@@ -576,7 +620,7 @@ fn propagate_at(
             return None;
         }
         let sampled = sampled_reflected_power(samples, shots, &reflectance);
-        let model = kernel_reflected_power(frozen, &sender, &receiver);
+        let model = kernel_reflected_power(frozen, sender, receiver);
         let (mut num, mut den) = (0.0, 0.0);
         for k in 0..MAX_BANDS {
             num += model[k];
@@ -619,7 +663,7 @@ fn propagate_at(
             break;
         }
         samples.par_iter_mut().for_each(|smp| {
-            smp.s = kernel_strength(&smp.ray, &frozen, &sender);
+            smp.s = kernel_strength(&smp.ray, &frozen, sender);
         });
         bounces += 1;
         let after = total(samples);
@@ -646,7 +690,7 @@ fn propagate_at(
     }
     Propagated {
         kernel: frozen,
-        sender,
+        sender: sender.clone(),
         bounces,
         energy_balance: balance,
         diverged,
@@ -676,16 +720,15 @@ fn propagate(
 ) -> Result<Propagated, SolveError> {
     let tol = config.projection_tolerance;
     let mut rejection = config.projection_rejection;
+    let prepared = Frozen::new(kernel, domain, config, samples, scene);
     let run = |samples: &mut [Sample], rejection: f64| {
         propagate_at(
-            kernel,
+            &prepared,
             domain,
             config,
-            samples,
-            shots,
-            scene,
+            (samples, shots),
             max_bounces,
-            (tol, rejection),
+            rejection,
         )
     };
     let start: Vec<Bands> = samples.iter().map(|s| s.s).collect();
@@ -742,7 +785,8 @@ fn bound_excess(samples: &[Sample], bound: &Bands) -> f64 {
 /// 0.9 converged to B within 8 % of the 300-cell solution at the scene's probes. On cornell-box
 /// at 1850 and 2000 cells (seed 2) the projection at 1e−6 reflected −195× the sampled power and
 /// 1e−3 was enough: going straight to 0.5 dropped 1568 of 1850 cells, and the ray gather error
-/// went from 5.8 % to 3.4 % with the gentler step. Each step recomputes the Gram matrix.
+/// went from 5.8 % to 3.4 % with the gentler step. Each step refactors the same Gram matrix
+/// ([`Frozen`]).
 const STABILIZING_REJECTIONS: [f64; 4] = [1e-3, 1e-1, 0.5, 0.9];
 
 /// A projection whose kernel reflects more than this many times the power the samples carry, or

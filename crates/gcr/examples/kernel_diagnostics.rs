@@ -24,7 +24,7 @@ fn main() -> anyhow::Result<()> {
     };
     let t = std::time::Instant::now();
     let (mut kernel, mut shading) = gcr::solve::make_networks(&domain, &config)?;
-    let trained = gcr::solver::train(&domain, &mut kernel, &mut shading, &config, &mut |_| {})?;
+    let trained = gcr::solve::train(&domain, &mut kernel, &mut shading, &config, &mut |_| {})?;
     let secs = t.elapsed().as_secs_f64();
     let (mut num, mut den, mut sk, mut sr) = (0.0, 0.0, 0.0, 0.0);
     for (p, r) in points.iter().zip(&reference) {

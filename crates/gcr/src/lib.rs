@@ -20,7 +20,6 @@ pub mod retriangulate;
 pub mod shading;
 pub mod shooting;
 pub mod solve;
-pub mod solver;
 pub mod spatial;
 
 /// The README's code, compiled and run as a doctest.

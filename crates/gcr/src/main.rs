@@ -263,7 +263,7 @@ fn solve_and_write(
     quiet: bool,
     start: Instant,
 ) -> Result<()> {
-    let mut observer = |p: &gcr::solver::Progress| {
+    let mut observer = |p: &gcr::solve::Progress| {
         if !quiet {
             // The FEM steps' Gram matrices grow like cells² and dominate large budgets, so the
             // remaining time is extrapolated quadratically in the cell count.
@@ -365,7 +365,7 @@ fn solve_and_write(
 
 fn probe_values(
     domain: &Domain,
-    trained: &gcr::solver::Trained,
+    trained: &gcr::solve::Trained,
     emitters: &Emitters,
     config: &SolveConfig,
     path: &PathBuf,
@@ -426,7 +426,7 @@ fn probe_values(
 
 fn flatland_image(
     domain: &Domain,
-    trained: &gcr::solver::Trained,
+    trained: &gcr::solve::Trained,
     emitters: &Emitters,
     config: &SolveConfig,
     flat: &scene_sampler::FlatlandScene,
@@ -486,7 +486,7 @@ fn flatland_image(
 fn flatland_kernel_image(
     domain: &Domain,
     sampler: &FlatKernelSampler,
-    trained: &gcr::solver::Trained,
+    trained: &gcr::solve::Trained,
     path: &PathBuf,
 ) -> Result<()> {
     use rayon::prelude::*;

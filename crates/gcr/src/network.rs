@@ -7,16 +7,12 @@
 /// A growing-cell-structures network as the radiosity solver drives it.
 pub trait GrowingNetwork {
     /// Presents one training sample (unsupervised step on `input`, supervised step towards
-    /// `target`), including the periodic insertion and deletion of cells. `hint` is the sample's
-    /// cached best-matching unit (sec. 2.6). Returns the new best-matching unit.
-    fn train(&mut self, input: &[f64], target: &[f64], hint: Option<usize>) -> usize;
+    /// `target`), including the periodic insertion and deletion of cells.
+    fn train(&mut self, input: &[f64], target: &[f64]);
     /// Number of cells.
     fn cell_count(&self) -> usize;
     /// Counts every insertion since the network was created.
     fn insertions(&self) -> u64;
-    /// Changes whenever cell indices may have been renumbered (after deletions): cached
-    /// best-matching units from an older epoch must be dropped.
-    fn epoch(&self) -> u64;
     /// Centre w_i of cell `i`.
     fn centre(&self, i: usize) -> &[f64];
     /// Width d_i of cell `i` (eq. 2.10).
@@ -36,18 +32,14 @@ pub trait GrowingNetwork {
 }
 
 impl GrowingNetwork for isgcs::Isgcs {
-    fn train(&mut self, input: &[f64], target: &[f64], hint: Option<usize>) -> usize {
-        isgcs::Isgcs::train(self, input, target, hint)
+    fn train(&mut self, input: &[f64], target: &[f64]) {
+        isgcs::Isgcs::train(self, input, target, None);
     }
     fn cell_count(&self) -> usize {
         self.len()
     }
     fn insertions(&self) -> u64 {
         isgcs::Isgcs::insertions(self)
-    }
-    fn epoch(&self) -> u64 {
-        // Cells are never renumbered (no deletion yet).
-        0
     }
     fn centre(&self, i: usize) -> &[f64] {
         isgcs::Isgcs::centre(self, i)

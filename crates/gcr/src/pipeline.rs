@@ -7,7 +7,7 @@ use crate::element::{Bands, MAX_BANDS};
 use crate::gather::{Emitters, Gathered, gather};
 use crate::mesh::ShadedMesh;
 use crate::retriangulate::{RetriangulateLimits, retriangulate};
-use crate::solver::Trained;
+use crate::solve::Trained;
 use crate::spatial::BoxGrid;
 use glam::DVec3;
 use rayon::prelude::*;

@@ -28,7 +28,7 @@
 use crate::cluster::Mask;
 use crate::element::{Bands, MAX_BANDS};
 use crate::fem::{KernelCells, SceneSurface};
-use crate::solver::Sample;
+use crate::solve::Sample;
 use crate::spatial::support_radius;
 use gauss_integrals as integrals;
 use glam::DVec3;
@@ -415,8 +415,6 @@ mod tests {
             .map(|shot| Sample {
                 s: shot.ray.emission_x,
                 ray: shot.ray,
-                kernel_bmu: None,
-                shading_bmu: None,
                 inv_px: shot.inv_px,
             })
             .collect()

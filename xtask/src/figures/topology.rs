@@ -4,7 +4,7 @@
 //! hidden-point removal against the depth buffer) on a flat-shaded view of the scene's faces.
 //!
 //! * `gcr-<scene>-samples.png` (fig. 4.12a): the end points y_i of every sample ray the kernel
-//!   network was trained on (the solver keeps all of them, [`gcr::solver::Trained::samples`]);
+//!   network was trained on (the solver keeps all of them, [`gcr::solve::Trained::samples`]);
 //! * `gcr-<scene>-network.png` (figs. 4.12b, 4.15d): the shading network of the last FEM step
 //!   ([`gcr::shading::ShadingGeometry`]): cell centres as dots, the edges of its triangles as lines.
 //!   Only the triangles that survive our breaking operator (sec. 4.4.2, on by default) exist there;
@@ -17,7 +17,7 @@ use anyhow::{Context, Result};
 use gcr::mesh::ShadedMesh;
 use gcr::output::raster::{Image, PinholeCamera, render_image};
 use gcr::output::tonemap::Exposure;
-use gcr::solver::Trained;
+use gcr::solve::Trained;
 use glam::DVec3;
 use scene_sampler::Scene;
 use std::collections::BTreeSet;

@@ -1,0 +1,50 @@
+//! The projected kernel (beyond the dissertation): the kernel network only places the cells;
+//! their weights are a Galerkin projection of K·s on shot rays ([`crate::projection`]), and the
+//! light is propagated by bouncing through the kernel collection ([`super::propagate`]).
+
+use super::Run;
+use super::SolveError;
+use super::propagate::{FINAL_BOUNCES, Propagated, TRAINING_BOUNCES, propagate};
+use crate::config::StrengthFrom;
+use crate::fem::KernelCells;
+use crate::network::GrowingNetwork;
+
+/// A FEM step during training: a few bounces through the projected kernel, then the base step
+/// (empty unless something reads the base).
+pub(super) fn fem_step(
+    kernel: &impl GrowingNetwork,
+    shading: &impl GrowingNetwork,
+    run: &mut Run,
+) -> Result<(), SolveError> {
+    let p = propagate(kernel, run, TRAINING_BOUNCES)?;
+    record(run, &p);
+    run.fem = Some(run.base_step(&p.kernel, shading));
+    if run.config.strength_from == StrengthFrom::Base {
+        run.update_strengths(&p.kernel);
+    }
+    run.metrics.fem_steps += 1;
+    Ok(())
+}
+
+/// The final step: one Gram matrix, then bounces until the strengths settle (each bounce is
+/// cheap), and the base step. Returns the projected kernel and its sender integrals.
+pub(super) fn finish(
+    kernel: &impl GrowingNetwork,
+    shading: &impl GrowingNetwork,
+    run: &mut Run,
+) -> Result<(KernelCells, Vec<f64>), SolveError> {
+    let p = propagate(kernel, run, FINAL_BOUNCES)?;
+    record(run, &p);
+    run.metrics.energy_balance = run.config.energy_correction.then_some(p.energy_balance);
+    run.fem = Some(run.base_step(&p.kernel, shading));
+    run.metrics.fem_steps += 1;
+    Ok((p.kernel, p.sender))
+}
+
+fn record(run: &mut Run, p: &Propagated) {
+    let m = &mut run.metrics;
+    m.bounces += p.bounces;
+    m.diverging_bounces_stopped += usize::from(p.diverged);
+    m.stabilized_projections += p.stabilized;
+    m.unsupported_cells = p.unsupported;
+}

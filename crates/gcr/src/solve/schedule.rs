@@ -1,0 +1,111 @@
+//! When the main loop stops and when it runs a FEM step (sec. 4.4.1, fig. B.1).
+
+use crate::config::SolveConfig;
+
+/// The loop's clock: the budgets and the FEM steps' spacing.
+pub(super) struct Schedule {
+    kernel_cells: usize,
+    time_budget: Option<f64>,
+    fem_every: u64,
+    projection: bool,
+    base_used: bool,
+    last_fem_insertions: u64,
+    last_projected_cells: usize,
+}
+
+impl Schedule {
+    pub(super) fn new(config: &SolveConfig) -> Self {
+        Self {
+            kernel_cells: config.kernel_cells,
+            time_budget: config.time_budget,
+            fem_every: config.fem_every as u64,
+            projection: config.output_fit == crate::config::OutputFit::Projection,
+            base_used: config.needs_base(),
+            last_fem_insertions: 0,
+            last_projected_cells: 0,
+        }
+    }
+
+    /// Why training stops now, if it does: the kernel cell budget (`"cells"`) or the time budget
+    /// (`"time"`).
+    pub(super) fn stop(&self, kernel_cells: usize, elapsed: f64) -> Option<&'static str> {
+        if kernel_cells >= self.kernel_cells {
+            Some("cells")
+        } else if self.time_budget.is_some_and(|t| elapsed >= t) {
+            Some("time")
+        } else {
+            None
+        }
+    }
+
+    /// Whether a FEM step is due, recording it when it is: every `fem_every` kernel insertions
+    /// (sec. 4.4.1), once the shading network has a simplex (when the base is read), and with the
+    /// projected output layer only after the kernel grew by a quarter since the last step: its
+    /// Gram matrix costs O(cells²), so the steps thin out geometrically and their total cost
+    /// stays a small multiple of the last one.
+    pub(super) fn fem_due(
+        &mut self,
+        insertions: u64,
+        kernel_cells: usize,
+        shading_cells: usize,
+    ) -> bool {
+        let due = insertions - self.last_fem_insertions >= self.fem_every
+            && (shading_cells >= 3 || !self.base_used)
+            && (!self.projection || kernel_cells * 4 >= self.last_projected_cells * 5);
+        if due {
+            self.last_fem_insertions = insertions;
+            self.last_projected_cells = kernel_cells;
+        }
+        due
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::OutputFit;
+
+    #[test]
+    fn budgets_stop_training_cells_first() {
+        let config = SolveConfig {
+            kernel_cells: 100,
+            time_budget: Some(2.0),
+            ..SolveConfig::default()
+        };
+        let s = Schedule::new(&config);
+        assert_eq!(s.stop(99, 1.0), None);
+        assert_eq!(s.stop(100, 1.0), Some("cells"));
+        assert_eq!(s.stop(100, 3.0), Some("cells"));
+        assert_eq!(s.stop(50, 2.0), Some("time"));
+    }
+
+    /// The projection's steps need the kernel 25 % larger than at the last step; the delta rule
+    /// steps every `fem_every` insertions, once the shading network has a simplex.
+    #[test]
+    fn projected_steps_thin_out_geometrically() {
+        let config = SolveConfig {
+            fem_every: 30,
+            ..SolveConfig::default()
+        };
+        let mut s = Schedule::new(&config);
+        assert!(!s.fem_due(29, 34, 0));
+        assert!(s.fem_due(30, 35, 0));
+        assert!(!s.fem_due(60, 43, 0), "43 < 1.25 · 35");
+        assert!(s.fem_due(60, 44, 0));
+        assert!(!s.fem_due(70, 200, 0), "only 10 insertions since");
+
+        let delta = SolveConfig {
+            fem_every: 30,
+            output_fit: OutputFit::DeltaRule,
+            skip_unused_base: false,
+            ..SolveConfig::default()
+        };
+        let mut s = Schedule::new(&delta);
+        assert!(!s.fem_due(30, 35, 2), "the base needs a shading simplex");
+        assert!(s.fem_due(30, 35, 3));
+        assert!(
+            s.fem_due(60, 36, 3),
+            "no growth condition without the projection"
+        );
+    }
+}

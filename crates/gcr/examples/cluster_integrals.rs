@@ -7,8 +7,8 @@
 //! of the scene's diagonal, prints the relative error of ∫_S (max and RMS over the centres) and
 //! the time per integral, exact and clustered for each θ given.
 
-use gcr::domain::Domain;
-use gcr::fem::SurfaceClusters;
+use gcr::stages::SceneSurface;
+use gcr::{Domain, SurfaceClusters};
 use rand::{Rng, SeedableRng};
 use scene_sampler::{KernelSampler, SceneBvh};
 use std::time::Instant;
@@ -27,7 +27,7 @@ fn main() -> anyhow::Result<()> {
     let scene = scene_sampler::builtin(name)?.into_3d()?;
     let bvh = SceneBvh::new(&scene);
     let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
-    let exact = domain.scene_surface();
+    let exact = SceneSurface::of(&domain);
     let diag = domain.diagonal();
     let tol = 1e-6;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
@@ -54,7 +54,7 @@ fn main() -> anyhow::Result<()> {
         let t_exact = t.elapsed().as_secs_f64() / centres.len() as f64;
         let mut near = 0;
         for c in &centres {
-            exact.elements_near(*c, gcr::spatial::support_radius(d, tol), &mut scratch);
+            exact.elements_near(*c, gcr::stages::support_radius(d, tol), &mut scratch);
             near += scratch.len();
         }
         print!(
@@ -63,10 +63,13 @@ fn main() -> anyhow::Result<()> {
             1e6 * t_exact
         );
         for &theta in &thetas {
-            let clustered = domain.scene_surface_clustered(SurfaceClusters {
-                min_elements: 0,
-                theta,
-            });
+            let clustered = SceneSurface::of_clustered(
+                &domain,
+                SurfaceClusters {
+                    min_elements: 0,
+                    theta,
+                },
+            );
             let t = Instant::now();
             let got: Vec<f64> = centres
                 .iter()

@@ -3,10 +3,7 @@
 //!
 //! `cargo run --release -p gcr --example compare_reference -- cornell-box 200 [seed] [samples-per-cell]`
 
-use gcr::config::{GatherMode, OutputFit, SolveConfig};
-use gcr::domain::Domain;
-use gcr::gather::Emitters;
-use gcr::pipeline::radiosity_at;
+use gcr::{Domain, Emitters, GatherMode, OutputFit, SolveConfig, radiosity_at_points};
 use scene_sampler::{KernelSampler, SceneBvh};
 
 fn main() -> anyhow::Result<()> {
@@ -42,28 +39,18 @@ fn main() -> anyhow::Result<()> {
             ..SolveConfig::default()
         };
         let t = std::time::Instant::now();
-        let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+        let trained = gcr::solve(&domain, &config, &mut |_| {})?;
         let seconds = t.elapsed().as_secs_f64();
         for gather in [GatherMode::Base, GatherMode::Kernel, GatherMode::Rays] {
             let config = SolveConfig { gather, ..config };
-            let mut scratch = Vec::new();
             let (mut num, mut den) = (0.0, 0.0);
-            for (i, (p, r)) in points.iter().zip(&reference).enumerate() {
+            let at: Vec<_> = points.iter().map(|p| (p.point, p.normal, p.face)).collect();
+            let gathered = radiosity_at_points(&domain, &trained, &emitters, &config, &at)?;
+            for ((p, r), g) in points.iter().zip(&reference).zip(&gathered) {
                 // Emitter probes would dominate the L2 sum with their exact E: leave them out.
                 if !scene.faces[p.face as usize].emission.is_zero() {
                     continue;
                 }
-                let g = radiosity_at(
-                    &domain,
-                    &trained,
-                    &emitters,
-                    &config,
-                    p.point,
-                    p.normal,
-                    p.face,
-                    i as u64,
-                    &mut scratch,
-                );
                 for b in 0..3 {
                     num += (g.radiosity[b] - r.mean[b]).powi(2);
                     den += r.mean[b].powi(2);

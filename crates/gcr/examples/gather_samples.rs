@@ -11,10 +11,7 @@
 //! Prints one line per sample count: relative L2 of B (and of B − E, the part the gather
 //! estimates) and the gather's seconds.
 
-use gcr::config::{GatherMode, SolveConfig};
-use gcr::domain::Domain;
-use gcr::gather::{Emitters, GatherSamples};
-use gcr::pipeline::radiosity_at_points;
+use gcr::{Domain, Emitters, GatherMode, GatherSamples, SolveConfig, radiosity_at_points};
 use scene_sampler::{KernelSampler, SceneBvh, SurfaceSampler};
 
 fn main() -> anyhow::Result<()> {
@@ -91,7 +88,7 @@ fn main() -> anyhow::Result<()> {
         projection_min_support: min_support,
         ..defaults
     };
-    let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+    let trained = gcr::solve(&domain, &config, &mut |_| {})?;
     let at: Vec<_> = points.iter().map(|p| (p.point, p.normal, p.face)).collect();
     let noise: f64 = {
         let (mut num, mut den) = (0.0, 0.0);
@@ -120,7 +117,7 @@ fn main() -> anyhow::Result<()> {
             ..config
         };
         let t = std::time::Instant::now();
-        let got = radiosity_at_points(&domain, &trained, &emitters, &config, &at);
+        let got = radiosity_at_points(&domain, &trained, &emitters, &config, &at)?;
         let seconds = t.elapsed().as_secs_f64();
         let (mut num, mut den, mut den_r) = (0.0, 0.0, 0.0);
         for ((g, r), p) in got.iter().zip(&reference).zip(&points) {

@@ -3,8 +3,7 @@
 //!
 //! `cargo run --release -p gcr --example kernel_diagnostics -- cornell-box 200`
 
-use gcr::config::SolveConfig;
-use gcr::domain::Domain;
+use gcr::{Domain, SolveConfig};
 use scene_sampler::{KernelSampler, SceneBvh};
 
 fn main() -> anyhow::Result<()> {
@@ -23,8 +22,8 @@ fn main() -> anyhow::Result<()> {
         ..SolveConfig::default()
     };
     let t = std::time::Instant::now();
-    let (mut kernel, mut shading) = gcr::solve::make_networks(&domain, &config)?;
-    let trained = gcr::solve::train(&domain, &mut kernel, &mut shading, &config, &mut |_| {})?;
+    let (mut kernel, mut shading) = gcr::make_networks(&domain, &config)?;
+    let trained = gcr::train(&domain, &mut kernel, &mut shading, &config, &mut |_| {})?;
     let secs = t.elapsed().as_secs_f64();
     let (mut num, mut den, mut sk, mut sr) = (0.0, 0.0, 0.0, 0.0);
     for (p, r) in points.iter().zip(&reference) {
@@ -111,7 +110,7 @@ fn main() -> anyhow::Result<()> {
         if !scene.faces[p.face as usize].emission.is_zero() {
             continue;
         }
-        let k = gcr::fem::reflected_from_kernel(&ls, &trained.sender, p.point, p.normal);
+        let k = gcr::stages::reflected_from_kernel(&ls, &trained.sender, p.point, p.normal);
         for b in 0..3 {
             lnum += (k[b] - r.mean[b]).powi(2);
             lden += r.mean[b].powi(2);

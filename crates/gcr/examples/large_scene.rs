@@ -6,12 +6,7 @@
 //! `cargo run --release -p gcr --example large_scene -- tessellated-cornell-1000000 300 1 0.5`
 //! (scene, kernel cells, then the θ values; default: the configuration's θ).
 
-use gcr::config::{GatherMode, SolveConfig};
-use gcr::domain::Domain;
-use gcr::fem::SurfaceClusters;
-use gcr::gather::Emitters;
-use gcr::pipeline::radiosity_at;
-use rayon::prelude::*;
+use gcr::{Domain, Emitters, GatherMode, SolveConfig, SurfaceClusters, radiosity_at_points};
 use scene_sampler::{KernelSampler, SceneBvh, SurfaceSampler};
 use std::time::Instant;
 
@@ -61,7 +56,7 @@ fn main() -> anyhow::Result<()> {
             ..SolveConfig::default()
         };
         let t = Instant::now();
-        let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+        let trained = gcr::solve(&domain, &config, &mut |_| {})?;
         let seconds = t.elapsed().as_secs_f64();
         print!(
             "θ = {theta}: solve {seconds:.1} s (FEM {:.1} s), energy factor {:?}",
@@ -70,17 +65,12 @@ fn main() -> anyhow::Result<()> {
         for gather in [GatherMode::Kernel, GatherMode::Rays] {
             let config = SolveConfig { gather, ..config };
             let t = Instant::now();
-            let values: Vec<[f64; 3]> = points
-                .par_iter()
-                .enumerate()
-                .map_init(Vec::new, |scratch, (i, p)| {
-                    radiosity_at(
-                        &domain, &trained, &emitters, &config, p.point, p.normal, p.face, i as u64,
-                        scratch,
-                    )
-                    .radiosity
-                })
-                .collect();
+            let at: Vec<_> = points.iter().map(|p| (p.point, p.normal, p.face)).collect();
+            let values: Vec<[f64; 3]> =
+                radiosity_at_points(&domain, &trained, &emitters, &config, &at)?
+                    .into_iter()
+                    .map(|g| g.radiosity)
+                    .collect();
             let (mut num, mut den, mut sum_v, mut sum_r) = (0.0, 0.0, 0.0, 0.0);
             for (v, r) in values.iter().zip(&reference) {
                 for b in 0..3 {
@@ -101,7 +91,7 @@ fn main() -> anyhow::Result<()> {
         }
         println!();
     }
-    if let Some(peak) = gcr::metrics::peak_memory_bytes() {
+    if let Some(peak) = gcr::peak_memory_bytes() {
         println!("peak resident memory {:.0} MiB", peak as f64 / 1048576.0);
     }
     Ok(())

@@ -8,10 +8,7 @@
 //! The ray gather averages B_refl over the hemisphere it sees, so pointwise errors that cancel
 //! within an object matter less than a wrong mean per object; this prints both.
 
-use gcr::config::{GatherMode, SolveConfig};
-use gcr::domain::Domain;
-use gcr::gather::Emitters;
-use gcr::pipeline::radiosity_at_points;
+use gcr::{Domain, Emitters, GatherMode, SolveConfig, radiosity_at_points};
 use scene_sampler::{KernelSampler, SceneBvh, SurfaceSampler};
 
 fn main() -> anyhow::Result<()> {
@@ -39,7 +36,7 @@ fn main() -> anyhow::Result<()> {
         kernel_facing,
         ..SolveConfig::default()
     };
-    let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+    let trained = gcr::solve(&domain, &config, &mut |_| {})?;
     let at: Vec<_> = points.iter().map(|p| (p.point, p.normal, p.face)).collect();
     let kernel = radiosity_at_points(
         &domain,
@@ -50,8 +47,8 @@ fn main() -> anyhow::Result<()> {
             ..config.clone()
         },
         &at,
-    );
-    let rays = radiosity_at_points(&domain, &trained, &emitters, &config, &at);
+    )?;
+    let rays = radiosity_at_points(&domain, &trained, &emitters, &config, &at)?;
     let objects = scene.objects.len();
     // Per object and band: Σ ref, Σ kernel, Σ (kernel − ref)², Σ ref², Σ (rays − ref)², count.
     let mut acc = vec![[[0.0f64; 5]; 3]; objects];
@@ -131,7 +128,7 @@ fn main() -> anyhow::Result<()> {
         .iter()
         .enumerate()
         .map(|(i, &(y, nrm, face))| {
-            gcr::gather::gather(
+            gcr::stages::gather(
                 &domain,
                 &emitters,
                 y,

@@ -8,10 +8,7 @@
 //! the kernel and ray gathers at the scene's probes against the path-traced reference; a
 //! tolerance whose solve goes unstable prints the solver's error instead.
 
-use gcr::config::{GatherMode, SolveConfig};
-use gcr::domain::Domain;
-use gcr::gather::Emitters;
-use gcr::pipeline::radiosity_at;
+use gcr::{Domain, Emitters, GatherMode, SolveConfig, radiosity_at_points};
 use scene_sampler::{KernelSampler, SceneBvh};
 
 fn main() -> anyhow::Result<()> {
@@ -42,7 +39,7 @@ fn main() -> anyhow::Result<()> {
             ..SolveConfig::default()
         };
         let t = std::time::Instant::now();
-        let trained = match gcr::solve::solve(&domain, &config, &mut |_| {}) {
+        let trained = match gcr::solve(&domain, &config, &mut |_| {}) {
             Ok(t) => t,
             Err(e) => {
                 println!("| {tol:.0e} | {e} | | | |");
@@ -53,23 +50,13 @@ fn main() -> anyhow::Result<()> {
         let mut errors = Vec::new();
         for gather in [GatherMode::Kernel, GatherMode::Rays] {
             let config = SolveConfig { gather, ..config };
-            let mut scratch = Vec::new();
             let (mut num, mut den) = (0.0, 0.0);
-            for (i, (p, r)) in points.iter().zip(&reference).enumerate() {
+            let at: Vec<_> = points.iter().map(|p| (p.point, p.normal, p.face)).collect();
+            let gathered = radiosity_at_points(&domain, &trained, &emitters, &config, &at)?;
+            for ((p, r), g) in points.iter().zip(&reference).zip(&gathered) {
                 if !scene.faces[p.face as usize].emission.is_zero() {
                     continue;
                 }
-                let g = radiosity_at(
-                    &domain,
-                    &trained,
-                    &emitters,
-                    &config,
-                    p.point,
-                    p.normal,
-                    p.face,
-                    i as u64,
-                    &mut scratch,
-                );
                 for b in 0..3 {
                     num += (g.radiosity[b] - r.mean[b]).powi(2);
                     den += r.mean[b].powi(2);

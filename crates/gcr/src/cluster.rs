@@ -2,7 +2,7 @@
 //! tree whose nodes stand in for their elements where a Gaussian cannot tell them apart.
 //!
 //! Every FEM integral is `∫_S exp(−a|x − c|²) dx` over the scene's elements, possibly masked by
-//! normal (the base Gaussians live on the faces that face like their cell, [`crate::fem::BaseDomain::Scene`]).
+//! normal (the base Gaussians live on the faces that face like their cell, [`crate::config::BaseDomain::Scene`]).
 //! Summed exactly, one integral touches every element within the support radius
 //! `r = √(ln(1/tol)/a)`; on a scene of a million small triangles that is a large fraction of the
 //! scene, and the FEM step costs minutes per step.

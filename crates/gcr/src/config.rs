@@ -1,8 +1,5 @@
 //! Settings of a solve, with the dissertation's defaults (fig. 4.17, sec. 4.4.1) and validation.
 
-use crate::fem::{BaseDomain, SurfaceClusters, Transfer};
-use crate::gather::GatherSamples;
-use crate::shading::Breaking;
 use thiserror::Error;
 
 /// How the output radiosity at the vertices is computed (sec. 4.3.2).
@@ -372,6 +369,90 @@ impl SolveConfig {
             ));
         }
         Ok(())
+    }
+}
+
+/// When and how finely a large surface is clustered ([`crate::cluster`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceClusters {
+    /// Surfaces with at least this many elements are clustered (`usize::MAX`: never).
+    pub min_elements: usize,
+    /// A node replaces its elements in an integral of exp(−a|x − c|²) when a·R² ≤ θ (R: the
+    /// node's radius). The relative error of one node's contribution is O(θ²).
+    pub theta: f64,
+}
+
+impl Default for SurfaceClusters {
+    fn default() -> Self {
+        Self {
+            min_elements: 4096,
+            theta: 0.05,
+        }
+    }
+}
+
+/// Where the base Gaussians Λ_k are integrated (and where they live).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BaseDomain {
+    /// On the scene's own elements S, each Λ_k restricted to the elements that face like its
+    /// cell's learned normal (within the breaking angle). Beyond the dissertation: a single
+    /// shading sheet cannot follow a closed scene (sec. 4.4.2, fig. 4.18), but the scene is
+    /// there to integrate over, exactly.
+    #[default]
+    Scene,
+    /// On the shading network's own triangles Ŝ (the dissertation, sec. 3.2).
+    Shading,
+}
+
+/// Which sender integral multiplies each kernel cell ([`crate::fem`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Transfer {
+    /// c_o = ∫_S exp(−|x − w_o^x|²/d_o²) dx, exact on the scene: MATH.md §3.
+    #[default]
+    Direct,
+    /// The dissertation's B̄ (eq. 3.9–3.12): the constant 1 projected onto the base first.
+    Projected,
+}
+
+/// Sample counts of the gather.
+#[derive(Clone, Copy, Debug)]
+pub struct GatherSamples {
+    /// Shadow rays to the emitters per point.
+    pub direct: usize,
+    /// Cosine-weighted rays for indirect light per point.
+    pub indirect: usize,
+}
+
+impl Default for GatherSamples {
+    fn default() -> Self {
+        Self {
+            direct: 64,
+            indirect: 64,
+        }
+    }
+}
+
+/// Settings of the breaking operator (sec. 4.4.2, fig. 4.18): the dissertation notes the
+/// shading network spans gaps and folds around edges of the geometry, and that "some sort of
+/// breaking operator which splits the network into several independent pieces at these edges
+/// would be necessary". We drop a triangle when the learned normals at two of its corners
+/// disagree by more than `max_normal_angle`, or when one of its edges spans empty space
+/// (the caller's `spans_gap` test, e.g. the midpoint is farther than a tolerance from every
+/// scene surface).
+#[derive(Clone, Copy, Debug)]
+pub struct Breaking {
+    /// Whether the operator runs at all (off reproduces the dissertation).
+    pub enabled: bool,
+    /// Largest allowed angle (radians) between corner normals of one triangle.
+    pub max_normal_angle: f64,
+}
+
+impl Default for Breaking {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            max_normal_angle: 50f64.to_radians(),
+        }
     }
 }
 

@@ -187,7 +187,7 @@ impl Domain<'_> {
     /// triangles of positive area, where two consecutive ones share an edge, lie in one plane
     /// and form a convex quadrilateral (a rectangle split on load) merged into one
     /// [`Element::Quad`], whose exact Gaussian integral costs two thirds of the two triangles'.
-    fn surface_elements(&self) -> Vec<(Element, DVec3)> {
+    pub(crate) fn surface_elements(&self) -> Vec<(Element, DVec3)> {
         match self {
             Domain::ThreeD(k) => {
                 let faces: Vec<_> = k.scene.faces.iter().filter(|f| f.area > 0.0).collect();
@@ -218,24 +218,6 @@ impl Domain<'_> {
                 .map(|s| (Element::Segment([d3(s.a), d3(s.b)]), d3(s.normal)))
                 .collect(),
         }
-    }
-
-    /// The scene surface S indexed for Gaussian integrals (cells of 5 % of the diagonal), exact.
-    pub fn scene_surface(&self) -> crate::fem::SceneSurface {
-        self.scene_surface_clustered(crate::fem::SurfaceClusters {
-            min_elements: usize::MAX,
-            ..Default::default()
-        })
-    }
-
-    /// [`Domain::scene_surface`], clustered when it has at least `clusters.min_elements`
-    /// elements ([`crate::cluster`]).
-    pub fn scene_surface_clustered(
-        &self,
-        clusters: crate::fem::SurfaceClusters,
-    ) -> crate::fem::SceneSurface {
-        let (elements, normals) = self.surface_elements().into_iter().unzip();
-        crate::fem::SceneSurface::with_clusters(elements, normals, 0.05 * self.diagonal(), clusters)
     }
 
     /// Emission of face (segment) `face`.

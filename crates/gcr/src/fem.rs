@@ -23,6 +23,8 @@
 //! between opposed normals; a transfer is zero when the sender lies behind the receiver.
 
 use crate::cluster::{ClusterTree, Mask};
+use crate::config::{BaseDomain, SurfaceClusters, Transfer};
+use crate::domain::Domain;
 use crate::element::{Bands, Element, MAX_BANDS};
 use crate::shading::ShadingGeometry;
 use crate::spatial::{BoxGrid, support_radius};
@@ -171,26 +173,26 @@ enum SurfaceIndex {
     Tree(Box<ClusterTree>),
 }
 
-/// When and how finely a large surface is clustered ([`crate::cluster`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SurfaceClusters {
-    /// Surfaces with at least this many elements are clustered (`usize::MAX`: never).
-    pub min_elements: usize,
-    /// A node replaces its elements in an integral of exp(−a|x − c|²) when a·R² ≤ θ (R: the
-    /// node's radius). The relative error of one node's contribution is O(θ²).
-    pub theta: f64,
-}
-
-impl Default for SurfaceClusters {
-    fn default() -> Self {
-        Self {
-            min_elements: 4096,
-            theta: 0.05,
-        }
-    }
-}
-
 impl SceneSurface {
+    /// The scene surface S of `domain` indexed for Gaussian integrals (cells of 5 % of the
+    /// diagonal), exact.
+    pub fn of(domain: &Domain) -> Self {
+        Self::of_clustered(
+            domain,
+            SurfaceClusters {
+                min_elements: usize::MAX,
+                ..Default::default()
+            },
+        )
+    }
+
+    /// [`SceneSurface::of`], clustered when it has at least `clusters.min_elements` elements
+    /// ([`crate::cluster`]).
+    pub fn of_clustered(domain: &Domain, clusters: SurfaceClusters) -> Self {
+        let (elements, normals) = domain.surface_elements().into_iter().unzip();
+        Self::with_clusters(elements, normals, 0.05 * domain.diagonal(), clusters)
+    }
+
     /// Indexes `elements` (with their unit `normals`) with buckets of about `cell` (typically
     /// a kernel width); every integral is exact.
     pub fn new(elements: Vec<Element>, normals: Vec<DVec3>, cell: f64) -> Self {
@@ -323,29 +325,6 @@ impl SceneSurface {
             .map(|&e| self.elements[e as usize].gaussian_integral(c, a))
             .sum()
     }
-}
-
-/// Where the base Gaussians Λ_k are integrated (and where they live).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum BaseDomain {
-    /// On the scene's own elements S, each Λ_k restricted to the elements that face like its
-    /// cell's learned normal (within the breaking angle). Beyond the dissertation: a single
-    /// shading sheet cannot follow a closed scene (sec. 4.4.2, fig. 4.18), but the scene is
-    /// there to integrate over, exactly.
-    #[default]
-    Scene,
-    /// On the shading network's own triangles Ŝ (the dissertation, sec. 3.2).
-    Shading,
-}
-
-/// Which sender integral multiplies each kernel cell (module docs).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Transfer {
-    /// c_o = ∫_S exp(−|x − w_o^x|²/d_o²) dx, exact on the scene: MATH.md §3.
-    #[default]
-    Direct,
-    /// The dissertation's B̄ (eq. 3.9–3.12): the constant 1 projected onto the base first.
-    Projected,
 }
 
 /// Settings of one FEM step.
@@ -904,7 +883,7 @@ mod integrals {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shading::Breaking;
+    use crate::config::Breaking;
 
     /// A flat n×n shading grid with spacing h on z = 0, normals +z.
     fn grid_base(n: usize, h: f64, settings: FemSettings) -> Base {

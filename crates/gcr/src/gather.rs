@@ -27,6 +27,7 @@
 //! heuristic gave 7.6 % on `two-blockers` against 6.1 % without MIS, the power heuristic 6.2 %;
 //! furnace 1.32 / 1.44 %, `cornell-box` 9.3 / 9.4 % (balance / power).
 
+use crate::config::GatherSamples;
 use crate::domain::Domain;
 use crate::element::{Bands, MAX_BANDS};
 use glam::{DVec2, DVec3};
@@ -34,24 +35,6 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use scene_sampler::{cosine_halfplane, cosine_hemisphere};
 use std::f64::consts::PI;
-
-/// Sample counts of the gather.
-#[derive(Clone, Copy, Debug)]
-pub struct GatherSamples {
-    /// Shadow rays to the emitters per point.
-    pub direct: usize,
-    /// Cosine-weighted rays for indirect light per point.
-    pub indirect: usize,
-}
-
-impl Default for GatherSamples {
-    fn default() -> Self {
-        Self {
-            direct: 64,
-            indirect: 64,
-        }
-    }
-}
 
 /// Emitters with a power-proportional selection table.
 #[derive(Clone, Debug)]
@@ -148,149 +131,192 @@ pub fn gather(
     b_refl: &impl Fn(DVec3, DVec3, u32) -> Bands,
 ) -> Gathered {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let (n_e, n_c) = (samples.direct as f64, samples.indirect as f64);
-    // What an emitter point x with geometry term g contributes per unit emission, drawn by
-    // emitter sampling (`light`) or by a cosine ray: the power heuristic (module docs), written
-    // with ratios so that g → ∞ at an edge gives the limits 0 and 1/n_c instead of ∞/∞.
-    let mis = |g: f64, face_x: u32, light: bool| {
-        let a = if emitters.is_empty() {
-            0.0
-        } else {
-            n_e * emitters.density(face_x)
-        };
-        let b = n_c * g;
-        if light {
-            let r = b / a;
-            g / a / (1.0 + r * r)
-        } else {
-            let r = a / b;
-            1.0 / (n_c * (1.0 + r * r))
-        }
+    let mis = Mis {
+        emitters,
+        n_e: samples.direct as f64,
+        n_c: samples.indirect as f64,
     };
-    let rho = domain.reflectance(face);
-    let e = domain.emission(face);
     let mut direct = [0.0; MAX_BANDS];
     let mut indirect = [0.0; MAX_BANDS];
+    // ⟨Direct light: shadow rays to emitter points, stratified over the emitter choice⟩
     if !emitters.is_empty() && samples.direct > 0 {
         for i in 0..samples.direct {
-            // Stratified over the emitter selection dimension.
             let u0 = (i as f64 + rng.random::<f64>()) / samples.direct as f64;
             let ef = emitters.pick(u0);
             if ef == face {
                 continue;
             }
-            let (u1, u2) = (rng.random::<f64>(), rng.random::<f64>());
-            let (contrib, emission) = match domain {
-                Domain::ThreeD(k) => {
-                    let f = &k.scene.faces[ef as usize];
-                    // Area-uniform point: barycentrics (1 − √u1, √u1(1 − u2), √u1·u2).
-                    let s = u1.sqrt();
-                    let x = f.point(s * (1.0 - u2), s * u2);
-                    let d = y - x;
-                    let r2 = d.length_squared();
-                    let (cx, cy) = (f.normal.dot(d), -n.dot(d));
-                    if cx <= 0.0 || cy <= 0.0 || r2 == 0.0 {
-                        continue;
-                    }
-                    let g = cx * cy / (PI * r2 * r2);
-                    let xp = Domain::surface_point_3d(x, f.normal, ef);
-                    let yp = Domain::surface_point_3d(y, n, face);
-                    if !k.bvh.visible(&xp, &yp) {
-                        continue;
-                    }
-                    (mis(g, ef, true), f.emission.0)
+            let u = [rng.random::<f64>(), rng.random::<f64>()];
+            if let Some(g) = emitter_geometry(domain, ef, u, y, n, face) {
+                let (w, e) = (mis.light(g, ef), domain.emission(ef));
+                for b in 0..MAX_BANDS {
+                    direct[b] += w * e[b];
                 }
-                Domain::Flat(k) => {
-                    let s = &k.scene.segments[ef as usize];
-                    let x2 = s.point(u1);
-                    let y2 = DVec2::new(y.x, y.y);
-                    let n2 = DVec2::new(n.x, n.y);
-                    let d = y2 - x2;
-                    let r = d.length();
-                    let (cx, cy) = (s.normal.dot(d), -n2.dot(d));
-                    if cx <= 0.0 || cy <= 0.0 || r == 0.0 {
-                        continue;
-                    }
-                    let g = cx * cy / (2.0 * r * r * r);
-                    let xp = Domain::flat_point(
-                        DVec3::new(x2.x, x2.y, 0.0),
-                        DVec3::new(s.normal.x, s.normal.y, 0.0),
-                        ef,
-                    );
-                    let yp = Domain::flat_point(y, n, face);
-                    if !k.vis.visible(&xp, &yp) {
-                        continue;
-                    }
-                    (mis(g, ef, true), s.emission.0)
-                }
-            };
-            for b in 0..MAX_BANDS {
-                direct[b] += contrib * emission[b];
             }
         }
     }
+    // ⟨Indirect light: cosine rays with B_refl from the networks at their hits; hits on an
+    // emitter are the direct light's second technique⟩
     for _ in 0..samples.indirect {
-        let (u1, u2) = (rng.random::<f64>(), rng.random::<f64>());
-        let hit = match domain {
-            Domain::ThreeD(k) => {
-                let dir = cosine_hemisphere(n, [u1, u2]);
-                let from = Domain::surface_point_3d(y, n, face);
-                k.bvh.trace_from(&from, dir).map(|h| {
-                    let p = k.bvh.surface_point(&h);
-                    (p.point, p.normal, p.face)
-                })
-            }
-            Domain::Flat(k) => {
-                let n2 = DVec2::new(n.x, n.y);
-                let dir = cosine_halfplane(n2, u1);
-                let from = Domain::flat_point(y, n, face);
-                k.vis.trace_from(&from, dir).map(|h| {
-                    let p = k.vis.surface_point(&h);
-                    (
-                        DVec3::new(p.point.x, p.point.y, 0.0),
-                        DVec3::new(p.normal.x, p.normal.y, 0.0),
-                        p.segment,
-                    )
-                })
-            }
+        let u = [rng.random::<f64>(), rng.random::<f64>()];
+        let Some((x, nx, fx)) = trace_cosine(domain, y, n, face, u) else {
+            continue;
         };
-        if let Some((x, nx, fx)) = hit {
-            // Only the front side of a face radiates.
-            let d = y - x;
-            let cx = nx.dot(d);
-            if cx > 0.0 {
-                let b = b_refl(x, nx, fx);
+        // Only the front side of a face radiates.
+        let d = y - x;
+        let cx = nx.dot(d);
+        if cx <= 0.0 {
+            continue;
+        }
+        let b = b_refl(x, nx, fx);
+        for band in 0..MAX_BANDS {
+            indirect[band] += b[band].max(0.0) / mis.n_c;
+        }
+        let e = domain.emission(fx);
+        if e.iter().any(|v| *v != 0.0) {
+            let w = mis.cosine(geometry(domain, cx, -n.dot(d), d), fx);
+            if w > 0.0 {
                 for band in 0..MAX_BANDS {
-                    indirect[band] += b[band].max(0.0) / n_c;
-                }
-                let e = domain.emission(fx);
-                if e.iter().any(|v| *v != 0.0) {
-                    // The direct light's second technique (module docs).
-                    let g = match domain {
-                        Domain::ThreeD(_) => cx * -n.dot(d) / (PI * d.length_squared().powi(2)),
-                        Domain::Flat(_) => cx * -n.dot(d) / (2.0 * d.length().powi(3)),
-                    };
-                    // r → 0 at an edge makes g infinite: the weight's limit is 1/n_c.
-                    let w = if g == f64::INFINITY {
-                        1.0 / n_c
-                    } else {
-                        mis(g, fx, false)
-                    };
-                    if w > 0.0 {
-                        for band in 0..MAX_BANDS {
-                            direct[band] += w * e[band];
-                        }
-                    }
+                    direct[band] += w * e[band];
                 }
             }
         }
     }
+    // ⟨B = E + ρ·(direct + indirect)⟩
+    let (rho, e) = (domain.reflectance(face), domain.emission(face));
     let mut out = Gathered::default();
     for b in 0..MAX_BANDS {
         out.from_networks[b] = rho[b] * indirect[b];
         out.radiosity[b] = e[b] + rho[b] * (direct[b] + indirect[b]);
     }
     out
+}
+
+/// The power heuristic of the two direct-light techniques (module docs), written with ratios so
+/// that g → ∞ at an edge gives the limits 0 and 1/n_c instead of ∞/∞.
+struct Mis<'a> {
+    emitters: &'a Emitters,
+    n_e: f64,
+    n_c: f64,
+}
+
+impl Mis<'_> {
+    /// n_e · p_e(x): the emitter technique's sample density at a point of `face`.
+    fn a(&self, face: u32) -> f64 {
+        if self.emitters.is_empty() {
+            0.0
+        } else {
+            self.n_e * self.emitters.density(face)
+        }
+    }
+
+    /// Weight per unit emission of an emitter point with geometry term `g`, drawn by emitter
+    /// sampling: E·G·a/(a² + b²).
+    fn light(&self, g: f64, face: u32) -> f64 {
+        let (a, b) = (self.a(face), self.n_c * g);
+        let r = b / a;
+        g / a / (1.0 + r * r)
+    }
+
+    /// Weight per unit emission of an emitter point hit by a cosine ray: b²/(n_c·(a² + b²)); its
+    /// limit 1/n_c where r → 0 at an edge makes g infinite.
+    fn cosine(&self, g: f64, face: u32) -> f64 {
+        if g == f64::INFINITY {
+            return 1.0 / self.n_c;
+        }
+        let (a, b) = (self.a(face), self.n_c * g);
+        let r = a / b;
+        1.0 / (self.n_c * (1.0 + r * r))
+    }
+}
+
+/// The point-to-point geometry term for cosines `cx`, `cy` and offset `d` = y − x: cos θx cos θy /
+/// (π r²) in 3-D, cos θx cos θy / (2r) in Flatland (the cosines are unnormalised: d's length
+/// divides out).
+fn geometry(domain: &Domain, cx: f64, cy: f64, d: DVec3) -> f64 {
+    match domain {
+        Domain::ThreeD(_) => cx * cy / (PI * d.length_squared().powi(2)),
+        Domain::Flat(_) => cx * cy / (2.0 * d.length().powi(3)),
+    }
+}
+
+/// G(x, y) for an area-uniform point x on emitter `ef` at `u` ∈ [0,1)² (3-D: barycentrics
+/// (1 − √u1, √u1(1 − u2), √u1·u2); Flatland: arc length u1), when x and the receiver (y, n, face)
+/// face each other and see each other; None otherwise.
+fn emitter_geometry(
+    domain: &Domain,
+    ef: u32,
+    u: [f64; 2],
+    y: DVec3,
+    n: DVec3,
+    face: u32,
+) -> Option<f64> {
+    match domain {
+        Domain::ThreeD(k) => {
+            let f = &k.scene.faces[ef as usize];
+            let s = u[0].sqrt();
+            let x = f.point(s * (1.0 - u[1]), s * u[1]);
+            let d = y - x;
+            let r2 = d.length_squared();
+            let (cx, cy) = (f.normal.dot(d), -n.dot(d));
+            if cx <= 0.0 || cy <= 0.0 || r2 == 0.0 {
+                return None;
+            }
+            let xp = Domain::surface_point_3d(x, f.normal, ef);
+            let yp = Domain::surface_point_3d(y, n, face);
+            k.bvh.visible(&xp, &yp).then(|| cx * cy / (PI * r2 * r2))
+        }
+        Domain::Flat(k) => {
+            let s = &k.scene.segments[ef as usize];
+            let x2 = s.point(u[0]);
+            let d = DVec2::new(y.x, y.y) - x2;
+            let r = d.length();
+            let (cx, cy) = (s.normal.dot(d), -DVec2::new(n.x, n.y).dot(d));
+            if cx <= 0.0 || cy <= 0.0 || r == 0.0 {
+                return None;
+            }
+            let xp = Domain::flat_point(
+                DVec3::new(x2.x, x2.y, 0.0),
+                DVec3::new(s.normal.x, s.normal.y, 0.0),
+                ef,
+            );
+            let yp = Domain::flat_point(y, n, face);
+            k.vis.visible(&xp, &yp).then(|| cx * cy / (2.0 * r * r * r))
+        }
+    }
+}
+
+/// The first surface point (x, n_x, face_x) along a cosine-weighted direction from (y, n, face)
+/// drawn with `u` (3-D: about the hemisphere; Flatland: the half-plane, from u[0]).
+fn trace_cosine(
+    domain: &Domain,
+    y: DVec3,
+    n: DVec3,
+    face: u32,
+    u: [f64; 2],
+) -> Option<(DVec3, DVec3, u32)> {
+    match domain {
+        Domain::ThreeD(k) => {
+            let dir = cosine_hemisphere(n, u);
+            let from = Domain::surface_point_3d(y, n, face);
+            k.bvh.trace_from(&from, dir).map(|h| {
+                let p = k.bvh.surface_point(&h);
+                (p.point, p.normal, p.face)
+            })
+        }
+        Domain::Flat(k) => {
+            let dir = cosine_halfplane(DVec2::new(n.x, n.y), u[0]);
+            let from = Domain::flat_point(y, n, face);
+            k.vis.trace_from(&from, dir).map(|h| {
+                let p = k.vis.surface_point(&h);
+                (
+                    DVec3::new(p.point.x, p.point.y, 0.0),
+                    DVec3::new(p.normal.x, p.normal.y, 0.0),
+                    p.segment,
+                )
+            })
+        }
+    }
 }
 
 #[cfg(test)]

@@ -3,24 +3,81 @@
 //! The solver learns the light flow K(x,y)·B(x) with a growing-cell-structures network (the
 //! *kernel network*, [`isgcs`]), meshes the surfaces with a second one (the *shading network*),
 //! and integrates between them in closed form ([`gauss_integrals`]).
+//!
+//! A solve in three calls: a [`Domain`] over a scene (from `scene_sampler`), [`solve`] with a
+//! [`SolveConfig`], then [`radiosity_at_points`] (B at any surface points), [`output_mesh`] (the
+//! re-triangulated scene with B at its vertices) or the writers of [`output`].
+//!
+//! ```
+//! use gcr::{Domain, Emitters, SolveConfig, radiosity_at_points};
+//! use scene_sampler::{KernelSampler, SceneBvh};
+//!
+//! let scene = scene_sampler::builtin("cornell-box")?.into_3d()?;
+//! let bvh = SceneBvh::new(&scene);
+//! let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+//! let config = SolveConfig { kernel_cells: 60, ..SolveConfig::default() };
+//! let trained = gcr::solve(&domain, &config, &mut |_| {})?;
+//! let f = &scene.faces[0];
+//! let centre = (f.v[0] + f.v[1] + f.v[2]) / 3.0;
+//! let b = radiosity_at_points(&domain, &trained, &Emitters::new(&domain), &config,
+//!                             &[(centre, f.normal, 0)])?;
+//! assert!(b[0].radiosity.iter().all(|v| v.is_finite() && *v >= 0.0));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! Where things are: `docs/architecture.md`.
 
-pub mod cluster;
-pub mod config;
-pub mod domain;
-pub mod element;
-pub mod fem;
-pub mod gather;
-pub mod mesh;
-pub mod metrics;
-pub mod network;
+mod cluster;
+mod config;
+mod domain;
+mod element;
+mod fem;
+mod gather;
+mod mesh;
+mod metrics;
+mod network;
 pub mod output;
-pub mod pipeline;
-pub mod projection;
-pub mod retriangulate;
-pub mod shading;
-pub mod shooting;
-pub mod solve;
-pub mod spatial;
+mod pipeline;
+mod projection;
+mod retriangulate;
+mod sample;
+mod shading;
+mod shooting;
+mod solve;
+mod spatial;
+
+pub use config::{
+    BaseDomain, Breaking, ConfigError, GatherMode, GatherSamples, NetworkTarget, OutputFit,
+    SolveConfig, StrengthFrom, SurfaceClusters, Transfer,
+};
+pub use domain::{Domain, Ray};
+pub use element::{Bands, MAX_BANDS};
+pub use gather::{Emitters, Gathered};
+pub use mesh::ShadedMesh;
+pub use metrics::{Metrics, PhaseTimes, peak_memory_bytes};
+pub use network::GrowingNetwork;
+pub use pipeline::{GatherError, output_mesh, point_seed, radiosity_at_points};
+pub use retriangulate::RetriangulateLimits;
+pub use sample::Sample;
+pub use solve::{Progress, SolveError, Trained, make_networks, solve, train};
+
+/// The solver's stages one at a time, for benchmarks and experiments (`cargo xtask bench`, the
+/// examples): the FEM step and its integrals, the frozen networks, the shading geometry and the
+/// ray gather. A solve does not need them.
+pub mod stages {
+    pub use crate::cluster::ClusterTree;
+    pub use crate::element::Element;
+    pub use crate::fem::{
+        Base, FemSettings, FemSolution, KernelCells, SceneSurface, fem_step, receiver_integrals,
+        reflected_from_kernel, sender_integrals,
+    };
+    pub use crate::gather::gather;
+    pub use crate::projection::{KernelProjection, kernel_gram};
+    pub use crate::retriangulate::{Triangulation, retriangulate};
+    pub use crate::shading::ShadingGeometry;
+    pub use crate::solve::{freeze_kernel, freeze_shading};
+    pub use crate::spatial::support_radius;
+}
 
 /// The README's code, compiled and run as a doctest.
 #[cfg(doctest)]

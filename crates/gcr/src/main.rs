@@ -2,13 +2,11 @@
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
-use gcr::config::{GatherMode, NetworkTarget, OutputFit, SolveConfig};
-use gcr::domain::Domain;
-use gcr::fem::SurfaceClusters;
-use gcr::gather::{Emitters, GatherSamples};
 use gcr::output::tonemap::Exposure;
-use gcr::pipeline::{output_mesh, radiosity_at};
-use gcr::retriangulate::RetriangulateLimits;
+use gcr::{
+    Domain, Emitters, GatherMode, GatherSamples, NetworkTarget, OutputFit, RetriangulateLimits,
+    SolveConfig, SurfaceClusters, output_mesh, radiosity_at_points,
+};
 use scene_sampler::{AnyScene, FlatKernelSampler, KernelSampler, SceneBvh};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -263,7 +261,7 @@ fn solve_and_write(
     quiet: bool,
     start: Instant,
 ) -> Result<()> {
-    let mut observer = |p: &gcr::solve::Progress| {
+    let mut observer = |p: &gcr::Progress| {
         if !quiet {
             // The FEM steps' Gram matrices grow like cells² and dominate large budgets, so the
             // remaining time is extrapolated quadratically in the cell count.
@@ -285,7 +283,7 @@ fn solve_and_write(
             );
         }
     };
-    let trained = gcr::solve::solve(domain, config, &mut observer)?;
+    let trained = gcr::solve(domain, config, &mut observer)?;
     if !quiet {
         eprintln!();
     }
@@ -302,7 +300,7 @@ fn solve_and_write(
     if let Some(scene) = domain.scene_3d() {
         if image.is_some() || mesh_path.is_some() || ply.is_some() {
             let (mesh, share) =
-                output_mesh(domain, &trained, config, RetriangulateLimits::default());
+                output_mesh(domain, &trained, config, RetriangulateLimits::default())?;
             metrics.network_share = share;
             metrics.output_vertices = mesh.vertex_count();
             metrics.output_triangles = mesh.triangle_count();
@@ -349,7 +347,7 @@ fn solve_and_write(
         flatland_kernel_image(domain, sampler, &trained, &path)?;
     }
     metrics.seconds.total = start.elapsed().as_secs_f64();
-    metrics.peak_memory_bytes = gcr::metrics::peak_memory_bytes();
+    metrics.peak_memory_bytes = gcr::peak_memory_bytes();
     if let Some(path) = metrics_path {
         std::fs::write(&path, serde_json::to_string_pretty(&metrics)?)
             .with_context(|| format!("writing {}", path.display()))?;
@@ -365,13 +363,12 @@ fn solve_and_write(
 
 fn probe_values(
     domain: &Domain,
-    trained: &gcr::solve::Trained,
+    trained: &gcr::Trained,
     emitters: &Emitters,
     config: &SolveConfig,
     path: &PathBuf,
 ) -> Result<String> {
     let mut out = String::new();
-    let mut scratch = Vec::new();
     let grey = domain.bands() == 1;
     let mut line = |i: usize, b: [f64; 3]| {
         if grey && domain.dim() == 2 {
@@ -381,91 +378,65 @@ fn probe_values(
         }
         let _ = i;
     };
-    match domain {
+    let points: Vec<(glam::DVec3, glam::DVec3, u32)> = match domain {
         Domain::ThreeD(k) => {
             let probes = scene_sampler::read_probes(path)?;
             let points = k.scene.snap_probes(&probes, &path.display().to_string())?;
-            for (i, p) in points.iter().enumerate() {
-                let g = radiosity_at(
-                    domain,
-                    trained,
-                    emitters,
-                    config,
-                    p.point,
-                    p.normal,
-                    p.face,
-                    config.seed ^ i as u64,
-                    &mut scratch,
-                );
-                line(i, g.radiosity);
-            }
+            points.iter().map(|p| (p.point, p.normal, p.face)).collect()
         }
         Domain::Flat(k) => {
             let probes = scene_sampler::read_flat_probes(path)?;
             let points = k.scene.snap_probes(&probes, &path.display().to_string())?;
-            for (i, p) in points.iter().enumerate() {
-                let y = glam::DVec3::new(p.point.x, p.point.y, 0.0);
-                let n = glam::DVec3::new(p.normal.x, p.normal.y, 0.0);
-                let g = radiosity_at(
-                    domain,
-                    trained,
-                    emitters,
-                    config,
-                    y,
-                    n,
-                    p.segment,
-                    config.seed ^ i as u64,
-                    &mut scratch,
-                );
-                line(i, g.radiosity);
-            }
+            points
+                .iter()
+                .map(|p| {
+                    let y = glam::DVec3::new(p.point.x, p.point.y, 0.0);
+                    let n = glam::DVec3::new(p.normal.x, p.normal.y, 0.0);
+                    (y, n, p.segment)
+                })
+                .collect()
         }
+    };
+    for (i, g) in radiosity_at_points(domain, trained, emitters, config, &points)?
+        .iter()
+        .enumerate()
+    {
+        line(i, g.radiosity);
     }
     Ok(out)
 }
 
 fn flatland_image(
     domain: &Domain,
-    trained: &gcr::solve::Trained,
+    trained: &gcr::Trained,
     emitters: &Emitters,
     config: &SolveConfig,
     flat: &scene_sampler::FlatlandScene,
     path: &PathBuf,
 ) -> Result<()> {
     use gcr::output::flatland::{Stroke, draw_segments};
-    let mut strokes = Vec::new();
-    let mut scratch = Vec::new();
+    let pieces = 64;
+    let mut points = Vec::new();
     for (si, s) in flat.segments.iter().enumerate() {
-        let pieces = 64;
-        let at = |t: f64, scratch: &mut Vec<u32>| {
-            let p = s.point(t);
-            let y = glam::DVec3::new(p.x, p.y, 0.0);
-            let n = glam::DVec3::new(s.normal.x, s.normal.y, 0.0);
-            radiosity_at(
-                domain,
-                trained,
-                emitters,
-                config,
-                y,
-                n,
-                si as u32,
-                config.seed ^ (si * 1000) as u64 ^ (t * 1e6) as u64,
-                scratch,
-            )
-            .radiosity
-        };
-        let mut prev = at(0.0, &mut scratch);
+        let n = glam::DVec3::new(s.normal.x, s.normal.y, 0.0);
+        for j in 0..=pieces {
+            let p = s.point(j as f64 / pieces as f64);
+            points.push((glam::DVec3::new(p.x, p.y, 0.0), n, si as u32));
+        }
+    }
+    let b = radiosity_at_points(domain, trained, emitters, config, &points)?;
+    let mut strokes = Vec::new();
+    for (si, s) in flat.segments.iter().enumerate() {
         for j in 0..pieces {
             let (t0, t1) = (j as f64 / pieces as f64, (j + 1) as f64 / pieces as f64);
-            let next = at(t1, &mut scratch);
+            let at = si * (pieces + 1) + j;
             strokes.push(Stroke {
                 a: s.point(t0),
                 b: s.point(t1),
-                ba: prev,
-                bb: next,
+                ba: b[at].radiosity,
+                bb: b[at + 1].radiosity,
                 normal: s.normal,
             });
-            prev = next;
         }
     }
     let lit: Vec<[f64; 3]> = strokes.iter().map(|s| s.ba).collect();
@@ -486,7 +457,7 @@ fn flatland_image(
 fn flatland_kernel_image(
     domain: &Domain,
     sampler: &FlatKernelSampler,
-    trained: &gcr::solve::Trained,
+    trained: &gcr::Trained,
     path: &PathBuf,
 ) -> Result<()> {
     use rayon::prelude::*;

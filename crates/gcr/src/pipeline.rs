@@ -12,36 +12,64 @@ use crate::spatial::BoxGrid;
 use glam::DVec3;
 use rayon::prelude::*;
 
-/// [`radiosity_at`] at many surface points `(point, normal, face)` in parallel, point i with
-/// seed i: the same values whatever the thread count.
-///
-/// # Panics
-/// As [`radiosity_at`].
+/// Why radiosity could not be gathered from a solution.
+#[derive(Debug, thiserror::Error)]
+pub enum GatherError {
+    /// [`GatherMode::Base`] on a solution solved without a base.
+    #[error(
+        "the base gather needs a solution with a base: solve with a config whose needs_base() is \
+         true (gather = base, or skip_unused_base = false)"
+    )]
+    NoBase,
+}
+
+/// Radiosity at many surface points `(point, normal, face)` in parallel by the configured gather.
+/// Every entry point gathers through here, with one seeding convention: a point's ray gather is
+/// seeded from the solve's seed and the point's coordinates ([`point_seed`]), so its value does
+/// not depend on its index, its neighbours or the thread count.
 pub fn radiosity_at_points(
     domain: &Domain,
     trained: &Trained,
     emitters: &Emitters,
     config: &SolveConfig,
     points: &[(DVec3, DVec3, u32)],
-) -> Vec<Gathered> {
-    points
+) -> Result<Vec<Gathered>, GatherError> {
+    check_base(trained, config)?;
+    Ok(points
         .par_iter()
-        .enumerate()
-        .map_init(Vec::new, |scratch, (i, &(y, n, face))| {
-            radiosity_at(
-                domain, trained, emitters, config, y, n, face, i as u64, scratch,
-            )
+        .map_init(Vec::new, |scratch, &(y, n, face)| {
+            radiosity_at(domain, trained, emitters, config, y, n, face, scratch)
         })
-        .collect()
+        .collect())
 }
 
-/// Radiosity at surface point (y, n, face) by the configured gather; `seed` makes the ray gather
-/// deterministic per point.
-///
-/// # Panics
-/// With [`GatherMode::Base`] when `trained` was solved without a base (a config whose
-/// [`SolveConfig::needs_base`] was false): solve and gather with the same config.
-pub fn radiosity_at(
+/// A skipped base (`skip_unused_base` with a non-base gather) has no cells; reading it would
+/// silently report B = E.
+fn check_base(trained: &Trained, config: &SolveConfig) -> Result<(), GatherError> {
+    if config.gather == GatherMode::Base && trained.fem.base.geo.is_empty() {
+        return Err(GatherError::NoBase);
+    }
+    Ok(())
+}
+
+/// The ray gather's seed at point `y`: the solve's seed mixed with the bits of y's coordinates
+/// (SplitMix64 finalizer per coordinate).
+pub fn point_seed(seed: u64, y: DVec3) -> u64 {
+    let mix = |mut z: u64| {
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    };
+    [y.x, y.y, y.z]
+        .iter()
+        .fold(mix(seed ^ 0x9E37_79B9_7F4A_7C15), |h, c| {
+            mix(h ^ c.to_bits())
+        })
+}
+
+/// Radiosity at surface point (y, n, face) by the configured gather ([`check_base`] first).
+#[allow(clippy::too_many_arguments)]
+fn radiosity_at(
     domain: &Domain,
     trained: &Trained,
     emitters: &Emitters,
@@ -49,7 +77,6 @@ pub fn radiosity_at(
     y: DVec3,
     n: DVec3,
     face: u32,
-    seed: u64,
     scratch: &mut Vec<u32>,
 ) -> Gathered {
     let e = domain.emission(face);
@@ -62,16 +89,7 @@ pub fn radiosity_at(
         out
     };
     match config.gather {
-        GatherMode::Base => {
-            // A base skipped at solve time (`skip_unused_base` with a non-base gather) has no
-            // cells; reading it would silently report B = E.
-            assert!(
-                !trained.fem.base.geo.is_empty(),
-                "GatherMode::Base on a solution without a base: solve with a config whose \
-                 needs_base() is true (gather = base, or skip_unused_base = false)"
-            );
-            reflected(trained.fem.reflected_from_base(y, n, scratch))
-        }
+        GatherMode::Base => reflected(trained.fem.reflected_from_base(y, n, scratch)),
         GatherMode::Kernel => reflected(trained.reflected_kernel(y, n)),
         GatherMode::Rays => gather(
             domain,
@@ -80,7 +98,7 @@ pub fn radiosity_at(
             n,
             face,
             config.gather_samples,
-            seed,
+            point_seed(config.seed, y),
             &|x, nx, _| trained.reflected_kernel(x, nx),
         ),
     }
@@ -144,15 +162,15 @@ impl LocalEdge {
 }
 
 /// Re-triangulates the scene to the shading network's resolution (sec. 4.3.1) and gathers B at
-/// every vertex. Returns the mesh and the area-weighted share of B that came from the networks.
+/// every vertex ([`radiosity_at_points`]). Returns the mesh and the area-weighted share of B that came from the networks.
 pub fn output_mesh(
     domain: &Domain,
     trained: &Trained,
     config: &SolveConfig,
     limits: RetriangulateLimits,
-) -> (ShadedMesh, f64) {
+) -> Result<(ShadedMesh, f64), GatherError> {
     let Some(scene) = domain.scene_3d() else {
-        return (ShadedMesh::default(), 0.0);
+        return Ok((ShadedMesh::default(), 0.0));
     };
     let faces: Vec<[DVec3; 3]> = scene.faces.iter().map(|f| f.v).collect();
     let local = LocalEdge::new(trained);
@@ -163,26 +181,13 @@ pub fn output_mesh(
             vertex_face[v as usize] = *f;
         }
     }
-    let emitters = Emitters::new(domain);
-    let gathered: Vec<Gathered> = (0..tri.positions.len())
-        .into_par_iter()
-        .map_init(Vec::new, |scratch, v| {
+    let points: Vec<(DVec3, DVec3, u32)> = (0..tri.positions.len())
+        .map(|v| {
             let face = vertex_face[v];
-            let n = scene.faces[face as usize].normal;
-            let seed = config.seed ^ (v as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-            radiosity_at(
-                domain,
-                trained,
-                &emitters,
-                config,
-                tri.positions[v],
-                n,
-                face,
-                seed,
-                scratch,
-            )
+            (tri.positions[v], scene.faces[face as usize].normal, face)
         })
         .collect();
+    let gathered = radiosity_at_points(domain, trained, &Emitters::new(domain), config, &points)?;
     // Network share: area-weighted over triangles, all bands.
     let (mut total, mut net) = (0.0, 0.0);
     for t in &tri.triangles {
@@ -210,5 +215,5 @@ pub fn output_mesh(
             })
             .collect(),
     };
-    (mesh, if total > 0.0 { net / total } else { 0.0 })
+    Ok((mesh, if total > 0.0 { net / total } else { 0.0 }))
 }

@@ -28,7 +28,7 @@
 use crate::cluster::Mask;
 use crate::element::{Bands, MAX_BANDS};
 use crate::fem::{KernelCells, SceneSurface};
-use crate::solve::Sample;
+use crate::sample::Sample;
 use crate::spatial::support_radius;
 use gauss_integrals as integrals;
 use glam::DVec3;
@@ -488,7 +488,7 @@ mod tests {
         let scene = cornell();
         let bvh = SceneBvh::new(&scene);
         let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
-        let surface = domain.scene_surface();
+        let surface = SceneSurface::of(&domain);
         let samples = shot_samples(&domain, 4000);
         let mut kernel = cells([3, 40, 90].map(|i| (samples[i].ray.x, samples[i].ray.y, 0.2)));
         let reflectance = |f| domain.reflectance(f);
@@ -512,7 +512,7 @@ mod tests {
         let scene = cornell();
         let bvh = SceneBvh::new(&scene);
         let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
-        let surface = domain.scene_surface();
+        let surface = SceneSurface::of(&domain);
         assert!(
             domain
                 .elements()

@@ -9,6 +9,7 @@
 //! O(cells + triangles), exact (no stale values after cells moved), and the FEM step is the only
 //! consumer.
 
+use crate::config::Breaking;
 use glam::DVec3;
 use std::collections::{HashMap, VecDeque};
 
@@ -37,30 +38,6 @@ pub struct ShadingGeometry {
     pub fuzzy_roughness: Vec<f64>,
     /// Depth flag DF_i: edges to the nearest boundary cell (0 on the boundary).
     pub depth: Vec<u32>,
-}
-
-/// Settings of the breaking operator (sec. 4.4.2, fig. 4.18): the dissertation notes the
-/// shading network spans gaps and folds around edges of the geometry, and that "some sort of
-/// breaking operator which splits the network into several independent pieces at these edges
-/// would be necessary". We drop a triangle when the learned normals at two of its corners
-/// disagree by more than `max_normal_angle`, or when one of its edges spans empty space
-/// (the caller's `spans_gap` test, e.g. the midpoint is farther than a tolerance from every
-/// scene surface).
-#[derive(Clone, Copy, Debug)]
-pub struct Breaking {
-    /// Whether the operator runs at all (off reproduces the dissertation).
-    pub enabled: bool,
-    /// Largest allowed angle (radians) between corner normals of one triangle.
-    pub max_normal_angle: f64,
-}
-
-impl Default for Breaking {
-    fn default() -> Self {
-        Self {
-            enabled: true,
-            max_normal_angle: 50f64.to_radians(),
-        }
-    }
 }
 
 impl ShadingGeometry {

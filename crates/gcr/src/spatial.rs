@@ -91,30 +91,11 @@ impl BoxGrid {
         let (lo, hi) = self.boxes[i as usize];
         c.clamp(lo, hi).distance_squared(c) <= r * r
     }
-
-    /// Number of indexed items.
-    pub fn len(&self) -> usize {
-        self.boxes.len()
-    }
-
-    /// True when nothing is indexed.
-    pub fn is_empty(&self) -> bool {
-        self.boxes.is_empty()
-    }
 }
 
 fn key(p: DVec3, cell: f64) -> [i64; 3] {
     let k = (p / cell).floor();
     [k.x as i64, k.y as i64, k.z as i64]
-}
-
-/// Bounding box of a set of points.
-pub fn bounds_of(points: &[DVec3]) -> (DVec3, DVec3) {
-    points
-        .iter()
-        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(*p), hi.max(*p))
-        })
 }
 
 #[cfg(test)]

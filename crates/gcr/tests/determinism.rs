@@ -2,10 +2,7 @@
 //! fixed chunks combined in order, and every random stream is seeded per sample or per point, so
 //! the output is bit-identical whatever the thread count.
 
-use gcr::config::{GatherMode, SolveConfig};
-use gcr::domain::Domain;
-use gcr::gather::Emitters;
-use gcr::pipeline::radiosity_at;
+use gcr::{Domain, Emitters, GatherMode, SolveConfig, radiosity_at_points};
 use scene_sampler::{KernelSampler, SceneBvh};
 
 fn run(threads: usize, seed: u64) -> Vec<[f64; 3]> {
@@ -26,33 +23,23 @@ fn run(threads: usize, seed: u64) -> Vec<[f64; 3]> {
             seed,
             ..SolveConfig::default()
         };
-        let trained = gcr::solve::solve(&domain, &config, &mut |_| {}).unwrap();
+        let trained = gcr::solve(&domain, &config, &mut |_| {}).unwrap();
         let emitters = Emitters::new(&domain);
         let sampler = scene_sampler::SurfaceSampler::new(&scene);
-        let mut scratch = Vec::new();
         let mut out = Vec::new();
-        for gather in [GatherMode::Kernel, GatherMode::Rays] {
-            let config = SolveConfig { gather, ..config };
-            for i in 0..30 {
+        let at: Vec<_> = (0..30)
+            .map(|i| {
                 let p = sampler.sample([
                     (i as f64 * 0.754_877_666).fract(),
                     (i as f64 * 0.569_840_291).fract(),
                 ]);
-                out.push(
-                    radiosity_at(
-                        &domain,
-                        &trained,
-                        &emitters,
-                        &config,
-                        p.point,
-                        p.normal,
-                        p.face,
-                        i,
-                        &mut scratch,
-                    )
-                    .radiosity,
-                );
-            }
+                (p.point, p.normal, p.face)
+            })
+            .collect();
+        for gather in [GatherMode::Kernel, GatherMode::Rays] {
+            let config = SolveConfig { gather, ..config };
+            let b = radiosity_at_points(&domain, &trained, &emitters, &config, &at).unwrap();
+            out.extend(b.iter().map(|g| g.radiosity));
         }
         out
     })

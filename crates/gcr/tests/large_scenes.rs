@@ -3,11 +3,7 @@
 //! into about 2000 triangles) is small enough to solve both ways in a test; forcing the cluster tree
 //! on it (`min_elements = 0`) must move B by no more than the clustering's own error.
 
-use gcr::config::{GatherMode, SolveConfig};
-use gcr::domain::Domain;
-use gcr::fem::SurfaceClusters;
-use gcr::gather::Emitters;
-use gcr::pipeline::radiosity_at_points;
+use gcr::{Domain, Emitters, GatherMode, SolveConfig, SurfaceClusters, radiosity_at_points};
 use scene_sampler::{KernelSampler, SceneBvh};
 
 #[test]
@@ -42,8 +38,9 @@ fn clustered_integrals_give_the_exact_solution_on_a_tessellated_cornell_box() {
             gather: GatherMode::Kernel,
             ..SolveConfig::default()
         };
-        let trained = gcr::solve::solve(&domain, &config, &mut |_| {}).unwrap();
+        let trained = gcr::solve(&domain, &config, &mut |_| {}).unwrap();
         radiosity_at_points(&domain, &trained, &emitters, &config, &at)
+            .unwrap()
             .into_iter()
             .map(|g| g.radiosity)
             .collect::<Vec<_>>()

@@ -3,10 +3,7 @@
 //! (`SolveConfig::skip_unused_base`) gives bit-identical radiosity in the kernel and ray gathers.
 //! The time it saves is measured by `cargo xtask bench --only gcr`.
 
-use gcr::config::{GatherMode, SolveConfig};
-use gcr::domain::Domain;
-use gcr::gather::Emitters;
-use gcr::pipeline::radiosity_at;
+use gcr::{Domain, Emitters, GatherMode, SolveConfig, radiosity_at_points};
 use scene_sampler::{KernelSampler, SceneBvh};
 
 #[test]
@@ -37,25 +34,13 @@ fn skipping_the_unused_base_changes_nothing() {
             ..SolveConfig::default()
         };
         assert_eq!(config.needs_base(), !skip);
-        let trained = gcr::solve::solve(&domain, &config, &mut |_| {}).unwrap();
+        let trained = gcr::solve(&domain, &config, &mut |_| {}).unwrap();
         let mut out = Vec::new();
-        let mut scratch = Vec::new();
+        let at: Vec<_> = points.iter().map(|p| (p.point, p.normal, p.face)).collect();
         for gather in [GatherMode::Kernel, GatherMode::Rays] {
             let config = SolveConfig { gather, ..config };
-            for (i, p) in points.iter().enumerate() {
-                let g = radiosity_at(
-                    &domain,
-                    &trained,
-                    &emitters,
-                    &config,
-                    p.point,
-                    p.normal,
-                    p.face,
-                    i as u64,
-                    &mut scratch,
-                );
-                out.push(g.radiosity);
-            }
+            let b = radiosity_at_points(&domain, &trained, &emitters, &config, &at).unwrap();
+            out.extend(b.iter().map(|g| g.radiosity));
         }
         (out, trained.metrics.fem_steps)
     };

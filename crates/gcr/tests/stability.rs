@@ -3,10 +3,7 @@
 //! breaks naive code (a sliver triangle, a face coincident with another, corners where the kernel
 //! is singular).
 
-use gcr::config::{GatherMode, NetworkTarget, SolveConfig};
-use gcr::domain::Domain;
-use gcr::gather::Emitters;
-use gcr::pipeline::radiosity_at;
+use gcr::{Domain, Emitters, GatherMode, NetworkTarget, SolveConfig, radiosity_at_points};
 use glam::DVec3;
 use scene_sampler::{Face, KernelSampler, Scene, SceneBvh, Spectrum, SurfacePoint};
 
@@ -56,25 +53,15 @@ fn solve_at(
 ) -> Vec<[f64; 3]> {
     let bvh = SceneBvh::new(scene);
     let domain = Domain::ThreeD(KernelSampler::new(scene, &bvh));
-    let trained = gcr::solve::solve(&domain, config, &mut |_| {}).unwrap();
+    let trained = gcr::solve(&domain, config, &mut |_| {}).unwrap();
     let emitters = Emitters::new(&domain);
     let config = SolveConfig { gather, ..*config };
-    let mut scratch = Vec::new();
-    points
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let g = radiosity_at(
-                &domain,
-                &trained,
-                &emitters,
-                &config,
-                p.point,
-                p.normal,
-                p.face,
-                i as u64,
-                &mut scratch,
-            );
+    let at: Vec<_> = points.iter().map(|p| (p.point, p.normal, p.face)).collect();
+    radiosity_at_points(&domain, &trained, &emitters, &config, &at)
+        .unwrap()
+        .into_iter()
+        .zip(points)
+        .map(|(g, p)| {
             assert!(
                 g.radiosity.iter().all(|b| b.is_finite() && *b >= 0.0),
                 "B = {:?} at {:?}",
@@ -315,7 +302,7 @@ fn cells_without_samples_do_not_feed_their_noise_back() {
             network_target: NetworkTarget::KernelValue,
             ..small(600)
         };
-        let trained = gcr::solve::solve(&domain, &config, &mut |_| {}).unwrap();
+        let trained = gcr::solve(&domain, &config, &mut |_| {}).unwrap();
         let m = &trained.metrics;
         eprintln!(
             "min support {projection_min_support}: {} projections redone, {} diverging \

@@ -1,4 +1,4 @@
-//! The breaking operator (sec. 4.4.2, fig. 4.18; `gcr::shading::Breaking`): error of the base
+//! The breaking operator (sec. 4.4.2, fig. 4.18; `gcr::Breaking`): error of the base
 //! gather with and without it, on `wall-floor` and `cornell-box`, for both base domains (the
 //! dissertation's shading triangles Ŝ, where the operator decides what the base integrates over,
 //! and the scene S, where it only removes the triangles that bridge geometric edges). The kernel
@@ -8,12 +8,7 @@
 use super::gcr::{reference, relative_l2, scene_and_probes};
 use crate::Ctx;
 use anyhow::Result;
-use gcr::config::{GatherMode, SolveConfig};
-use gcr::domain::Domain;
-use gcr::fem::BaseDomain;
-use gcr::gather::Emitters;
-use gcr::pipeline::radiosity_at_points;
-use gcr::shading::Breaking;
+use gcr::{BaseDomain, Breaking, Domain, Emitters, GatherMode, SolveConfig, radiosity_at_points};
 use scene_sampler::{KernelSampler, SceneBvh};
 use std::fmt::Write;
 use std::time::Instant;
@@ -59,11 +54,11 @@ pub fn run(ctx: &Ctx) -> Result<()> {
                     ..SolveConfig::default()
                 };
                 let t = Instant::now();
-                let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+                let trained = gcr::solve(&domain, &config, &mut |_| {})?;
                 let seconds = t.elapsed().as_secs_f64();
                 let at: Vec<_> = points.iter().map(|p| (p.point, p.normal, p.face)).collect();
                 let values: Vec<[f64; 3]> =
-                    radiosity_at_points(&domain, &trained, &emitters, &config, &at)
+                    radiosity_at_points(&domain, &trained, &emitters, &config, &at)?
                         .into_iter()
                         .map(|g| g.radiosity)
                         .collect();

@@ -26,10 +26,7 @@ use baselines::classical::{ClassicalOptions, FormFactorOptions, Mesh};
 use baselines::flatland::{ExactOptions, ExactSolver};
 use baselines::hierarchical::{FlatHr, FlatHrConfig, TriHr, TriHrConfig, budget, solve_for_links};
 use baselines::progressive::ProgressiveOptions;
-use gcr::config::{GatherMode, SolveConfig};
-use gcr::domain::Domain;
-use gcr::gather::Emitters;
-use gcr::pipeline::radiosity_at;
+use gcr::{Domain, Emitters, GatherMode, SolveConfig, radiosity_at_points};
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use scene_sampler::{FlatKernelSampler, FlatPoint, FlatlandScene, KernelSampler, SceneBvh};
@@ -108,22 +105,18 @@ fn gcr_curves(
             shading_cells: (cells / 2).max(3),
             ..SolveConfig::default()
         };
-        let (trained, solve_s) = timed(|| gcr::solve::solve(domain, &config, &mut |_| {}));
+        let (trained, solve_s) = timed(|| gcr::solve(domain, &config, &mut |_| {}));
         let trained = trained?;
         for (c, &gather) in curves.iter_mut().zip(&gathers) {
             let config = SolveConfig { gather, ..config };
             let (values, gather_s) = timed(|| {
-                probes
-                    .par_iter()
-                    .enumerate()
-                    .map_init(Vec::new, |scratch, (i, &(p, n, face))| {
-                        radiosity_at(
-                            domain, &trained, &emitters, &config, p, n, face, i as u64, scratch,
-                        )
-                        .radiosity
-                    })
-                    .collect::<Vec<[f64; 3]>>()
+                radiosity_at_points(domain, &trained, &emitters, &config, probes).map(|b| {
+                    b.into_iter()
+                        .map(|g| g.radiosity)
+                        .collect::<Vec<[f64; 3]>>()
+                })
             });
+            let values = values?;
             push(c, scene, cells, solve_s + gather_s, score(&values));
         }
     }

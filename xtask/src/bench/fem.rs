@@ -7,10 +7,8 @@
 
 use crate::Ctx;
 use anyhow::Result;
-use gcr::config::SolveConfig;
-use gcr::domain::Domain;
-use gcr::fem::sender_integrals;
-use gcr::projection::KernelProjection;
+use gcr::stages::{KernelProjection, SceneSurface, sender_integrals};
+use gcr::{Domain, SolveConfig};
 use scene_sampler::{KernelSampler, SceneBvh};
 use std::fmt::Write;
 use std::time::Instant;
@@ -25,7 +23,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     let scene = scene_sampler::builtin("cornell-box")?.into_3d()?;
     let bvh = SceneBvh::new(&scene);
     let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
-    let surface = domain.scene_surface();
+    let surface = SceneSurface::of(&domain);
     let defaults = SolveConfig::default();
     let mut md = format!(
         "# FEM step against kernel cells\n\n\
@@ -46,7 +44,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
             shading_cells: cells / 2,
             ..SolveConfig::default()
         };
-        let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+        let trained = gcr::solve(&domain, &config, &mut |_| {})?;
         let kernel = &trained.kernel;
         let best = |f: &mut dyn FnMut()| {
             (0..3)
@@ -100,7 +98,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
 /// The base side of a FEM step (the dissertation's: base Gram matrix, orthonormalization and the
 /// receiver projections u_q = Σ_o v_o c_o β_qo) against the base size at a fixed kernel budget: the
 /// shading network (the base) is kept (`skip_unused_base: false`) and trained to each budget.
-fn base_scaling(ctx: &Ctx, surface: &gcr::fem::SceneSurface, domain: &Domain) -> Result<String> {
+fn base_scaling(ctx: &Ctx, surface: &gcr::stages::SceneSurface, domain: &Domain) -> Result<String> {
     let (kernel_cells, budgets): (usize, &[usize]) = if ctx.quick {
         (60, &[20, 40])
     } else {
@@ -108,7 +106,7 @@ fn base_scaling(ctx: &Ctx, surface: &gcr::fem::SceneSurface, domain: &Domain) ->
     };
     let mut md = format!(
         "\n## FEM step against base size\n\n\
-         The base side of one step (`gcr::fem::fem_step`: the base's Gram matrix under the fig. 3.6 rules, its \
+         The base side of one step (`gcr::stages::fem_step`: the base's Gram matrix under the fig. 3.6 rules, its \
          orthonormalization, sender integrals and u_q = Σ_o v_o c_o β_qo) at {kernel_cells} kernel cells, with the \
          shading network kept and trained to each budget; best of 3. The default solver skips this part \
          (`skip_unused_base`) because the projected kernel does not read the base.\n\n\
@@ -122,14 +120,14 @@ fn base_scaling(ctx: &Ctx, surface: &gcr::fem::SceneSurface, domain: &Domain) ->
             skip_unused_base: false,
             ..SolveConfig::default()
         };
-        let trained = gcr::solve::solve(domain, &config, &mut |_| {})?;
+        let trained = gcr::solve(domain, &config, &mut |_| {})?;
         let base = trained.fem.base.clone();
         let n = base.len();
         let secs = (0..3)
             .map(|_| {
                 let b = base.clone();
                 let t = Instant::now();
-                std::hint::black_box(gcr::fem::fem_step(b, &trained.kernel, surface));
+                std::hint::black_box(gcr::stages::fem_step(b, &trained.kernel, surface));
                 t.elapsed().as_secs_f64()
             })
             .fold(f64::INFINITY, f64::min);

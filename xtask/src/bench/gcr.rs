@@ -5,10 +5,7 @@
 
 use crate::Ctx;
 use anyhow::Result;
-use gcr::config::{GatherMode, SolveConfig};
-use gcr::domain::Domain;
-use gcr::gather::Emitters;
-use gcr::pipeline::radiosity_at_points;
+use gcr::{Domain, Emitters, GatherMode, SolveConfig, radiosity_at_points};
 use scene_sampler::{KernelSampler, Scene, SceneBvh, SurfacePoint};
 use std::fmt::Write;
 use std::time::Instant;
@@ -124,7 +121,7 @@ pub fn gcr_curves(
                 ..SolveConfig::default()
             };
             let t = Instant::now();
-            let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+            let trained = gcr::solve(&domain, &config, &mut |_| {})?;
             solved.push((config, trained, t.elapsed().as_secs_f64()));
         }
         let same = solved[0].1.kernel.v == solved[1].1.kernel.v
@@ -142,7 +139,7 @@ pub fn gcr_curves(
             let t = Instant::now();
             let at: Vec<_> = points.iter().map(|p| (p.point, p.normal, p.face)).collect();
             let values: Vec<[f64; 3]> =
-                radiosity_at_points(&domain, trained, &emitters, &config, &at)
+                radiosity_at_points(&domain, trained, &emitters, &config, &at)?
                     .into_iter()
                     .map(|g| g.radiosity)
                     .collect();

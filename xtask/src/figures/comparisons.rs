@@ -22,8 +22,7 @@ use crate::Ctx;
 use anyhow::Result;
 use baselines::flatland::{ExactOptions, ExactSolver};
 use baselines::hierarchical::{FlatHr, FlatHrConfig, HrKernel, budget, solve_for_links};
-use gcr::config::SolveConfig;
-use gcr::domain::Domain;
+use gcr::{Domain, SolveConfig};
 use rayon::prelude::*;
 use scene_sampler::{AnyScene, FlatKernelSampler, FlatlandScene};
 use std::fmt::Write;
@@ -142,7 +141,7 @@ fn gcr_run(scene: &FlatlandScene, cells: usize, n: usize, exact: &[f64]) -> Resu
         ..SolveConfig::default()
     };
     let t = Instant::now();
-    let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+    let trained = gcr::solve(&domain, &config, &mut |_| {})?;
     let seconds = t.elapsed().as_secs_f64();
     let flow: Vec<f64> = (0..n * n)
         .into_par_iter()

@@ -8,8 +8,7 @@
 use crate::Ctx;
 use anyhow::{Context, Result};
 use baselines::hierarchical::{FlatHrConfig, budget, solve_for_links};
-use gcr::config::SolveConfig;
-use gcr::domain::Domain;
+use gcr::{Domain, SolveConfig};
 use plotters::prelude::*;
 use scene_sampler::{AnyScene, FlatKernelSampler, FlatlandScene};
 
@@ -61,7 +60,7 @@ fn figure(ctx: &Ctx, name: &str, cells: usize) -> Result<String> {
         skip_unused_base: false,
         ..SolveConfig::default()
     };
-    let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+    let trained = gcr::solve(&domain, &config, &mut |_| {})?;
     let tol = 1e-3 * domain.diagonal();
     let centres: Vec<f64> = trained
         .fem

@@ -20,14 +20,13 @@
 use super::topology;
 use crate::Ctx;
 use anyhow::{Context, Result};
-use gcr::config::{GatherMode, SolveConfig};
-use gcr::domain::Domain;
-use gcr::gather::Emitters;
-use gcr::mesh::ShadedMesh;
 use gcr::output::raster::{Image, PinholeCamera, render_image};
 use gcr::output::tonemap::Exposure;
-use gcr::pipeline::{output_mesh, radiosity_at_points};
-use gcr::retriangulate::{RetriangulateLimits, retriangulate};
+use gcr::stages::retriangulate;
+use gcr::{
+    Domain, Emitters, GatherMode, RetriangulateLimits, ShadedMesh, SolveConfig, output_mesh,
+    radiosity_at_points,
+};
 use glam::DVec3;
 use rayon::prelude::*;
 use scene_sampler::{AnyScene, FlatKernelSampler, KernelSampler, Scene, SceneBvh};
@@ -55,7 +54,7 @@ fn flatland_kernel(ctx: &Ctx, name: &str, cells: usize, n: usize) -> Result<Kern
         shading_cells: (cells / 2).max(3),
         ..SolveConfig::default()
     };
-    let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+    let trained = gcr::solve(&domain, &config, &mut |_| {})?;
     // Row-major, row 0 at the top = t close to 1.
     let near = 0.05 * domain.diagonal();
     let cells_grid: Vec<(f64, f64, bool)> = (0..n * n)
@@ -158,7 +157,7 @@ fn scene_gathers(
         skip_unused_base: false,
         ..SolveConfig::default()
     };
-    let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+    let trained = gcr::solve(&domain, &config, &mut |_| {})?;
     let cam = camera(&scene);
     let size = if ctx.quick { 128 } else { 512 };
     // One exposure for all gathers (from the first, the ray gather), so that the images compare.
@@ -169,7 +168,7 @@ fn scene_gathers(
     };
     for &gather in gathers {
         let config = SolveConfig { gather, ..config };
-        let (mesh, _) = output_mesh(&domain, &trained, &config, RetriangulateLimits::default());
+        let (mesh, _) = output_mesh(&domain, &trained, &config, RetriangulateLimits::default())?;
         let exposure = exposure.get_or_insert_with(|| exposure_of(&scene, &mesh));
         let img = render_image(&mesh, &cam, exposure, size, size, 2);
         topology::save(
@@ -201,7 +200,7 @@ fn unbroken_network(ctx: &Ctx, name: &str, cells: usize) -> Result<(Image, usize
         ..SolveConfig::default()
     };
     config.breaking.enabled = false;
-    let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+    let trained = gcr::solve(&domain, &config, &mut |_| {})?;
     let cam = camera(&scene);
     let size = if ctx.quick { 128 } else { 512 };
     let background = topology::geometry_background(&scene, &cam, size, 2);
@@ -233,7 +232,7 @@ fn blocking_effects(
         shading_cells: cells / 2,
         ..SolveConfig::default()
     };
-    let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+    let trained = gcr::solve(&domain, &config, &mut |_| {})?;
     let faces: Vec<[DVec3; 3]> = scene.faces.iter().map(|f| f.v).collect();
     let tri = retriangulate(&faces, |_| edge, RetriangulateLimits::default());
     let mut vertex_face = vec![0u32; tri.positions.len()];
@@ -256,7 +255,7 @@ fn blocking_effects(
     // Rays first: the exposure comes from the sharper solution.
     for gather in [GatherMode::Rays, GatherMode::Kernel] {
         let config = SolveConfig { gather, ..config };
-        let b = radiosity_at_points(&domain, &trained, &emitters, &config, &points);
+        let b = radiosity_at_points(&domain, &trained, &emitters, &config, &points)?;
         let mesh = ShadedMesh {
             positions: tri.positions.clone(),
             triangles: tri.triangles.clone(),

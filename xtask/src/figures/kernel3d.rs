@@ -6,7 +6,7 @@
 //! pairs (x, y) drawn area-uniformly over the scene's faces ((s,t,u,v) ∈ [0,1]⁴, fig. B.2):
 //! * **exact**: the traced kernel times B(x) from the pointwise path tracer (`paths` per point; its own
 //!   noise is part of the reference, reported);
-//! * **GCR**: the kernel network Ψ(x,y) ([`gcr::fem::KernelCells::evaluate`]) after a default solve with
+//! * **GCR**: the kernel network Ψ(x,y) ([`gcr::stages::KernelCells::evaluate`]) after a default solve with
 //!   `kernel_cells` = the budget;
 //! * **HR**: `K̂·B_HR(x)`, with `K̂ = ρ(y)·F_rs/A_s` of the link (r, s) whose receiver contains y and
 //!   whose sender contains x (the 3-D analogue of fig. 4.2b), and B_HR(x) HR's leaf value; the budget is
@@ -20,8 +20,7 @@ use super::comparisons::{Run, error_plot, flow_error};
 use crate::Ctx;
 use anyhow::Result;
 use baselines::hierarchical::{TriHr, TriHrConfig, solve_tri_for_links};
-use gcr::config::SolveConfig;
-use gcr::domain::{Domain, Ray};
+use gcr::{Domain, Ray, SolveConfig};
 use glam::DVec3;
 use rayon::prelude::*;
 use scene_sampler::{KernelSampler, Scene, SceneBvh, SurfacePoint};
@@ -147,7 +146,7 @@ fn scene_rows(
             ..SolveConfig::default()
         };
         let t = Instant::now();
-        let trained = gcr::solve::solve(&domain, &config, &mut |_| {})?;
+        let trained = gcr::solve(&domain, &config, &mut |_| {})?;
         let seconds = t.elapsed().as_secs_f64();
         let flow: Vec<f64> = rays
             .par_iter()

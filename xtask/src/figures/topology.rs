@@ -4,9 +4,9 @@
 //! hidden-point removal against the depth buffer) on a flat-shaded view of the scene's faces.
 //!
 //! * `gcr-<scene>-samples.png` (fig. 4.12a): the end points y_i of every sample ray the kernel
-//!   network was trained on (the solver keeps all of them, [`gcr::solve::Trained::samples`]);
+//!   network was trained on (the solver keeps all of them, [`gcr::Trained::samples`]);
 //! * `gcr-<scene>-network.png` (figs. 4.12b, 4.15d): the shading network of the last FEM step
-//!   ([`gcr::shading::ShadingGeometry`]): cell centres as dots, the edges of its triangles as lines.
+//!   ([`gcr::stages::ShadingGeometry`]): cell centres as dots, the edges of its triangles as lines.
 //!   Only the triangles that survive our breaking operator (sec. 4.4.2, on by default) exist there;
 //!   the dissertation's network has no such operator (`gcr-wall-floor-network-unbroken.png` is a
 //!   solve with the operator off);
@@ -14,10 +14,9 @@
 //!   faces split to the shading network's local edge length (sec. 4.3.1).
 
 use anyhow::{Context, Result};
-use gcr::mesh::ShadedMesh;
 use gcr::output::raster::{Image, PinholeCamera, render_image};
 use gcr::output::tonemap::Exposure;
-use gcr::solve::Trained;
+use gcr::{ShadedMesh, Trained};
 use glam::DVec3;
 use scene_sampler::Scene;
 use std::collections::BTreeSet;

@@ -222,7 +222,7 @@ impl<'a> Run<'a> {
             shots: 0,
             metrics,
             fem: None,
-            surface: Arc::new(domain.scene_surface_clustered(config.surface_clusters)),
+            surface: Arc::new(SceneSurface::of_clustered(domain, config.surface_clusters)),
             fem_settings,
             density: SenderDensity::new(domain),
             start,

@@ -8,21 +8,11 @@ use crate::domain::Ray;
 use crate::element::{Bands, MAX_BANDS};
 use crate::fem::{FemSolution, KernelCells, reflected_from_kernel};
 use crate::network::GrowingNetwork;
+pub use crate::sample::Sample;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use std::time::Instant;
-
-/// One training sample: a ray with its current emitting strength s = E(x) + B_refl(x).
-#[derive(Clone, Copy, Debug)]
-pub struct Sample {
-    /// The ray and its kernel value.
-    pub ray: Ray,
-    /// Emitting strength s at the sender (MATH.md §4).
-    pub s: Bands,
-    /// `1/p_x(x)` of a shot ray ([`crate::shooting`]); 0 for area-uniform samples.
-    pub inv_px: f64,
-}
 
 impl Sample {
     /// A sample of `ray` with its strength from the current solution.

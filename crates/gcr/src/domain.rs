@@ -105,6 +105,23 @@ impl Domain<'_> {
         }
     }
 
+    /// The scene's frame: the low corner of its bounding box and the box's diagonal. Seeds and
+    /// other per-point choices read coordinates in this frame, so that they do not depend on
+    /// where the scene sits or on its scale.
+    pub fn frame(&self) -> (DVec3, f64) {
+        match self {
+            Domain::ThreeD(k) => (k.scene.bounds.0, k.scene.diagonal()),
+            Domain::Flat(k) => {
+                let lo = k
+                    .scene
+                    .segments
+                    .iter()
+                    .fold(DVec2::splat(f64::INFINITY), |lo, s| lo.min(s.a).min(s.b));
+                (d3(lo), k.scene.diagonal())
+            }
+        }
+    }
+
     /// Total surface area (Flatland: total length).
     pub fn total_measure(&self) -> f64 {
         match self {

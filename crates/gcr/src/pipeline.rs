@@ -35,10 +35,20 @@ pub fn radiosity_at_points(
     points: &[(DVec3, DVec3, u32)],
 ) -> Result<Vec<Gathered>, GatherError> {
     check_base(trained, config)?;
+    let frame = domain.frame();
     Ok(points
         .par_iter()
         .map_init(Vec::new, |scratch, &(y, n, face)| {
-            radiosity_at(domain, trained, emitters, config, y, n, face, scratch)
+            let seed = point_seed(config.seed, y, frame);
+            radiosity_at(
+                domain,
+                trained,
+                emitters,
+                config,
+                (y, n, face),
+                seed,
+                scratch,
+            )
         })
         .collect())
 }
@@ -52,31 +62,32 @@ fn check_base(trained: &Trained, config: &SolveConfig) -> Result<(), GatherError
     Ok(())
 }
 
-/// The ray gather's seed at point `y`: the solve's seed mixed with the bits of y's coordinates
-/// (SplitMix64 finalizer per coordinate).
-pub fn point_seed(seed: u64, y: DVec3) -> u64 {
+/// The ray gather's seed at point `y`: the solve's seed mixed with y's coordinates in the
+/// scene's frame ([`Domain::frame`]) quantized to 2⁻²⁴ of the diagonal (SplitMix64 finalizer
+/// per coordinate). A point's seed depends neither on its index among the points asked for nor
+/// on the scene's position or scale.
+pub fn point_seed(seed: u64, y: DVec3, (origin, diagonal): (DVec3, f64)) -> u64 {
     let mix = |mut z: u64| {
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
         z ^ (z >> 31)
     };
-    [y.x, y.y, y.z]
+    let q = (y - origin) / diagonal.max(f64::MIN_POSITIVE) * (1u64 << 24) as f64;
+    [q.x, q.y, q.z]
         .iter()
         .fold(mix(seed ^ 0x9E37_79B9_7F4A_7C15), |h, c| {
-            mix(h ^ c.to_bits())
+            mix(h ^ (c.round() as i64) as u64)
         })
 }
 
 /// Radiosity at surface point (y, n, face) by the configured gather ([`check_base`] first).
-#[allow(clippy::too_many_arguments)]
 fn radiosity_at(
     domain: &Domain,
     trained: &Trained,
     emitters: &Emitters,
     config: &SolveConfig,
-    y: DVec3,
-    n: DVec3,
-    face: u32,
+    (y, n, face): (DVec3, DVec3, u32),
+    seed: u64,
     scratch: &mut Vec<u32>,
 ) -> Gathered {
     let e = domain.emission(face);
@@ -98,7 +109,7 @@ fn radiosity_at(
             n,
             face,
             config.gather_samples,
-            point_seed(config.seed, y),
+            seed,
             &|x, nx, _| trained.reflected_kernel(x, nx),
         ),
     }

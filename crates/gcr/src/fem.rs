@@ -644,12 +644,8 @@ pub struct FemSolution {
     /// Coefficients γ of the reflected radiosity in the (non-orthogonal) Gaussians:
     /// B_refl(x) ≈ Σ_k γ_k Λ_k(x).
     pub gamma: Vec<Bands>,
-    /// Sender integral per kernel cell (c_o or c̄_o).
-    pub sender: Vec<f64>,
     /// Base components rejected as nearly dependent.
     pub rejected: usize,
-    /// The kernel network this step integrated.
-    pub kernel: KernelCells,
 }
 
 impl FemSolution {
@@ -728,67 +724,97 @@ const FLAT_AGREEMENT: f64 = 1e-9;
 /// to be kept.
 const MIN_MASS_FRACTION: f64 = 0.01;
 
-/// Runs one FEM step: Gram matrix, orthonormalization, sender integrals, receiver projections,
-/// and the coefficients γ of the reflected radiosity in the base.
-pub fn fem_step(base: Base, kernel: &KernelCells, scene: &SceneSurface) -> FemSolution {
+/// One FEM step (sec. 3.3–3.9) of `base` against the frozen `kernel` with its sender integrals
+/// c_o in `sender` ([`sender_integrals`], computed once by the caller): the Gram matrix and its
+/// orthonormalization, the receiver projections u, and the coefficients γ of the reflected
+/// radiosity in the base. Under [`Transfer::Projected`] `sender` is first replaced by the
+/// dissertation's c̄_o (eq. 3.9–3.12), so that it holds the integrals the step used.
+pub fn fem_step(base: Base, kernel: &KernelCells, sender: &mut Vec<f64>) -> FemSolution {
+    // ⟨Gram matrix and orthonormalization (eq. 3.31, 3.38; MATH.md §5)⟩
+    let ortho = orthonormalize(&base);
+    // ⟨The dissertation's sender integrals c̄_o, when selected⟩
+    if base.settings.transfer == Transfer::Projected {
+        *sender = projected_sender(&base, &ortho, kernel);
+    }
+    // ⟨Receiver projections u_q = ⟨Λ_q|B_refl⟩ and the coefficients γ = G⁻¹u⟩
+    let u = receiver_projections(&base, kernel, sender);
+    let mut gamma = vec![[0.0; MAX_BANDS]; base.len()];
+    for band in 0..MAX_BANDS {
+        let ub: Vec<f64> = u.iter().map(|x| x[band]).collect();
+        for (g, v) in gamma.iter_mut().zip(ortho.solve(&ub)) {
+            g[band] = v;
+        }
+    }
+    FemSolution {
+        rejected: ortho.rejected(),
+        base,
+        gamma,
+    }
+}
+
+/// The base's Gram matrix, orthonormalized with the rejection of nearly dependent components.
+/// A Gaussian with almost none of its mass on its domain (a shading cell far from Ŝ, say) has a
+/// tiny diagonal that the relative pivot test cannot see; its coefficient would be huge and it
+/// is evaluated where it has no support. It is dropped first: ‖Λ_k‖² below
+/// [`MIN_MASS_FRACTION`] of the plane value.
+fn orthonormalize(base: &Base) -> integrals::Orthonormal {
     let settings = base.settings;
-    let n = base.len();
     let mut gram = base.gram();
-    // A Gaussian with almost none of its mass on its domain (a shading cell far from Ŝ, say) has
-    // a tiny diagonal that the relative pivot test cannot see; its coefficient would be huge and
-    // it is evaluated where it has no support. Drop it: ‖Λ_k‖² below 1 % of the plane value.
-    for k in 0..n {
+    for k in 0..base.len() {
         let plane = integrals::flat(2.0 * base.a[k], 0.0, settings.surface_dim);
         if gram[(k, k)] < MIN_MASS_FRACTION * plane {
             gram.row_mut(k).fill(0.0);
             gram.column_mut(k).fill(0.0);
         }
     }
-    let ortho = integrals::Orthonormal::new(&gram, settings.rejection);
+    integrals::Orthonormal::new(&gram, settings.rejection)
+}
 
-    let sender = match settings.transfer {
-        Transfer::Direct => sender_integrals(kernel, scene, settings.support_tolerance),
-        Transfer::Projected => {
-            // B̄ = projection of the constant 1 onto the base: γ̄ = G⁻¹ ū, ū_k = ∫_Ŝ Λ_k.
-            let ones: Vec<f64> = (0..n)
-                .into_par_iter()
-                .map_init(Vec::new, |scratch, k| {
-                    base.product_integral(k, base.geo.centres[k], 0.0, scratch)
-                })
-                .collect();
-            let gamma_bar = ortho.solve(&ones);
-            (0..kernel.len())
-                .into_par_iter()
-                .map_init(
-                    || (Vec::new(), Vec::new()),
-                    |(near, scratch), o| {
-                        let b = 1.0 / (kernel.width[o] * kernel.width[o]);
-                        base.cells_near(
-                            kernel.wx[o],
-                            support_radius(kernel.width[o], settings.support_tolerance),
-                            near,
-                        );
-                        near.iter()
-                            .map(|&k| {
-                                gamma_bar[k as usize]
-                                    * base.product_integral_facing(
-                                        k as usize,
-                                        kernel.wx[o],
-                                        b,
-                                        kernel.facing_x(o),
-                                        scratch,
-                                    )
-                            })
-                            .sum()
-                    },
-                )
-                .collect()
-        }
-    };
+/// c̄_o = ∫ B̄ exp(−|x − w_o^x|²/d_o²): B̄ is the constant 1 projected onto the base,
+/// γ̄ = G⁻¹ ū with ū_k = ∫_Ŝ Λ_k (eq. 3.9–3.12; it adds the "surface base error" of fig. 3.4).
+fn projected_sender(base: &Base, ortho: &integrals::Orthonormal, kernel: &KernelCells) -> Vec<f64> {
+    let tol = base.settings.support_tolerance;
+    let ones: Vec<f64> = (0..base.len())
+        .into_par_iter()
+        .map_init(Vec::new, |scratch, k| {
+            base.product_integral(k, base.geo.centres[k], 0.0, scratch)
+        })
+        .collect();
+    let gamma_bar = ortho.solve(&ones);
+    (0..kernel.len())
+        .into_par_iter()
+        .map_init(
+            || (Vec::new(), Vec::new()),
+            |(near, scratch), o| {
+                let b = 1.0 / (kernel.width[o] * kernel.width[o]);
+                base.cells_near(kernel.wx[o], support_radius(kernel.width[o], tol), near);
+                near.iter()
+                    .map(|&k| {
+                        gamma_bar[k as usize]
+                            * base.product_integral_facing(
+                                k as usize,
+                                kernel.wx[o],
+                                b,
+                                kernel.facing_x(o),
+                                scratch,
+                            )
+                    })
+                    .sum()
+            },
+        )
+        .collect()
+}
 
-    // u_q = Σ_o v_o · sender_o · β_qo, accumulated over fixed chunks of kernel cells and summed
-    // in chunk order, so that the result does not depend on the number of threads.
+/// u_q = Σ_o v_o · sender_o · β_qo, accumulated over fixed chunks of kernel cells and summed in
+/// chunk order, so that the result does not depend on the number of threads.
+///
+/// No zero rule of fig. 3.6 (sender behind the receiver) here: the kernel collection
+/// B_refl(y) = Σ_o v_o c_o g_o(y) sums every cell, and projected weights cancel each other, so
+/// dropping cells made u inconsistent with G (on wall-floor the base then missed B_refl by 135 %,
+/// and by 7 % without it).
+fn receiver_projections(base: &Base, kernel: &KernelCells, sender: &[f64]) -> Vec<Bands> {
     const CHUNK: usize = 128;
+    let (n, tol) = (base.len(), base.settings.support_tolerance);
     let partial: Vec<Vec<Bands>> = (0..kernel.len().div_ceil(CHUNK))
         .into_par_iter()
         .map(|chunk| {
@@ -799,14 +825,13 @@ pub fn fem_step(base: Base, kernel: &KernelCells, scene: &SceneSurface) -> FemSo
                     continue;
                 }
                 let b = 1.0 / (kernel.width[o] * kernel.width[o]);
-                let reach = support_radius(kernel.width[o], settings.support_tolerance);
-                base.cells_near(kernel.wy[o], reach, &mut near);
+                base.cells_near(
+                    kernel.wy[o],
+                    support_radius(kernel.width[o], tol),
+                    &mut near,
+                );
                 for &q in &near {
                     let q = q as usize;
-                    // No zero rule of fig. 3.6 (sender behind the receiver) here: the kernel
-                    // collection B_refl(y) = Σ_o v_o c_o g_o(y) sums every cell, and projected
-                    // weights cancel each other, so dropping cells made u inconsistent with G
-                    // (on wall-floor the base then missed B_refl by 135 %, and by 7 % without it).
                     let beta = base.product_integral_facing(
                         q,
                         kernel.wy[o],
@@ -830,21 +855,7 @@ pub fn fem_step(base: Base, kernel: &KernelCells, scene: &SceneSurface) -> FemSo
             }
         }
     }
-
-    let mut gamma = vec![[0.0; MAX_BANDS]; n];
-    for band in 0..MAX_BANDS {
-        let ub: Vec<f64> = u.iter().map(|x| x[band]).collect();
-        for (g, v) in gamma.iter_mut().zip(ortho.solve(&ub)) {
-            g[band] = v;
-        }
-    }
-    FemSolution {
-        rejected: ortho.rejected(),
-        base,
-        gamma,
-        sender,
-        kernel: kernel.clone(),
-    }
+    u
 }
 
 /// Thin adapter from glam vectors to [`gauss_integrals`].
@@ -880,6 +891,7 @@ mod integrals {
     }
 }
 
+#[cfg(test)]
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -966,14 +978,16 @@ mod tests {
             DVec3::new(0.0, 80.0, 4.0),
         ]);
         let scene = SceneSurface::new(vec![sender_plane], vec![DVec3::NEG_Z], 2.0);
-        let sol = fem_step(base, &kernel, &scene);
+        let mut sender =
+            sender_integrals(&kernel, &scene, FemSettings::default().support_tolerance);
+        let sol = fem_step(base, &kernel, &mut sender);
         assert!(
             sol.rejected < 256 / 8,
             "wide Gaussians are nearly dependent; few are dropped: {}",
             sol.rejected
         );
         // c_o for a centre on the sender plane is the whole-plane value π d².
-        assert!((sol.sender[0] - std::f64::consts::PI * 2.25).abs() < 1e-9);
+        assert!((sender[0] - std::f64::consts::PI * 2.25).abs() < 1e-9);
         let mut scratch = Vec::new();
         for p in [
             DVec3::new(3.75, 3.75, 0.0),
@@ -981,7 +995,7 @@ mod tests {
             DVec3::new(5.0, 3.0, 0.0),
         ] {
             let from_base = sol.reflected_from_base(p, DVec3::Z, &mut scratch);
-            let direct = reflected_from_kernel(&kernel, &sol.sender, p, DVec3::Z);
+            let direct = reflected_from_kernel(&kernel, &sender, p, DVec3::Z);
             for b in 0..3 {
                 assert!(
                     (from_base[b] - direct[b]).abs() < 0.02 * direct[0],

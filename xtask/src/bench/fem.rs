@@ -127,7 +127,9 @@ fn base_scaling(ctx: &Ctx, surface: &gcr::stages::SceneSurface, domain: &Domain)
             .map(|_| {
                 let b = base.clone();
                 let t = Instant::now();
-                std::hint::black_box(gcr::stages::fem_step(b, &trained.kernel, surface));
+                let tol = gcr::stages::FemSettings::default().support_tolerance;
+                let mut c = sender_integrals(&trained.kernel, surface, tol);
+                std::hint::black_box(gcr::stages::fem_step(b, &trained.kernel, &mut c));
                 t.elapsed().as_secs_f64()
             })
             .fold(f64::INFINITY, f64::min);

@@ -8,12 +8,12 @@ use super::training::Trainer;
 use crate::fem::{KernelCells, sender_integrals};
 use crate::network::GrowingNetwork;
 
-/// A FEM step during training: freeze the kernel, step the base, update the strengths.
+/// A FEM step: freeze the kernel, its sender integrals c_o, step the base, update the strengths.
 pub(super) fn fem_step(kernel: &impl GrowingNetwork, shading: &impl GrowingNetwork, run: &mut Run) {
     let frozen = freeze_kernel(kernel, run.domain.dim(), run.domain.bands());
-    run.fem = Some(run.base_step(&frozen, shading));
-    run.update_strengths(&frozen);
-    run.metrics.fem_steps += 1;
+    let sender = sender_integrals(&frozen, &run.surface, run.fem_settings.support_tolerance);
+    run.base_step(frozen, sender, shading);
+    run.update_strengths();
 }
 
 /// The final FEM steps ([`crate::config::SolveConfig::final_fem_steps`], at least one), each

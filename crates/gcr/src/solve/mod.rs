@@ -175,6 +175,14 @@ pub fn train(
     Ok(run.finish(frozen, sender, &trainer, kernel, shading))
 }
 
+/// The last FEM step and the frozen kernel network it integrated, with its sender integrals:
+/// new samples take their strengths from it.
+struct Current {
+    kernel: KernelCells,
+    sender: Vec<f64>,
+    fem: FemSolution,
+}
+
 /// The state of one solve that every step reads or updates.
 struct Run<'a> {
     domain: &'a Domain<'a>,
@@ -186,8 +194,8 @@ struct Run<'a> {
     /// divide by it).
     shots: u64,
     metrics: Metrics,
-    /// The last FEM step.
-    fem: Option<FemSolution>,
+    /// The last FEM step with the kernel it integrated.
+    current: Option<Current>,
     /// The scene surface S every FEM integral runs over.
     surface: Arc<SceneSurface>,
     fem_settings: FemSettings,
@@ -221,7 +229,7 @@ impl<'a> Run<'a> {
             samples: Vec::new(),
             shots: 0,
             metrics,
-            fem: None,
+            current: None,
             surface: Arc::new(SceneSurface::of_clustered(domain, config.surface_clusters)),
             fem_settings,
             density: SenderDensity::new(domain),
@@ -230,9 +238,15 @@ impl<'a> Run<'a> {
         }
     }
 
-    /// One FEM step of the Gaussian base over the frozen `kernel` (sec. 3.3–3.9), on the shading
-    /// network frozen now (an empty base when nothing reads it).
-    fn base_step(&self, kernel: &KernelCells, shading: &impl GrowingNetwork) -> FemSolution {
+    /// One FEM step of the Gaussian base over the frozen `kernel` with its sender integrals
+    /// (sec. 3.3–3.9), on the shading network frozen now (an empty base when nothing reads it);
+    /// it becomes the current solution.
+    fn base_step(
+        &mut self,
+        kernel: KernelCells,
+        mut sender: Vec<f64>,
+        shading: &impl GrowingNetwork,
+    ) {
         let geo = networks::freeze_base_geometry(
             shading,
             self.domain,
@@ -240,7 +254,13 @@ impl<'a> Run<'a> {
             self.config.needs_base(),
         );
         let base = Base::new(geo, self.fem_settings, self.surface.clone());
-        fem_step(base, kernel, &self.surface)
+        let fem = fem_step(base, &kernel, &mut sender);
+        self.current = Some(Current {
+            kernel,
+            sender,
+            fem,
+        });
+        self.metrics.fem_steps += 1;
     }
 
     /// Tells the observer where the solve is, at most every 0.1 s unless `now`.
@@ -283,7 +303,7 @@ impl<'a> Run<'a> {
         m.kernel_cells = kernel_net.cell_count();
         m.shading_cells = shading_net.cell_count();
         m.samples = self.samples.len();
-        let fem = self.fem.expect("the final FEM step ran");
+        let fem = self.current.expect("the final FEM step ran").fem;
         m.shading_triangles = fem.base.geo.simplices.len();
         m.rejected_base_components = fem.rejected;
         Trained {

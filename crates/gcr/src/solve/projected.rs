@@ -18,11 +18,10 @@ pub(super) fn fem_step(
 ) -> Result<(), SolveError> {
     let p = propagate(kernel, run, TRAINING_BOUNCES)?;
     record(run, &p);
-    run.fem = Some(run.base_step(&p.kernel, shading));
+    run.base_step(p.kernel, p.sender, shading);
     if run.config.strength_from == StrengthFrom::Base {
-        run.update_strengths(&p.kernel);
+        run.update_strengths();
     }
-    run.metrics.fem_steps += 1;
     Ok(())
 }
 
@@ -36,8 +35,8 @@ pub(super) fn finish(
     let p = propagate(kernel, run, FINAL_BOUNCES)?;
     record(run, &p);
     run.metrics.energy_balance = run.config.energy_correction.then_some(p.energy_balance);
-    run.fem = Some(run.base_step(&p.kernel, shading));
-    run.metrics.fem_steps += 1;
+    // The bounces and the gathers use c_o; the base step may replace its copy by c̄_o.
+    run.base_step(p.kernel.clone(), p.sender.clone(), shading);
     Ok((p.kernel, p.sender))
 }
 

@@ -2,11 +2,13 @@
 //! drawn area-uniformly (fig. B.2; the delta rule), shot from the sender density
 //! ([`crate::shooting`]; the projection), or resampled in critical regions (sec. 2.5).
 
+use super::Current;
 use super::Run;
 use crate::config::{OutputFit, SolveConfig, StrengthFrom};
 use crate::domain::Ray;
 use crate::element::{Bands, MAX_BANDS};
-use crate::fem::{FemSolution, KernelCells, reflected_from_kernel};
+use crate::fem::FemSolution;
+use crate::fem::{KernelCells, reflected_from_kernel};
 use crate::network::GrowingNetwork;
 pub use crate::sample::Sample;
 use rand::{Rng, SeedableRng};
@@ -16,7 +18,7 @@ use std::time::Instant;
 
 impl Sample {
     /// A sample of `ray` with its strength from the current solution.
-    fn new(ray: Ray, inv_px: f64, config: &SolveConfig, current: Option<&FemSolution>) -> Self {
+    fn new(ray: Ray, inv_px: f64, config: &SolveConfig, current: Option<&Current>) -> Self {
         let mut scratch = Vec::new();
         Self {
             s: initial_strength(&ray, config, current, &mut scratch),
@@ -36,7 +38,7 @@ impl Run<'_> {
     /// also those that leave the scene), area-uniform rays for the delta rule.
     pub(super) fn add_samples(&mut self, count: usize) {
         let t0 = Instant::now();
-        let (domain, config, current) = (self.domain, self.config, self.fem.as_ref());
+        let (domain, config, current) = (self.domain, self.config, self.current.as_ref());
         let density = &self.density;
         let seeds: Vec<u64> = (0..count).map(|_| self.rng.random()).collect();
         let new: Vec<(u64, Option<Sample>)> = match config.output_fit {
@@ -109,7 +111,7 @@ impl Run<'_> {
         }
         self.metrics.seconds.resampling += tr.elapsed().as_secs_f64();
         let t0 = Instant::now();
-        let current = self.fem.as_ref();
+        let current = self.current.as_ref();
         // in chunks: `Domain::rays` prefetches ahead within a chunk
         let new: Vec<Sample> = accepted
             .par_chunks(64)
@@ -126,30 +128,26 @@ impl Run<'_> {
     }
 
     /// s ← E + B_refl for every sample, from the last FEM step's base or kernel collection.
-    pub(super) fn update_strengths(&mut self, kernel: &KernelCells) {
-        let (fem, from) = (self.fem.as_ref(), self.config.strength_from);
-        let fem = fem.expect("strengths are updated after a FEM step");
+    pub(super) fn update_strengths(&mut self) {
+        let (current, config) = (self.current.as_ref(), self.config);
         self.samples
             .par_iter_mut()
             .for_each_init(Vec::new, |scratch, smp| {
-                smp.s = match from {
-                    StrengthFrom::Base => strength(&smp.ray, Some(fem), scratch),
-                    StrengthFrom::Kernel => kernel_strength(&smp.ray, kernel, &fem.sender),
-                };
+                smp.s = initial_strength(&smp.ray, config, current, scratch);
             });
     }
 }
 
-/// A new sample's strength s = E + B_refl from the current solution.
+/// A sample's strength s = E + B_refl from the current solution ([`SolveConfig::strength_from`]).
 fn initial_strength(
     ray: &Ray,
     config: &SolveConfig,
-    current: Option<&FemSolution>,
+    current: Option<&Current>,
     scratch: &mut Vec<u32>,
 ) -> Bands {
     match (config.strength_from, current) {
-        (StrengthFrom::Kernel, Some(f)) => kernel_strength(ray, &f.kernel, &f.sender),
-        _ => strength(ray, current, scratch),
+        (StrengthFrom::Kernel, Some(c)) => kernel_strength(ray, &c.kernel, &c.sender),
+        _ => strength(ray, current.map(|c| &c.fem), scratch),
     }
 }
 

@@ -33,6 +33,8 @@ pub use closed_form::{
     line, plane, product, quad, quad_fast, segment, triangle, triangle_fast, triangle_reference,
 };
 pub use cubature::{Cubature, triangle_cubature};
-pub use gram::{Dim, Domain, Gaussian, Gram, GramConfig, GramError, Sparse, gram, gram_with};
+pub use gram::{
+    Dim, Domain, Gaussian, Gram, GramConfig, GramError, Sparse, gram, gram_with, support_radius,
+};
 pub use orthonormal::{Orthonormal, classical_gram_schmidt};
 pub use transfer::{Factors, KernelGaussian};

@@ -54,7 +54,11 @@ fn main() -> anyhow::Result<()> {
         let t_exact = t.elapsed().as_secs_f64() / centres.len() as f64;
         let mut near = 0;
         for c in &centres {
-            exact.elements_near(*c, gcr::stages::support_radius(d, tol), &mut scratch);
+            exact.elements_near(
+                *c,
+                gauss_integrals::support_radius(1.0 / (d * d), tol),
+                &mut scratch,
+            );
             near += scratch.len();
         }
         print!(

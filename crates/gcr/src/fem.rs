@@ -27,7 +27,8 @@ use crate::config::{BaseDomain, SurfaceClusters, Transfer};
 use crate::domain::Domain;
 use crate::element::{Bands, Element, MAX_BANDS};
 use crate::shading::ShadingGeometry;
-use crate::spatial::{BoxGrid, support_radius};
+use crate::spatial::{BoxGrid, width_a};
+use gauss_integrals::support_radius;
 use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -273,7 +274,7 @@ impl SceneSurface {
         mask: &Mask,
         candidates: &[u32],
     ) -> f64 {
-        let r = support_radius(1.0 / a.sqrt(), tol);
+        let r = support_radius(a, tol);
         let grid = match &self.index {
             SurfaceIndex::Tree(tree) => {
                 return tree.integral(c, a, r, mask, &mut |e| {
@@ -304,7 +305,7 @@ impl SceneSurface {
         cos_min: f64,
         scratch: &mut Vec<u32>,
     ) -> f64 {
-        let r = support_radius(1.0 / a.sqrt(), tol);
+        let r = support_radius(a, tol);
         let mask = Mask { facing, cos_min };
         let grid = match &self.index {
             SurfaceIndex::Tree(tree) => {
@@ -434,13 +435,13 @@ impl Base {
             })
             .collect();
         let mean_width = geo.widths.iter().sum::<f64>() / geo.len().max(1) as f64;
-        let cell = support_radius(mean_width.max(1e-300), settings.support_tolerance);
+        let cell = support_radius(width_a(mean_width.max(1e-300)), settings.support_tolerance);
         let element_grid = BoxGrid::new(elements.iter().map(Element::bounds).collect(), cell);
         let centre_grid = BoxGrid::new(geo.centres.iter().map(|c| (*c, *c)).collect(), cell);
         let max_reach = geo
             .widths
             .iter()
-            .map(|d| support_radius(*d, settings.support_tolerance))
+            .map(|d| support_radius(width_a(*d), settings.support_tolerance))
             .fold(0.0, f64::max);
         Self {
             geo,
@@ -530,7 +531,7 @@ impl Base {
                     )
             }
             BaseDomain::Shading => {
-                let r = support_radius(1.0 / ab.sqrt(), tol);
+                let r = support_radius(ab, tol);
                 self.element_grid.query_ball(c, r, scratch);
                 scale
                     * scratch
@@ -556,7 +557,10 @@ impl Base {
             .map_init(
                 || (Vec::new(), Vec::new()),
                 |(near, scratch), p| {
-                    let reach = support_radius(self.geo.widths[p], self.settings.support_tolerance);
+                    let reach = support_radius(
+                        width_a(self.geo.widths[p]),
+                        self.settings.support_tolerance,
+                    );
                     self.cells_near(self.geo.centres[p], reach, near);
                     near.iter()
                         .map(|&q| q as usize)
@@ -787,7 +791,11 @@ fn projected_sender(base: &Base, ortho: &integrals::Orthonormal, kernel: &Kernel
             || (Vec::new(), Vec::new()),
             |(near, scratch), o| {
                 let b = 1.0 / (kernel.width[o] * kernel.width[o]);
-                base.cells_near(kernel.wx[o], support_radius(kernel.width[o], tol), near);
+                base.cells_near(
+                    kernel.wx[o],
+                    support_radius(width_a(kernel.width[o]), tol),
+                    near,
+                );
                 near.iter()
                     .map(|&k| {
                         gamma_bar[k as usize]
@@ -827,7 +835,7 @@ fn receiver_projections(base: &Base, kernel: &KernelCells, sender: &[f64]) -> Ve
                 let b = 1.0 / (kernel.width[o] * kernel.width[o]);
                 base.cells_near(
                     kernel.wy[o],
-                    support_radius(kernel.width[o], tol),
+                    support_radius(width_a(kernel.width[o]), tol),
                     &mut near,
                 );
                 for &q in &near {

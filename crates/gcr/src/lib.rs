@@ -76,7 +76,6 @@ pub mod stages {
     pub use crate::retriangulate::{Triangulation, retriangulate};
     pub use crate::shading::ShadingGeometry;
     pub use crate::solve::{freeze_kernel, freeze_shading};
-    pub use crate::spatial::support_radius;
 }
 
 /// The README's code, compiled and run as a doctest.

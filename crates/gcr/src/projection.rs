@@ -29,8 +29,9 @@ use crate::cluster::Mask;
 use crate::element::{Bands, MAX_BANDS};
 use crate::fem::{KernelCells, SceneSurface};
 use crate::sample::Sample;
-use crate::spatial::support_radius;
+use crate::spatial::width_a;
 use gauss_integrals as integrals;
+use gauss_integrals::support_radius;
 use glam::DVec3;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
@@ -75,7 +76,7 @@ fn candidates(centres: &[DVec3], widths: &[f64], scene: &SceneSurface, tol: f64)
         .zip(widths)
         .map(|(c, d)| {
             let mut out = Vec::new();
-            scene.elements_near(*c, 2.0 * support_radius(*d, tol), &mut out);
+            scene.elements_near(*c, 2.0 * support_radius(width_a(*d), tol), &mut out);
             out
         })
         .collect()

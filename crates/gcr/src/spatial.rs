@@ -9,9 +9,10 @@
 use glam::DVec3;
 use std::collections::HashMap;
 
-/// Radius beyond which exp(−r²/d²) < `tol`: r = d·√(ln(1/tol)).
-pub fn support_radius(d: f64, tol: f64) -> f64 {
-    d * (1.0 / tol).ln().max(0.0).sqrt()
+/// The exponent factor a = 1/d² of a Gaussian exp(−|x − w|²/d²) of width d, as
+/// [`gauss_integrals::support_radius`] and the closed forms take it.
+pub fn width_a(d: f64) -> f64 {
+    1.0 / (d * d)
 }
 
 /// A uniform grid of buckets holding item ids whose bounding boxes overlap each bucket.
@@ -129,7 +130,7 @@ mod tests {
 
     #[test]
     fn support_radius_matches_the_gaussian() {
-        let r = support_radius(2.0, 1e-12);
+        let r = gauss_integrals::support_radius(width_a(2.0), 1e-12);
         assert!(((-(r / 2.0).powi(2)).exp() - 1e-12).abs() < 1e-20);
         let mut out = vec![7];
         BoxGrid::new(vec![], 1.0).query_ball(DVec3::ZERO, f64::NAN, &mut out);

@@ -1,4 +1,4 @@
-//! Large scenes: the clustered surface integrals (`gcr::cluster`, `SolveConfig::surface_clusters`)
+//! Large scenes: the clustered surface integrals (the cluster tree, `SolveConfig::surface_clusters`)
 //! must give the solve the exact integrals give. `tessellated-cornell-2000` (the Cornell box cut
 //! into about 2000 triangles) is small enough to solve both ways in a test; forcing the cluster tree
 //! on it (`min_elements = 0`) must move B by no more than the clustering's own error.

@@ -1,7 +1,7 @@
 //! GCR on a generated large scene (`tessellated-cornell-<N>`: the Cornell box cut into about N
 //! triangles; `random-boxes-<N>`: the Cornell box filled with small random boxes), against the
 //! path-traced reference at 200 area-uniform probes, for several cluster criteria θ
-//! ([`gcr::cluster`]).
+//! (`gcr`'s cluster tree).
 //!
 //! `cargo run --release -p gcr --example large_scene -- tessellated-cornell-1000000 300 1 0.5`
 //! (scene, kernel cells, then the θ values; default: the configuration's θ).

@@ -1,4 +1,4 @@
-//! Accuracy and speed of the clustered surface integrals ([`gcr::cluster`]) against the exact
+//! Accuracy and speed of the clustered surface integrals (`gcr`'s cluster tree) against the exact
 //! element sums, on a large scene.
 //!
 //! `cargo run --release -p gcr --example cluster_integrals -- random-boxes-100000 0.25 0.05`

@@ -662,40 +662,30 @@ impl FemSolution {
 /// Sender integrals c_o = ∫_S exp(−|x − w_o^x|²/d_o²) dx for every kernel cell, exact on the
 /// scene's elements (MATH.md §3).
 pub fn sender_integrals(kernel: &KernelCells, scene: &SceneSurface, tol: f64) -> Vec<f64> {
-    (0..kernel.len())
-        .into_par_iter()
-        .map_init(Vec::new, |scratch, o| {
-            let a = 1.0 / (kernel.width[o] * kernel.width[o]);
-            let facing = [kernel.facing_x(o)];
-            scene.masked_gaussian_integral(
-                kernel.wx[o],
-                a,
-                tol,
-                &facing,
-                kernel.facing_cos,
-                scratch,
-            )
-        })
-        .collect()
+    half_integrals(kernel, scene, tol, |o| (kernel.wx[o], kernel.facing_x(o)))
 }
 
 /// Receiver integrals ∫_S exp(−|y − w_o^y|²/d_o²) dy for every kernel cell: with the sender
 /// integrals they give the reflected power of the kernel collection,
 /// ∫_S B_refl = Σ_o v_o c_o ∫_S g_o^y.
 pub fn receiver_integrals(kernel: &KernelCells, scene: &SceneSurface, tol: f64) -> Vec<f64> {
+    half_integrals(kernel, scene, tol, |o| (kernel.wy[o], kernel.facing_y(o)))
+}
+
+/// ∫_S exp(−|x − w|²/d_o²) dx over the surfaces facing like the half, for the half
+/// `half(o)` = (centre w, facing direction) of every kernel cell o.
+fn half_integrals(
+    kernel: &KernelCells,
+    scene: &SceneSurface,
+    tol: f64,
+    half: impl Fn(usize) -> (DVec3, DVec3) + Sync,
+) -> Vec<f64> {
     (0..kernel.len())
         .into_par_iter()
         .map_init(Vec::new, |scratch, o| {
+            let (centre, facing) = half(o);
             let a = 1.0 / (kernel.width[o] * kernel.width[o]);
-            let facing = [kernel.facing_y(o)];
-            scene.masked_gaussian_integral(
-                kernel.wy[o],
-                a,
-                tol,
-                &facing,
-                kernel.facing_cos,
-                scratch,
-            )
+            scene.masked_gaussian_integral(centre, a, tol, &[facing], kernel.facing_cos, scratch)
         })
         .collect()
 }

@@ -224,6 +224,64 @@ impl Isgcs {
         self.growing = on;
     }
 
+    /// Batch form of the unsupervised adaption (eq. 2.6 in the limit of presenting all of
+    /// `inputs`, N × n row-major, with ε_N = 0): `iterations` times, every cell moves to the
+    /// mean of the inputs it is the best-matching unit of (a Lloyd iteration; cells winning
+    /// none stay). Topology and outputs are kept; widths are refreshed. BMU search in parallel.
+    pub fn relax(&mut self, inputs: &[f64], iterations: usize) -> Result<(), IsgcsError> {
+        use rayon::prelude::*;
+        let n = self.n;
+        if inputs.len() % n != 0 || inputs.iter().any(|v| !v.is_finite()) {
+            return Err(IsgcsError::Invalid(format!(
+                "relax needs finite inputs N × {n}, got {} numbers",
+                inputs.len()
+            )));
+        }
+        for _ in 0..iterations {
+            let bmus: Vec<usize> = inputs
+                .par_chunks(n)
+                .with_min_len(64)
+                .map(|x| self.bmu(x, None))
+                .collect();
+            let z = self.len();
+            let mut sum = vec![0.0; z * n];
+            let mut count = vec![0usize; z];
+            for (x, &b) in inputs.chunks_exact(n).zip(&bmus) {
+                count[b] += 1;
+                for a in 0..n {
+                    sum[b * n + a] += x[a];
+                }
+            }
+            for i in 0..z {
+                if count[i] > 0 {
+                    for a in 0..n {
+                        self.centres[i * n + a] = sum[i * n + a] / count[i] as f64;
+                    }
+                }
+            }
+        }
+        for i in 0..self.len() {
+            self.refresh_width(i);
+        }
+        Ok(())
+    }
+
+    /// Replaces the supervised resources τ^SL_i by `tau` (one per cell, finite, ≥ 0) and clears
+    /// the unsupervised ones, e.g. with the squared residuals of a batch output fit summed over
+    /// each cell's samples, so that [`Isgcs::insert`] grows where that error is largest.
+    pub fn set_resources(&mut self, tau: &[f64]) -> Result<(), IsgcsError> {
+        if tau.len() != self.len() || tau.iter().any(|t| !(t.is_finite() && *t >= 0.0)) {
+            return Err(IsgcsError::Invalid(format!(
+                "set_resources needs {} finite resources >= 0, got {}",
+                self.len(),
+                tau.len()
+            )));
+        }
+        self.tau_sl.copy_from_slice(tau);
+        self.tau_usl.iter_mut().for_each(|t| *t = 0.0);
+        Ok(())
+    }
+
     fn dist2(&self, i: usize, x: &[f64]) -> f64 {
         self.centre(i)
             .iter()

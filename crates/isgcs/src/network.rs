@@ -67,6 +67,11 @@ impl Isgcs {
                 "dimensions n = {n}, m = {m}, k = {k} must be at least 1"
             ));
         }
+        if k > n {
+            return bad(format!(
+                "topology dimension k = {k} exceeds the input dimension n = {n}"
+            ));
+        }
         if initial.len() != k + 1
             || initial
                 .iter()
@@ -407,7 +412,19 @@ impl Isgcs {
     }
 
     /// Ψ(x) with the support cut-off of [`Isgcs::support`].
+    ///
+    /// # Panics
+    /// When `x` does not have n or `out` not m entries (also in release builds;
+    /// [`Isgcs::try_predict`] returns an error instead).
     pub fn predict(&self, x: &[f64], out: &mut [f64]) {
+        assert!(
+            x.len() == self.n && out.len() == self.m,
+            "predict: input of length {} (n = {}) or output of length {} (m = {})",
+            x.len(),
+            self.n,
+            out.len(),
+            self.m
+        );
         let mut cells = Vec::new();
         self.weights(x, &mut cells);
         out.iter_mut().for_each(|o| *o = 0.0);
@@ -416,6 +433,26 @@ impl Isgcs {
                 *o += v * a;
             }
         }
+    }
+
+    /// [`Isgcs::predict`], with wrong lengths an error instead of a panic.
+    pub fn try_predict(&self, x: &[f64], out: &mut [f64]) -> Result<(), IsgcsError> {
+        self.check_lengths("try_predict", x, out)?;
+        self.predict(x, out);
+        Ok(())
+    }
+
+    fn check_lengths(&self, what: &str, x: &[f64], y: &[f64]) -> Result<(), IsgcsError> {
+        if x.len() != self.n || y.len() != self.m {
+            return Err(IsgcsError::Invalid(format!(
+                "{what}: input of length {} (n = {}) or output of length {} (m = {})",
+                x.len(),
+                self.n,
+                y.len(),
+                self.m
+            )));
+        }
+        Ok(())
     }
 
     /// Ψ at N points at once, in parallel (rayon): `inputs` is N × n row-major, `out` N × m.
@@ -458,9 +495,38 @@ impl Isgcs {
     /// One training step (fig. 2.9): USL on the BMU and its neighbours (eq. 2.6, 2.9 corrected),
     /// the delta rule on the output layer (eq. 2.8), resource updates with decay, and an
     /// insertion every λ steps while growing. Returns the BMU.
+    ///
+    /// # Panics
+    /// When `x` does not have n or `target` not m entries (also in release builds;
+    /// [`Isgcs::try_train`] returns an error instead).
     pub fn train(&mut self, x: &[f64], target: &[f64], hint: Option<usize>) -> usize {
         let _ = hint;
+        assert!(
+            x.len() == self.n && target.len() == self.m,
+            "train: input of length {} (n = {}) or target of length {} (m = {})",
+            x.len(),
+            self.n,
+            target.len(),
+            self.m
+        );
         self.train_step(x, target).0
+    }
+
+    /// [`Isgcs::train`], with wrong lengths or non-finite values an error instead of a panic
+    /// (or of a network poisoned by NaN).
+    pub fn try_train(
+        &mut self,
+        x: &[f64],
+        target: &[f64],
+        hint: Option<usize>,
+    ) -> Result<usize, IsgcsError> {
+        self.check_lengths("try_train", x, target)?;
+        if x.iter().chain(target).any(|v| !v.is_finite()) {
+            return Err(IsgcsError::Invalid(
+                "try_train: non-finite input or target".into(),
+            ));
+        }
+        Ok(self.train(x, target, hint))
     }
 
     /// [`Isgcs::train`], also returning the squared output error |y − Ψ(x)|² of the step
@@ -1558,5 +1624,43 @@ mod tests {
             .is_err()
         );
         assert!(Isgcs::new(Params::default(), 1, 1, 1, vec![vec![f64::NAN], vec![1.0]]).is_err());
+        // k > n.
+        let tri = vec![vec![0.0], vec![1.0], vec![2.0]];
+        assert!(Isgcs::new(Params::default(), 1, 1, 2, tri).is_err());
+        // Wrong lengths are errors in the checked calls and panics (not misreads) otherwise.
+        let mut net = Isgcs::new(Params::default(), 2, 1, 1, vec![vec![0.0; 2], vec![1.0; 2]]).unwrap();
+        let mut out = [0.0];
+        assert!(net.try_predict(&[0.5], &mut out).is_err());
+        assert!(net.try_predict(&[0.5, 0.5], &mut [0.0, 0.0]).is_err());
+        assert!(net.try_predict(&[0.5, 0.5], &mut out).is_ok());
+        assert!(net.try_train(&[0.5], &[1.0], None).is_err());
+        assert!(net.try_train(&[0.5, f64::NAN], &[1.0], None).is_err());
+        assert_eq!(net.steps(), 0);
+        assert!(net.try_train(&[0.5, 0.5], &[1.0], None).is_ok());
+        assert_eq!(net.steps(), 1);
+        let short = std::panic::catch_unwind(move || {
+            let mut o = [0.0];
+            net.predict(&[0.5], &mut o);
+        });
+        assert!(short.is_err());
+    }
+
+    #[test]
+    fn relax_moves_cells_to_their_means_and_resources_drive_insertion() {
+        let mut net = Isgcs::new(Params::default(), 1, 1, 1, vec![vec![0.0], vec![1.0]]).unwrap();
+        // Inputs near 0.2 (won by cell 0) and near 0.9 (cell 1).
+        net.relax(&[0.1, 0.3, 0.8, 1.0], 1).unwrap();
+        assert!((net.centre(0)[0] - 0.2).abs() < 1e-12);
+        assert!((net.centre(1)[0] - 0.9).abs() < 1e-12);
+        assert!((net.width(0) - 0.7).abs() < 1e-12);
+        assert!(net.relax(&[0.1, f64::NAN], 1).is_err());
+        assert!(net.set_resources(&[1.0]).is_err());
+        assert!(net.set_resources(&[1.0, -1.0]).is_err());
+        net.set_resources(&[0.0, 5.0]).unwrap();
+        assert!(net.resource(1) > net.resource(0));
+        // The only edge is split; the new cell takes a third of both resources.
+        assert_eq!(net.insert(), 2);
+        assert!((net.resource(2) - 5.0 / 3.0).abs() < 1e-12);
+        assert!((net.centre(2)[0] - 0.55).abs() < 1e-12);
     }
 }

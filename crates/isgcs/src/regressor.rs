@@ -11,9 +11,9 @@
 //!    deviation along principal axis i.
 //! 3. **Growth** in rounds, each: λ online ISGCS steps per cell (USL and delta rule,
 //!    [`Isgcs::fit`], rows in shuffled epochs; λ = 10 by default) and two batch USL steps
-//!    ([`Isgcs::relax`]: every cell to the mean of the rows it wins) on a sample of 8z rows;
+//!    ([`Isgcs::relax`]: every cell to the mean of the rows it wins) on a sample of 4z + 200 rows;
 //!    a least-squares output fit on that sample; each cell's resource τ^SL becomes the summed
-//!    squared residual of the rows it wins ([`Isgcs::set_resources`]); then z/5 insertions
+//!    squared residual of the rows it wins ([`Isgcs::set_resources`]); then 0.3 z insertions
 //!    ([`Isgcs::insert`]: the longest edge of the highest-resource cell is split, the resource
 //!    shared 2/3 : 1/3). This is the supervised resource of sec. 2.4 measured on the least-
 //!    squares network instead of the slowly converging delta rule: with λ-step online
@@ -61,6 +61,16 @@ pub enum RegressorError {
     /// A hyperparameter out of range (the message names it).
     #[error("invalid parameter: {0}")]
     InvalidParams(String),
+    /// The cell budget is below the k + 1 cells of the initial simplex or above the rows.
+    #[error("cell budget {cells} is outside {min} (k + 1) … {max} (the number of rows)")]
+    CellBudget {
+        /// The requested budget.
+        cells: usize,
+        /// k + 1.
+        min: usize,
+        /// The number of rows.
+        max: usize,
+    },
     /// The network rejected its parameters.
     #[error(transparent)]
     Network(#[from] IsgcsError),
@@ -351,11 +361,11 @@ impl Regressor {
 
         let (k, simplex) = topology_from_data(&xs, n, params.topology_dim);
         if params.max_cells < k + 1 || params.max_cells > rows {
-            return invalid(format!(
-                "max_cells {} must be between k + 1 = {} and the number of rows {rows}",
-                params.max_cells,
-                k + 1
-            ));
+            return Err(RegressorError::CellBudget {
+                cells: params.max_cells,
+                min: k + 1,
+                max: rows,
+            });
         }
         let lambda = params.lambda.unwrap_or(10);
         let net_params = Params {
@@ -390,14 +400,14 @@ impl Regressor {
         };
         // Growth in rounds: adapt (λ online steps per cell, then two batch steps), fit the
         // output layer by least squares on a sample of rows, make each cell's resource the
-        // squared residuals of its rows, and insert 20 % more cells where that resource is
+        // squared residuals of its rows, and insert 30 % more cells where that resource is
         // largest (ISGCS insertion).
         let mut tau = vec![0.0; 0];
         let (relax_rounds, relax_final) = (2, 5);
         while net.len() < params.max_cells {
             let z = net.len();
             train(&mut net, (lambda * z) as u64)?;
-            let sample = rows.min((8 * z).max(200));
+            let sample = rows.min(4 * z + 200);
             net.relax(&xs[..sample * n], relax_rounds)?;
             let centres: Vec<f64> = (0..z).flat_map(|i| net.centre(i).to_vec()).collect();
             let basis = Basis {
@@ -438,7 +448,7 @@ impl Regressor {
                 }
             }
             net.set_resources(&tau)?;
-            let add = (z / 5).max(1).min(params.max_cells - z);
+            let add = (z * 3 / 10).max(1).min(params.max_cells - z);
             for _ in 0..add {
                 net.insert();
             }

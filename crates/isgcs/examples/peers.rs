@@ -21,7 +21,12 @@ fn rms_over_sd(pred: &[f64], truth: &[f64]) -> f64 {
     let n = truth.len() as f64;
     let mean = truth.iter().sum::<f64>() / n;
     let sd = (truth.iter().map(|t| (t - mean) * (t - mean)).sum::<f64>() / n).sqrt();
-    let mse = pred.iter().zip(truth).map(|(p, t)| (p - t) * (p - t)).sum::<f64>() / n;
+    let mse = pred
+        .iter()
+        .zip(truth)
+        .map(|(p, t)| (p - t) * (p - t))
+        .sum::<f64>()
+        / n;
     mse.sqrt() / sd
 }
 
@@ -73,8 +78,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         let w = model.widths();
-        let (lo, hi) = w.iter().fold((f64::INFINITY, 0.0f64), |(a, b), &v| (a.min(v), b.max(v)));
-        eprintln!("train rms/sd {:.4} widths {lo:.4}..{hi:.4}", rms_over_sd(&tr_out, &y));
+        let (lo, hi) = w
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), &v| (a.min(v), b.max(v)));
+        eprintln!(
+            "train rms/sd {:.4} widths {lo:.4}..{hi:.4}",
+            rms_over_sd(&tr_out, &y)
+        );
         let t = Instant::now();
         let rbf = KMeansRbf::fit(&x, &y, n, 1, cells, seed)?;
         let tr = t.elapsed().as_secs_f64();

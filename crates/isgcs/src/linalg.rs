@@ -66,7 +66,6 @@ fn cholesky(g: &[f64], z: usize, rho: f64) -> Option<Vec<f64>> {
     Some(l)
 }
 
-
 /// Block size of the blocked Cholesky factorisation.
 const BLOCK: usize = 64;
 

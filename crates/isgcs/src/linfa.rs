@@ -334,8 +334,7 @@ impl ParamGuard for IsgcsRegressorParams {
         if p.ridge.is_some_and(|r| !(r.is_finite() && r >= 0.0)) {
             return invalid(format!("ridge {:?} must be finite and >= 0", p.ridge));
         }
-        if p
-            .width_multiplier
+        if p.width_multiplier
             .is_some_and(|w| !(w.is_finite() && w > 0.0))
         {
             return invalid(format!(

@@ -1628,7 +1628,8 @@ mod tests {
         let tri = vec![vec![0.0], vec![1.0], vec![2.0]];
         assert!(Isgcs::new(Params::default(), 1, 1, 2, tri).is_err());
         // Wrong lengths are errors in the checked calls and panics (not misreads) otherwise.
-        let mut net = Isgcs::new(Params::default(), 2, 1, 1, vec![vec![0.0; 2], vec![1.0; 2]]).unwrap();
+        let mut net =
+            Isgcs::new(Params::default(), 2, 1, 1, vec![vec![0.0; 2], vec![1.0; 2]]).unwrap();
         let mut out = [0.0];
         assert!(net.try_predict(&[0.5], &mut out).is_err());
         assert!(net.try_predict(&[0.5, 0.5], &mut [0.0, 0.0]).is_err());

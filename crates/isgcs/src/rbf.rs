@@ -255,7 +255,7 @@ impl KMeansRbf {
         centres: usize,
         seed: u64,
     ) -> Result<Self, crate::regressor::RegressorError> {
-        use crate::readout::{fit_holdout, nearest_widths, Basis, Readout, Standardizer};
+        use crate::readout::{Basis, Readout, Standardizer, fit_holdout, nearest_widths};
         use crate::regressor::RegressorError;
         let rows = crate::regressor::check_data(inputs, targets, n, m)?;
         if centres < 2 || centres > rows {

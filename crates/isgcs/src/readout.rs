@@ -2,9 +2,7 @@
 //! generalized cross-validation (the default regressor) or on a holdout (the k-means RBF
 //! reference), on standardized inputs and outputs.
 
-use crate::linalg::{
-    forward, gcv, gram_add, rademacher, ridge_fit, search_ridge, RidgeFit,
-};
+use crate::linalg::{RidgeFit, forward, gcv, gram_add, rademacher, ridge_fit, search_ridge};
 use ndarray::{Array2, ArrayView2, Axis, Slice};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -261,10 +259,14 @@ fn gcv_at(
     // Leave-one-out residuals e_i / (1 − h_ii) on the first rows (a random sample: the rows
     // are shuffled), h_ii = |L⁻¹ a_i|²: unlike GCV's mean leverage this sees single rows
     // that a cluster of narrow cells interpolates.
-    let loo_rows = rows.min(LOO_ROWS).min(blocks.first().map_or(0, |a| a.nrows()));
-    let sub = blocks
-        .first()
-        .map(|a| a.slice_axis(Axis(0), Slice::from(..loo_rows)).t().to_owned());
+    let loo_rows = rows
+        .min(LOO_ROWS)
+        .min(blocks.first().map_or(0, |a| a.nrows()));
+    let sub = blocks.first().map(|a| {
+        a.slice_axis(Axis(0), Slice::from(..loo_rows))
+            .t()
+            .to_owned()
+    });
     let eval = |r: f64| {
         let mut fit = ridge_fit(&g, &b, yy, r, &probes)?;
         // The closed form yy − 2⟨W, B⟩ + ⟨W, GW⟩ cancels badly for small ridges.
@@ -317,9 +319,8 @@ pub(crate) fn fit_gcv(
         None => {
             let sel = select_rows.min(rows).max(1);
             let (sx, sy) = (&xs[..sel * n], ys.slice_axis(Axis(0), Slice::from(..sel)));
-            let score = |mult: f64| {
-                gcv_at(basis, mult, ridge, sx, sy).map_or(f64::INFINITY, |(s, _)| s)
-            };
+            let score =
+                |mult: f64| gcv_at(basis, mult, ridge, sx, sy).map_or(f64::INFINITY, |(s, _)| s);
             let step = std::f64::consts::SQRT_2;
             let mut best = (1.0, score(1.0));
             for dir in [step, 1.0 / step] {
@@ -426,11 +427,7 @@ pub(crate) fn nearest_widths(centres: &[f64], n: usize, q: usize) -> Vec<f64> {
             let q = q.min(d.len());
             d.select_nth_unstable_by(q - 1, |a, b| a.total_cmp(b));
             let w = d[..q].iter().sum::<f64>() / q as f64;
-            if w > 0.0 {
-                w
-            } else {
-                1e-6
-            }
+            if w > 0.0 { w } else { 1e-6 }
         })
         .collect()
 }

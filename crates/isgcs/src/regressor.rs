@@ -32,7 +32,7 @@
 //! Cost: growth O(steps · z · n); the output layer O(N · z²) per candidate multiplier (dense
 //! matrix products on two threads) plus O(z³) per candidate ridge.
 
-use crate::readout::{fit_gcv, nearest_widths, Basis, Readout, Standardizer};
+use crate::readout::{Basis, Readout, Standardizer, fit_gcv, nearest_widths};
 use crate::{GoalFunction, Isgcs, IsgcsError, Params, Termination};
 use ndarray::ArrayView2;
 use rand::{Rng, SeedableRng};
@@ -277,11 +277,7 @@ fn symmetric_eigen(mut a: Vec<f64>, d: usize) -> (Vec<f64>, Vec<f64>) {
 }
 
 /// k (module docs) and the initial simplex for standardized inputs (N × n).
-pub(crate) fn topology_from_data(
-    xs: &[f64],
-    n: usize,
-    k: Option<usize>,
-) -> (usize, Vec<Vec<f64>>) {
+pub(crate) fn topology_from_data(xs: &[f64], n: usize, k: Option<usize>) -> (usize, Vec<Vec<f64>>) {
     let rows = (xs.len() / n).max(1) as f64;
     let mut cov = vec![0.0; n * n];
     for r in xs.chunks_exact(n) {

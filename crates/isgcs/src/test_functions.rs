@@ -87,16 +87,76 @@ fn franke2(x: &[f64]) -> f64 {
 /// noisy variants (noise about a quarter to a half of the function's standard deviation).
 pub fn suite() -> Vec<Problem> {
     vec![
-        Problem { name: "franke", lo: &[0.0; 2], hi: &[1.0; 2], f: franke2, noise: 0.0 },
-        Problem { name: "franke-noisy", lo: &[0.0; 2], hi: &[1.0; 2], f: franke2, noise: 0.1 },
-        Problem { name: "jump2", lo: &[0.0; 2], hi: &[1.0; 2], f: jump2, noise: 0.0 },
-        Problem { name: "ishigami", lo: &[-PI; 3], hi: &[PI; 3], f: ishigami, noise: 0.0 },
-        Problem { name: "oscillatory4", lo: &[0.0; 4], hi: &[1.0; 4], f: oscillatory4, noise: 0.0 },
-        Problem { name: "friedman1", lo: &[0.0; 10], hi: &[1.0; 10], f: friedman1, noise: 0.0 },
-        Problem { name: "friedman1-noisy", lo: &[0.0; 10], hi: &[1.0; 10], f: friedman1, noise: 1.0 },
-        Problem { name: "friedman2", lo: F2_LO, hi: F2_HI, f: friedman2, noise: 0.0 },
-        Problem { name: "friedman3", lo: F2_LO, hi: F2_HI, f: friedman3, noise: 0.0 },
-        Problem { name: "smooth6", lo: &[0.0; 6], hi: &[1.0; 6], f: smooth6, noise: 0.0 },
+        Problem {
+            name: "franke",
+            lo: &[0.0; 2],
+            hi: &[1.0; 2],
+            f: franke2,
+            noise: 0.0,
+        },
+        Problem {
+            name: "franke-noisy",
+            lo: &[0.0; 2],
+            hi: &[1.0; 2],
+            f: franke2,
+            noise: 0.1,
+        },
+        Problem {
+            name: "jump2",
+            lo: &[0.0; 2],
+            hi: &[1.0; 2],
+            f: jump2,
+            noise: 0.0,
+        },
+        Problem {
+            name: "ishigami",
+            lo: &[-PI; 3],
+            hi: &[PI; 3],
+            f: ishigami,
+            noise: 0.0,
+        },
+        Problem {
+            name: "oscillatory4",
+            lo: &[0.0; 4],
+            hi: &[1.0; 4],
+            f: oscillatory4,
+            noise: 0.0,
+        },
+        Problem {
+            name: "friedman1",
+            lo: &[0.0; 10],
+            hi: &[1.0; 10],
+            f: friedman1,
+            noise: 0.0,
+        },
+        Problem {
+            name: "friedman1-noisy",
+            lo: &[0.0; 10],
+            hi: &[1.0; 10],
+            f: friedman1,
+            noise: 1.0,
+        },
+        Problem {
+            name: "friedman2",
+            lo: F2_LO,
+            hi: F2_HI,
+            f: friedman2,
+            noise: 0.0,
+        },
+        Problem {
+            name: "friedman3",
+            lo: F2_LO,
+            hi: F2_HI,
+            f: friedman3,
+            noise: 0.0,
+        },
+        Problem {
+            name: "smooth6",
+            lo: &[0.0; 6],
+            hi: &[1.0; 6],
+            f: smooth6,
+            noise: 0.0,
+        },
     ]
 }
 

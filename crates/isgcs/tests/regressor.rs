@@ -113,7 +113,11 @@ fn save_and_load_give_the_same_predictions() {
     let (tx, _) = p.sample(300, false, 7);
     let (a, b) = (predict(&model, &tx), predict(&back, &tx));
     // serde_json's float parsing may be off by an ulp (without its `float_roundtrip` feature).
-    assert!(a.iter().zip(&b).all(|(u, v)| (u - v).abs() <= 1e-9 * u.abs().max(1.0)));
+    assert!(
+        a.iter()
+            .zip(&b)
+            .all(|(u, v)| (u - v).abs() <= 1e-9 * u.abs().max(1.0))
+    );
     assert_eq!(model.input_dim(), back.input_dim());
     assert_eq!(model.len(), back.len());
 }
@@ -139,8 +143,12 @@ fn misuse_is_an_error() {
             ..
         })
     ));
-    let invalid =
-        |p: RegressorParams| matches!(Regressor::fit(&p, &x, &y, 2, 1), Err(RegressorError::InvalidParams(_)));
+    let invalid = |p: RegressorParams| {
+        matches!(
+            Regressor::fit(&p, &x, &y, 2, 1),
+            Err(RegressorError::InvalidParams(_))
+        )
+    };
     let budget = |c: usize| {
         matches!(
             Regressor::fit(&params(c, 0), &x, &y, 2, 1),

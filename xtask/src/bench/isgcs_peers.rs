@@ -11,7 +11,7 @@ use crate::Ctx;
 use anyhow::Result;
 use isgcs::rbf::KMeansRbf;
 use isgcs::regressor::{Regressor, RegressorParams};
-use isgcs::test_functions::{suite, Problem};
+use isgcs::test_functions::{Problem, suite};
 use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -139,67 +139,68 @@ fn python_peers(
 }
 
 fn plot(path: &std::path::Path, rows: &[Row], cells: usize) -> Result<()> {
+    let e = |m: String| anyhow::anyhow!("plotting: {m}");
     let names: Vec<&str> = suite().iter().map(|p| p.name).collect();
-    let root = BitMapBackend::new(path, (1100, 520)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(
-            format!("rms/σ at {cells} centres (log scale)"),
-            ("sans-serif", 20),
-        )
-        .margin(12)
-        .x_label_area_size(70)
-        .y_label_area_size(60)
-        .build_cartesian_2d(
-            -0.5f64..names.len() as f64 - 0.5,
-            (1e-4f64..2.0).log_scale(),
-        )?;
-    chart
-        .configure_mesh()
-        .x_labels(names.len())
-        .x_label_formatter(&|v| {
-            let i = v.round() as usize;
-            if (v - i as f64).abs() < 0.01 {
-                names.get(i).copied().unwrap_or("").to_string()
-            } else {
-                String::new()
-            }
-        })
-        .y_desc("rms / σ")
-        .draw()?;
-    let methods: Vec<String> = {
-        let mut m: Vec<String> = rows.iter().map(|r| r.method.clone()).collect();
-        m.dedup();
-        let mut seen = Vec::new();
-        for x in m {
-            if !seen.contains(&x) {
-                seen.push(x);
-            }
+    let mut methods: Vec<String> = Vec::new();
+    for r in rows {
+        if !methods.contains(&r.method) {
+            methods.push(r.method.clone());
         }
-        seen
-    };
-    for (k, method) in methods.iter().enumerate() {
-        let colour = Palette99::pick(k).to_rgba();
-        let off = (k as f64 - methods.len() as f64 / 2.0) * 0.08;
-        let pts: Vec<(f64, f64)> = rows
-            .iter()
-            .filter(|r| &r.method == method && r.cells == cells && r.rms.is_finite())
-            .filter_map(|r| {
-                let i = names.iter().position(|n| *n == r.problem)?;
-                Some((i as f64 + off, r.rms.clamp(1e-4, 2.0)))
-            })
-            .collect();
-        chart
-            .draw_series(pts.iter().map(|&p| Circle::new(p, 5, colour.filled())))?
-            .label(method.as_str())
-            .legend(move |(x, y)| Circle::new((x, y), 5, colour.filled()));
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()?;
-    root.present()?;
+    crate::plot::png(path, 1100, 520, |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(
+                format!("rms/σ at {cells} centres (log scale)"),
+                ("sans-serif", 18),
+            )
+            .margin(12)
+            .x_label_area_size(50)
+            .y_label_area_size(60)
+            .build_cartesian_2d(
+                -0.5f64..names.len() as f64 - 0.5,
+                (1e-4f64..2.0).log_scale(),
+            )
+            .map_err(|x| e(x.to_string()))?;
+        chart
+            .configure_mesh()
+            .x_labels(names.len())
+            .x_label_formatter(&|v| {
+                let i = v.round() as usize;
+                if (v - i as f64).abs() < 0.01 {
+                    names.get(i).copied().unwrap_or("").to_string()
+                } else {
+                    String::new()
+                }
+            })
+            .y_desc("rms / σ")
+            .draw()
+            .map_err(|x| e(x.to_string()))?;
+        for (k, method) in methods.iter().enumerate() {
+            let colour = Palette99::pick(k).to_rgba();
+            let off = (k as f64 - methods.len() as f64 / 2.0) * 0.08;
+            let pts: Vec<(f64, f64)> = rows
+                .iter()
+                .filter(|r| &r.method == method && r.cells == cells && r.rms.is_finite())
+                .filter_map(|r| {
+                    let i = names.iter().position(|n| *n == r.problem)?;
+                    Some((i as f64 + off, r.rms.clamp(1e-4, 2.0)))
+                })
+                .collect();
+            chart
+                .draw_series(pts.iter().map(|&p| Circle::new(p, 5, colour.filled())))
+                .map_err(|x| e(x.to_string()))?
+                .label(method.as_str())
+                .legend(move |(x, y)| Circle::new((x, y), 5, colour.filled()));
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|x| e(x.to_string()))?;
+        Ok(())
+    })?;
+    image::open(path)?.to_rgb8().save(path)?;
     Ok(())
 }
 

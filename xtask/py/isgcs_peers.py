@@ -59,14 +59,14 @@ def knn(x, y):
 
 
 def mlp(x, y):
-    return MLPRegressor((64, 64), max_iter=2000, early_stopping=True, random_state=1).fit(x, y)
+    return MLPRegressor(hidden_layer_sizes=(64, 64), max_iter=2000, early_stopping=True, random_state=1).fit(x, y)
 
 
 def gp(x, y):
     rows = min(len(x), 2000)
     n = x.shape[1]
     kernel = ConstantKernel() * RBF(length_scale=np.ones(n)) + WhiteKernel(1e-3)
-    return GaussianProcessRegressor(kernel, normalize_y=True, random_state=1).fit(x[:rows], y[:rows])
+    return GaussianProcessRegressor(kernel=kernel, normalize_y=True, random_state=1).fit(x[:rows], y[:rows])
 
 
 def gbr(x, y):

@@ -48,7 +48,7 @@ pub enum Event {
 }
 
 /// Why [`Isgcs::fit`] returned.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Stopped {
     /// [`Termination::max_cells`] reached.
     CellBudget,

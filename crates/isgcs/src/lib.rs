@@ -39,6 +39,8 @@ pub mod linfa;
 mod network;
 mod params;
 pub mod rbf;
+mod readout;
+pub mod regressor;
 mod resample;
 pub mod test_functions;
 

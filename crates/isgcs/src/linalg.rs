@@ -1,5 +1,8 @@
 //! Dense symmetric positive-definite solves for the least-squares output fits.
 
+use ndarray::linalg::general_mat_mul;
+use ndarray::{Array2, ArrayView2, Axis, Slice};
+
 /// Solves (G + ρ·I) X = B in place for a symmetric positive semi-definite z×z matrix `g`
 /// (row-major, only the lower triangle is read) and `b` (z×m row-major, overwritten with X),
 /// by a Cholesky factorisation. The ridge ρ = `ridge` × mean diagonal of G is retried ten times
@@ -61,6 +64,222 @@ fn cholesky(g: &[f64], z: usize, rho: f64) -> Option<Vec<f64>> {
         }
     }
     Some(l)
+}
+
+/// Block size of the blocked Cholesky factorisation.
+const BLOCK: usize = 64;
+
+/// G += AᵀA for a dense block A (rows × z), the rows split over two threads when large.
+pub(crate) fn gram_add(a: ArrayView2<'_, f64>, g: &mut Array2<f64>) {
+    let rows = a.nrows();
+    if rows >= 256 {
+        let (top, bottom) = a.split_at(Axis(0), rows / 2);
+        let mut other = Array2::zeros(g.raw_dim());
+        rayon::join(
+            || general_mat_mul(1.0, &top.t(), &top, 1.0, g),
+            || general_mat_mul(1.0, &bottom.t(), &bottom, 0.0, &mut other),
+        );
+        *g += &other;
+    } else {
+        general_mat_mul(1.0, &a.t(), &a, 1.0, g);
+    }
+}
+
+/// In-place lower Cholesky factor of the symmetric matrix `a` plus `rho`·I (the lower triangle
+/// is read; the strict upper triangle is left unspecified). Blocked right-looking, the trailing
+/// updates by matrix products on two threads. `false` at a non-positive or NaN pivot.
+pub(crate) fn cholesky_in_place(a: &mut Array2<f64>, rho: f64) -> bool {
+    let z = a.nrows();
+    for i in 0..z {
+        a[[i, i]] += rho;
+    }
+    let mut k0 = 0;
+    while k0 < z {
+        let k1 = (k0 + BLOCK).min(z);
+        // Diagonal block, unblocked.
+        for i in k0..k1 {
+            for j in k0..=i {
+                let mut s = a[[i, j]];
+                for p in k0..j {
+                    s -= a[[i, p]] * a[[j, p]];
+                }
+                if i == j {
+                    if s.is_nan() || s <= 0.0 {
+                        return false;
+                    }
+                    a[[i, i]] = s.sqrt();
+                } else {
+                    a[[i, j]] = s / a[[j, j]];
+                }
+            }
+        }
+        if k1 == z {
+            break;
+        }
+        // Panel L21 = A21 L11⁻ᵀ.
+        for i in k1..z {
+            for j in k0..k1 {
+                let mut s = a[[i, j]];
+                for p in k0..j {
+                    s -= a[[i, p]] * a[[j, p]];
+                }
+                a[[i, j]] = s / a[[j, j]];
+            }
+        }
+        // Trailing update A22 −= L21 L21ᵀ.
+        let l21 = a
+            .slice_axis(Axis(0), Slice::from(k1..))
+            .slice_axis(Axis(1), Slice::from(k0..k1))
+            .to_owned();
+        let mut a22 = a.slice_axis_mut(Axis(0), Slice::from(k1..));
+        let mut a22 = a22.slice_axis_mut(Axis(1), Slice::from(k1..));
+        let rows = z - k1;
+        if rows >= 2 * BLOCK {
+            let h = rows / 2;
+            let (l_top, l_bottom) = l21.view().split_at(Axis(0), h);
+            let (mut top, mut bottom) = a22.view_mut().split_at(Axis(0), h);
+            rayon::join(
+                || general_mat_mul(-1.0, &l_top, &l21.t(), 1.0, &mut top),
+                || general_mat_mul(-1.0, &l_bottom, &l21.t(), 1.0, &mut bottom),
+            );
+        } else {
+            general_mat_mul(-1.0, &l21, &l21.t(), 1.0, &mut a22);
+        }
+        k0 = k1;
+    }
+    true
+}
+
+/// Solves L X = B in place (L lower triangular from [`cholesky_in_place`], B z × c).
+pub(crate) fn forward(l: &Array2<f64>, b: &mut Array2<f64>) {
+    let z = l.nrows();
+    for i in 0..z {
+        let (done, mut rest) = b.view_mut().split_at(Axis(0), i);
+        let mut row = rest.row_mut(0);
+        for p in 0..i {
+            let lip = l[[i, p]];
+            if lip != 0.0 {
+                row.scaled_add(-lip, &done.row(p));
+            }
+        }
+        row /= l[[i, i]];
+    }
+}
+
+/// Solves Lᵀ X = B in place.
+pub(crate) fn backward(l: &Array2<f64>, b: &mut Array2<f64>) {
+    let z = l.nrows();
+    for i in (0..z).rev() {
+        let (mut head, rest) = b.view_mut().split_at(Axis(0), i + 1);
+        let mut row = head.row_mut(i);
+        for p in i + 1..z {
+            let lpi = l[[p, i]];
+            if lpi != 0.0 {
+                row.scaled_add(-lpi, &rest.row(p - i - 1));
+            }
+        }
+        row /= l[[i, i]];
+    }
+}
+
+/// The ridge solution of one regularisation strength: weights, residual sum of squares and the
+/// effective degrees of freedom tr H.
+pub(crate) struct RidgeFit {
+    /// ρ relative to the mean diagonal of G.
+    pub relative: f64,
+    /// The solution W (z × m).
+    pub weights: Array2<f64>,
+    /// Σ |y − A w|² over the rows.
+    pub rss: f64,
+    /// tr(A (G + ρI)⁻¹ Aᵀ) (estimated by Rademacher probes).
+    pub dof: f64,
+    /// The Cholesky factor L of G + ρI (lower triangle).
+    pub factor: Array2<f64>,
+}
+
+/// Solves (G + ρI) W = B for ρ = `relative` × mean diagonal of G, with the residual sum of
+/// squares from `yy` = Σ y² (RSS = yy − 2⟨W, B⟩ + ⟨W, G W⟩) and tr H = z − ρ tr((G + ρI)⁻¹),
+/// the trace by `probes` (z × p Rademacher vectors: E‖L⁻¹u‖² = tr (G + ρI)⁻¹). `None` when
+/// the factorisation fails.
+pub(crate) fn ridge_fit(
+    g: &Array2<f64>,
+    b: &Array2<f64>,
+    yy: f64,
+    relative: f64,
+    probes: &Array2<f64>,
+) -> Option<RidgeFit> {
+    let z = g.nrows();
+    let mean_diag = g.diag().sum() / z.max(1) as f64;
+    if !(mean_diag > 0.0 && mean_diag.is_finite()) {
+        return None;
+    }
+    let rho = relative * mean_diag;
+    let mut l = g.clone();
+    if !cholesky_in_place(&mut l, rho) {
+        return None;
+    }
+    let mut w = b.clone();
+    forward(&l, &mut w);
+    backward(&l, &mut w);
+    let gw = g.dot(&w);
+    let rss = (yy - 2.0 * (&w * b).sum() + (&w * &gw).sum()).max(0.0);
+    let mut u = probes.clone();
+    forward(&l, &mut u);
+    let trace_inv = u.iter().map(|v| v * v).sum::<f64>() / probes.ncols().max(1) as f64;
+    let dof = (z as f64 - rho * trace_inv).clamp(0.0, z as f64);
+    Some(RidgeFit {
+        relative,
+        weights: w,
+        rss,
+        dof,
+        factor: l,
+    })
+}
+
+/// z × p Rademacher probe vectors (±1), deterministic in `seed`.
+pub(crate) fn rademacher(z: usize, p: usize, seed: u64) -> Array2<f64> {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    Array2::from_shape_fn((z, p), |_| if rng.random::<bool>() { 1.0 } else { -1.0 })
+}
+
+/// Generalized cross-validation score N·RSS / (N − tr H)² (∞ when tr H ≥ N).
+pub(crate) fn gcv(rows: usize, fit: &RidgeFit) -> f64 {
+    let free = rows as f64 - fit.dof;
+    if free <= 0.5 {
+        f64::INFINITY
+    } else {
+        rows as f64 * fit.rss / (free * free)
+    }
+}
+
+/// The relative ridge in 10⁻¹²…10⁰ minimising `score` (a coarse search over even decades,
+/// then refined by decades and half decades around the best), with its fit.
+pub(crate) fn search_ridge(
+    mut evaluate: impl FnMut(f64) -> Option<(f64, RidgeFit)>,
+) -> Option<(f64, RidgeFit)> {
+    let mut best: Option<(f64, RidgeFit)> = None;
+    let mut tried: Vec<f64> = Vec::new();
+    let mut try_one = |e: f64, best: &mut Option<(f64, RidgeFit)>| {
+        if !(-12.0..=0.0).contains(&e) || tried.iter().any(|t| (t - e).abs() < 1e-9) {
+            return;
+        }
+        tried.push(e);
+        if let Some((score, fit)) = evaluate(10f64.powf(e)) {
+            if score.is_finite() && best.as_ref().is_none_or(|(s, _)| score < *s) {
+                *best = Some((score, fit));
+            }
+        }
+    };
+    for e in [-12.0, -10.0, -8.0, -6.0, -4.0, -2.0, 0.0] {
+        try_one(e, &mut best);
+    }
+    for step in [1.0, 0.5] {
+        let centre = best.as_ref()?.1.relative.log10();
+        try_one(centre - step, &mut best);
+        try_one(centre + step, &mut best);
+    }
+    best
 }
 
 #[cfg(test)]

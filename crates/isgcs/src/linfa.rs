@@ -28,21 +28,27 @@
 //!
 //! # Training
 //!
-//! [`IsgcsRegressorValidParams`]'s `fit` runs three phases:
+//! By default `fit` runs the chosen-from-data pipeline of [`crate::regressor`]: inputs and
+//! outputs standardized, k and the initial simplex from a principal component analysis,
+//! growth in rounds that insert where the least-squares residual is largest, and an output
+//! layer whose width multiplier and ridge minimise a leave-one-out estimate. Only `max_cells`
+//! and `seed` need setting; `ridge` and `width_multiplier` fix what is otherwise chosen.
+//!
+//! Setting [`IsgcsRegressorParams::network_params`] or
+//! [`IsgcsRegressorParams::least_squares`] selects the native pipeline instead, three phases
+//! on the raw data:
 //!
 //! 1. **Growth**: [`Isgcs::fit`] on a [`DatasetGoal`] (uniformly random rows of the dataset,
 //!    seeded) until the cell budget is reached, or earlier by the optional step budget or
 //!    target error (the RMS error of a block of λ steps, see [`Termination`]).
 //! 2. **Settling**: insertion off, [`Isgcs::train`] for `settle` × the growth steps more (⅓ by
 //!    default, as in the `franke` example and docs/isgcs.md's measurements).
-//! 3. **Least squares** (unless switched off): [`Isgcs::fit_outputs`] on every row of the
-//!    dataset, with the relative ridge given.
+//! 3. **Least squares** (unless `None`): [`Isgcs::fit_outputs`] on every row of the
+//!    dataset, with the fixed relative ridge given.
 //!
-//! The defaults are [`Params::accurate`] with least squares (ridge 1e-9), the accurate setting
-//! of docs/isgcs.md; [`IsgcsRegressorParams::network_params`] with [`Params::thesis`] and
-//! `least_squares(None)` gives the dissertation's delta-rule network instead.
+//! [`Params::thesis`] with `least_squares(None)` gives the dissertation's delta-rule network.
 //!
-//! The network starts from one k-simplex at the records' mean: vertex 0 is the mean, vertex i
+//! The native pipeline's network starts from one k-simplex at the records' mean: vertex 0 is the mean, vertex i
 //! (1 ≤ i ≤ k) is the mean moved by one standard deviation of feature i − 1 along that feature
 //! (features without spread use the largest standard deviation, or 1).
 //!
@@ -52,6 +58,7 @@
 //! the target of the nearest record (Euclidean; the first of equally near ones), i.e. the
 //! nearest-neighbour interpolant of the data, the only value the dataset itself supports.
 
+use crate::regressor::{Regressor, RegressorError, RegressorParams};
 use crate::{GoalFunction, Isgcs, IsgcsError, Params, Stopped, Termination};
 use ::linfa::dataset::{AsTargets, DatasetBase, TargetDim};
 use ::linfa::param_guard::ParamGuard;
@@ -112,6 +119,9 @@ pub enum IsgcsRegressorError {
     /// The network rejected its parameters or the least-squares polish failed.
     #[error(transparent)]
     Network(#[from] IsgcsError),
+    /// The default pipeline failed (its message says why).
+    #[error(transparent)]
+    Regressor(#[from] RegressorError),
     /// An error reported by linfa.
     #[error(transparent)]
     Linfa(#[from] ::linfa::Error),
@@ -128,6 +138,11 @@ pub struct IsgcsRegressorValidParams {
     target_error: Option<f64>,
     settle: f64,
     least_squares: Option<f64>,
+    /// The chosen-from-data pipeline of [`crate::regressor`] (the default); `false` after
+    /// [`IsgcsRegressorParams::least_squares`] or [`IsgcsRegressorParams::network_params`].
+    auto: bool,
+    ridge: Option<f64>,
+    width_multiplier: Option<f64>,
     seed: u64,
 }
 
@@ -156,9 +171,22 @@ impl IsgcsRegressorValidParams {
     pub fn settle(&self) -> f64 {
         self.settle
     }
-    /// The relative ridge of the least-squares polish, `None` when it is off.
+    /// The relative ridge of the least-squares polish of the native pipeline, `None` when it is
+    /// off (only used when [`IsgcsRegressorValidParams::is_auto`] is false).
     pub fn least_squares(&self) -> Option<f64> {
         self.least_squares
+    }
+    /// Whether the default, chosen-from-data pipeline ([`crate::regressor`]) is used.
+    pub fn is_auto(&self) -> bool {
+        self.auto
+    }
+    /// The fixed relative ridge of the default pipeline, `None` when chosen from the data.
+    pub fn ridge(&self) -> Option<f64> {
+        self.ridge
+    }
+    /// The fixed width multiplier of the default pipeline, `None` when chosen from the data.
+    pub fn width_multiplier(&self) -> Option<f64> {
+        self.width_multiplier
     }
     /// The seed of the row sampling.
     pub fn seed(&self) -> u64 {
@@ -181,24 +209,45 @@ impl Default for IsgcsRegressorParams {
             target_error: None,
             settle: 1.0 / 3.0,
             least_squares: Some(1e-9),
+            auto: true,
+            ridge: None,
+            width_multiplier: None,
             seed: 0,
         })
     }
 }
 
 impl IsgcsRegressorParams {
-    /// The defaults: [`Params::accurate`], k = min(n, 2), 100 cells, no step budget or target
-    /// error, settling ⅓ of the growth steps, least squares with ridge 1e-9, seed 0.
+    /// The defaults: the chosen-from-data pipeline of [`crate::regressor`] (standardized
+    /// inputs and outputs, k and the start simplex from a principal component analysis,
+    /// growth by least-squares residuals, width multiplier and ridge by leave-one-out / GCV),
+    /// 100 cells, seed 0.
     pub fn new() -> Self {
         Self::default()
     }
-    /// The network's training parameters ([`Params::accurate`] by default; [`Params::thesis`]
-    /// for the dissertation's defaults, usually with `least_squares(None)`).
+    /// The network's training parameters for the native pipeline ([`Params::accurate`] by
+    /// default; [`Params::thesis`] for the dissertation's defaults, usually with
+    /// `least_squares(None)`). Switches to the native pipeline (module docs): `Isgcs::fit` on
+    /// the raw data, settling, optional least-squares polish with a fixed ridge.
     pub fn network_params(mut self, params: Params) -> Self {
         self.0.network = params;
+        self.0.auto = false;
         self
     }
-    /// The topology dimension k of the simplicial complex (1 ≤ k ≤ n; default min(n, 2)).
+    /// Fixed relative ridge of the default pipeline's output layer instead of the leave-one-out
+    /// choice (`None`, the default: chosen from the data).
+    pub fn ridge(mut self, ridge: Option<f64>) -> Self {
+        self.0.ridge = ridge;
+        self
+    }
+    /// Fixed width multiplier of the default pipeline's output layer instead of the
+    /// leave-one-out choice (`None`, the default: chosen from the data).
+    pub fn width_multiplier(mut self, multiplier: Option<f64>) -> Self {
+        self.0.width_multiplier = multiplier;
+        self
+    }
+    /// The topology dimension k of the simplicial complex (1 ≤ k ≤ n; default: from the data
+    /// in the default pipeline, min(n, 2) in the native one).
     pub fn topology_dim(mut self, k: usize) -> Self {
         self.0.topology_dim = Some(k);
         self
@@ -209,15 +258,18 @@ impl IsgcsRegressorParams {
         self
     }
     /// Also end growth after this many training steps (required with deletion, `kappa > 0`,
-    /// which may keep the network below its cell budget).
+    /// which may keep the network below its cell budget). `Some` selects the native pipeline.
     pub fn max_steps(mut self, steps: Option<u64>) -> Self {
         self.0.max_steps = steps;
+        self.0.auto &= steps.is_none();
         self
     }
     /// Also end growth once a block of λ steps has an RMS output error of at most this
-    /// (measured on each sample before the network adapts to it).
+    /// (measured on each sample before the network adapts to it). `Some` selects the native
+    /// pipeline.
     pub fn target_error(mut self, error: Option<f64>) -> Self {
         self.0.target_error = error;
+        self.0.auto &= error.is_none();
         self
     }
     /// Steps of the settling phase (insertion off) as a multiple of the growth steps (≥ 0;
@@ -226,10 +278,13 @@ impl IsgcsRegressorParams {
         self.0.settle = fraction;
         self
     }
-    /// The least-squares polish of the output layer ([`Isgcs::fit_outputs`]) with this relative
-    /// ridge, or `None` for the delta rule alone (default `Some(1e-9)`).
+    /// Switches to the native pipeline with the least-squares polish of the output layer
+    /// ([`Isgcs::fit_outputs`]) at this fixed relative ridge, or `None` for the delta rule
+    /// alone (the native pipeline's default is `Some(1e-9)`, which can overfit noisy data:
+    /// prefer the default pipeline).
     pub fn least_squares(mut self, ridge: Option<f64>) -> Self {
         self.0.least_squares = ridge;
+        self.0.auto = false;
         self
     }
     /// Seed of the random row sampling (default 0); equal seeds give equal models.
@@ -274,6 +329,17 @@ impl ParamGuard for IsgcsRegressorParams {
             return invalid(format!(
                 "least_squares ridge {:?} must be finite and >= 0",
                 p.least_squares
+            ));
+        }
+        if p.ridge.is_some_and(|r| !(r.is_finite() && r >= 0.0)) {
+            return invalid(format!("ridge {:?} must be finite and >= 0", p.ridge));
+        }
+        if p.width_multiplier
+            .is_some_and(|w| !(w.is_finite() && w > 0.0))
+        {
+            return invalid(format!(
+                "width_multiplier {:?} must be finite and > 0",
+                p.width_multiplier
             ));
         }
         if p.network.kappa > 0 && p.max_steps.is_none() {
@@ -414,7 +480,7 @@ fn validate(
 }
 
 /// How a fit went.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FitReport {
     /// Why growth ended.
     pub stopped: Stopped,
@@ -422,18 +488,28 @@ pub struct FitReport {
     pub growth_steps: u64,
     /// Training steps of the settling phase.
     pub settle_steps: u64,
-    /// The relative ridge the least-squares polish used, `None` when it was off.
+    /// The relative ridge the least-squares output layer used, `None` when it was off.
     pub ridge: Option<f64>,
+    /// What the default pipeline chose (`None` for the native pipeline).
+    pub auto: Option<crate::regressor::RegressorReport>,
 }
 
 /// A fitted ISGCS network as a linfa regressor. `D` is the target shape it was fitted on:
 /// [`Ix1`](type@Ix1) (single output, predicts `Array1`) or [`Ix2`](type@Ix2) (m outputs,
 /// predicts `Array2`). The shape is part of the type so that `model.predict(&x)` needs no
 /// annotation and returns what the targets were.
-#[derive(Clone, Debug)]
+///
+/// Serde-serializable (save with e.g. `serde_json::to_string(&model)`, load with
+/// `serde_json::from_str::<IsgcsRegressor<Ix1>>`): the model keeps the network, its output
+/// layer and the standardization.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(bound = "")]
 pub struct IsgcsRegressor<D = Ix2> {
     net: Isgcs,
     report: FitReport,
+    /// The default pipeline's fitted model; predictions come from it when present.
+    auto: Option<Regressor>,
+    #[serde(skip)]
     dim: PhantomData<D>,
 }
 
@@ -446,9 +522,15 @@ impl IsgcsRegressor {
 }
 
 impl<D> IsgcsRegressor<D> {
-    /// The trained network.
+    /// The trained network (for the default pipeline: in standardized input coordinates, its
+    /// outputs those of the delta rule; predictions use the least-squares output layer).
     pub fn network(&self) -> &Isgcs {
         &self.net
+    }
+
+    /// The default pipeline's fitted model, `None` for the native pipeline.
+    pub fn regressor(&self) -> Option<&Regressor> {
+        self.auto.as_ref()
     }
 
     /// The trained network, e.g. to keep training it or to serialize it (it derives serde).
@@ -494,11 +576,15 @@ impl<D> IsgcsRegressor<D> {
         let inputs = inputs.as_slice().expect("standard layout is contiguous");
         let m = self.net.output_dim();
         let shapes = "predict_batch shapes are checked";
+        let run = |out: &mut [f64]| match &self.auto {
+            Some(model) => model.predict(inputs, out).expect(shapes),
+            None => self.net.predict_batch(inputs, out).expect(shapes),
+        };
         match y.as_slice_mut() {
-            Some(out) => self.net.predict_batch(inputs, out).expect(shapes),
+            Some(out) => run(out),
             None => {
                 let mut out = vec![0.0; x.nrows() * m];
-                self.net.predict_batch(inputs, &mut out).expect(shapes);
+                run(&mut out);
                 y.iter_mut().zip(out).for_each(|(a, b)| *a = b);
             }
         }
@@ -579,16 +665,63 @@ where
         let rows = y.shape()[0];
         let y = Array2::from_shape_vec((rows, m), y.iter().copied().collect())
             .map_err(::linfa::Error::from)?;
+        if self.auto {
+            let model = self.fit_auto(x, y.view())?;
+            let r = *model.report();
+            return Ok(IsgcsRegressor {
+                net: model.network().clone(),
+                report: FitReport {
+                    stopped: Stopped::CellBudget,
+                    growth_steps: r.growth_steps,
+                    settle_steps: r.settle_steps,
+                    ridge: Some(r.ridge),
+                    auto: Some(r),
+                },
+                auto: Some(model),
+                dim: PhantomData,
+            });
+        }
         let net = self.fit_network(x, y.view())?;
         Ok(IsgcsRegressor {
             net: net.0,
             report: net.1,
+            auto: None,
             dim: PhantomData,
         })
     }
 }
 
 impl IsgcsRegressorValidParams {
+    /// The default pipeline ([`crate::regressor`]) on records (N × n) and targets (N × m).
+    fn fit_auto(
+        &self,
+        x: ArrayView2<'_, f64>,
+        y: ArrayView2<'_, f64>,
+    ) -> Result<Regressor, IsgcsRegressorError> {
+        validate(x, y)?;
+        let (n, m) = (x.ncols(), y.ncols());
+        if let Some(k) = self.topology_dim.filter(|&k| k > n) {
+            return Err(IsgcsRegressorError::TopologyDim { k, n });
+        }
+        let params = RegressorParams {
+            max_cells: self.max_cells,
+            seed: self.seed,
+            topology_dim: self.topology_dim,
+            settle: self.settle,
+            ridge: self.ridge,
+            width_multiplier: self.width_multiplier,
+            ..RegressorParams::default()
+        };
+        let xs: Vec<f64> = x.iter().copied().collect();
+        let ys: Vec<f64> = y.iter().copied().collect();
+        Regressor::fit(&params, &xs, &ys, n, m).map_err(|e| match e {
+            RegressorError::CellBudget { cells, min, .. } if cells < min => {
+                IsgcsRegressorError::CellBudget { cells, min }
+            }
+            e => e.into(),
+        })
+    }
+
     /// The three phases of the module docs on records (N × n) and targets (N × m).
     fn fit_network(
         &self,
@@ -638,6 +771,7 @@ impl IsgcsRegressorValidParams {
             growth_steps,
             settle_steps,
             ridge,
+            auto: None,
         };
         Ok((net, report))
     }

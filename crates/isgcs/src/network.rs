@@ -67,6 +67,11 @@ impl Isgcs {
                 "dimensions n = {n}, m = {m}, k = {k} must be at least 1"
             ));
         }
+        if k > n {
+            return bad(format!(
+                "topology dimension k = {k} exceeds the input dimension n = {n}"
+            ));
+        }
         if initial.len() != k + 1
             || initial
                 .iter()
@@ -224,6 +229,64 @@ impl Isgcs {
         self.growing = on;
     }
 
+    /// Batch form of the unsupervised adaption (eq. 2.6 in the limit of presenting all of
+    /// `inputs`, N × n row-major, with ε_N = 0): `iterations` times, every cell moves to the
+    /// mean of the inputs it is the best-matching unit of (a Lloyd iteration; cells winning
+    /// none stay). Topology and outputs are kept; widths are refreshed. BMU search in parallel.
+    pub fn relax(&mut self, inputs: &[f64], iterations: usize) -> Result<(), IsgcsError> {
+        use rayon::prelude::*;
+        let n = self.n;
+        if inputs.len() % n != 0 || inputs.iter().any(|v| !v.is_finite()) {
+            return Err(IsgcsError::Invalid(format!(
+                "relax needs finite inputs N × {n}, got {} numbers",
+                inputs.len()
+            )));
+        }
+        for _ in 0..iterations {
+            let bmus: Vec<usize> = inputs
+                .par_chunks(n)
+                .with_min_len(64)
+                .map(|x| self.bmu(x, None))
+                .collect();
+            let z = self.len();
+            let mut sum = vec![0.0; z * n];
+            let mut count = vec![0usize; z];
+            for (x, &b) in inputs.chunks_exact(n).zip(&bmus) {
+                count[b] += 1;
+                for a in 0..n {
+                    sum[b * n + a] += x[a];
+                }
+            }
+            for i in 0..z {
+                if count[i] > 0 {
+                    for a in 0..n {
+                        self.centres[i * n + a] = sum[i * n + a] / count[i] as f64;
+                    }
+                }
+            }
+        }
+        for i in 0..self.len() {
+            self.refresh_width(i);
+        }
+        Ok(())
+    }
+
+    /// Replaces the supervised resources τ^SL_i by `tau` (one per cell, finite, ≥ 0) and clears
+    /// the unsupervised ones, e.g. with the squared residuals of a batch output fit summed over
+    /// each cell's samples, so that [`Isgcs::insert`] grows where that error is largest.
+    pub fn set_resources(&mut self, tau: &[f64]) -> Result<(), IsgcsError> {
+        if tau.len() != self.len() || tau.iter().any(|t| !(t.is_finite() && *t >= 0.0)) {
+            return Err(IsgcsError::Invalid(format!(
+                "set_resources needs {} finite resources >= 0, got {}",
+                self.len(),
+                tau.len()
+            )));
+        }
+        self.tau_sl.copy_from_slice(tau);
+        self.tau_usl.iter_mut().for_each(|t| *t = 0.0);
+        Ok(())
+    }
+
     fn dist2(&self, i: usize, x: &[f64]) -> f64 {
         self.centre(i)
             .iter()
@@ -349,7 +412,19 @@ impl Isgcs {
     }
 
     /// Ψ(x) with the support cut-off of [`Isgcs::support`].
+    ///
+    /// # Panics
+    /// When `x` does not have n or `out` not m entries (also in release builds;
+    /// [`Isgcs::try_predict`] returns an error instead).
     pub fn predict(&self, x: &[f64], out: &mut [f64]) {
+        assert!(
+            x.len() == self.n && out.len() == self.m,
+            "predict: input of length {} (n = {}) or output of length {} (m = {})",
+            x.len(),
+            self.n,
+            out.len(),
+            self.m
+        );
         let mut cells = Vec::new();
         self.weights(x, &mut cells);
         out.iter_mut().for_each(|o| *o = 0.0);
@@ -358,6 +433,26 @@ impl Isgcs {
                 *o += v * a;
             }
         }
+    }
+
+    /// [`Isgcs::predict`], with wrong lengths an error instead of a panic.
+    pub fn try_predict(&self, x: &[f64], out: &mut [f64]) -> Result<(), IsgcsError> {
+        self.check_lengths("try_predict", x, out)?;
+        self.predict(x, out);
+        Ok(())
+    }
+
+    fn check_lengths(&self, what: &str, x: &[f64], y: &[f64]) -> Result<(), IsgcsError> {
+        if x.len() != self.n || y.len() != self.m {
+            return Err(IsgcsError::Invalid(format!(
+                "{what}: input of length {} (n = {}) or output of length {} (m = {})",
+                x.len(),
+                self.n,
+                y.len(),
+                self.m
+            )));
+        }
+        Ok(())
     }
 
     /// Ψ at N points at once, in parallel (rayon): `inputs` is N × n row-major, `out` N × m.
@@ -400,9 +495,38 @@ impl Isgcs {
     /// One training step (fig. 2.9): USL on the BMU and its neighbours (eq. 2.6, 2.9 corrected),
     /// the delta rule on the output layer (eq. 2.8), resource updates with decay, and an
     /// insertion every λ steps while growing. Returns the BMU.
+    ///
+    /// # Panics
+    /// When `x` does not have n or `target` not m entries (also in release builds;
+    /// [`Isgcs::try_train`] returns an error instead).
     pub fn train(&mut self, x: &[f64], target: &[f64], hint: Option<usize>) -> usize {
         let _ = hint;
+        assert!(
+            x.len() == self.n && target.len() == self.m,
+            "train: input of length {} (n = {}) or target of length {} (m = {})",
+            x.len(),
+            self.n,
+            target.len(),
+            self.m
+        );
         self.train_step(x, target).0
+    }
+
+    /// [`Isgcs::train`], with wrong lengths or non-finite values an error instead of a panic
+    /// (or of a network poisoned by NaN).
+    pub fn try_train(
+        &mut self,
+        x: &[f64],
+        target: &[f64],
+        hint: Option<usize>,
+    ) -> Result<usize, IsgcsError> {
+        self.check_lengths("try_train", x, target)?;
+        if x.iter().chain(target).any(|v| !v.is_finite()) {
+            return Err(IsgcsError::Invalid(
+                "try_train: non-finite input or target".into(),
+            ));
+        }
+        Ok(self.train(x, target, hint))
     }
 
     /// [`Isgcs::train`], also returning the squared output error |y − Ψ(x)|² of the step
@@ -1500,5 +1624,44 @@ mod tests {
             .is_err()
         );
         assert!(Isgcs::new(Params::default(), 1, 1, 1, vec![vec![f64::NAN], vec![1.0]]).is_err());
+        // k > n.
+        let tri = vec![vec![0.0], vec![1.0], vec![2.0]];
+        assert!(Isgcs::new(Params::default(), 1, 1, 2, tri).is_err());
+        // Wrong lengths are errors in the checked calls and panics (not misreads) otherwise.
+        let mut net =
+            Isgcs::new(Params::default(), 2, 1, 1, vec![vec![0.0; 2], vec![1.0; 2]]).unwrap();
+        let mut out = [0.0];
+        assert!(net.try_predict(&[0.5], &mut out).is_err());
+        assert!(net.try_predict(&[0.5, 0.5], &mut [0.0, 0.0]).is_err());
+        assert!(net.try_predict(&[0.5, 0.5], &mut out).is_ok());
+        assert!(net.try_train(&[0.5], &[1.0], None).is_err());
+        assert!(net.try_train(&[0.5, f64::NAN], &[1.0], None).is_err());
+        assert_eq!(net.steps(), 0);
+        assert!(net.try_train(&[0.5, 0.5], &[1.0], None).is_ok());
+        assert_eq!(net.steps(), 1);
+        let short = std::panic::catch_unwind(move || {
+            let mut o = [0.0];
+            net.predict(&[0.5], &mut o);
+        });
+        assert!(short.is_err());
+    }
+
+    #[test]
+    fn relax_moves_cells_to_their_means_and_resources_drive_insertion() {
+        let mut net = Isgcs::new(Params::default(), 1, 1, 1, vec![vec![0.0], vec![1.0]]).unwrap();
+        // Inputs near 0.2 (won by cell 0) and near 0.9 (cell 1).
+        net.relax(&[0.1, 0.3, 0.8, 1.0], 1).unwrap();
+        assert!((net.centre(0)[0] - 0.2).abs() < 1e-12);
+        assert!((net.centre(1)[0] - 0.9).abs() < 1e-12);
+        assert!((net.width(0) - 0.7).abs() < 1e-12);
+        assert!(net.relax(&[0.1, f64::NAN], 1).is_err());
+        assert!(net.set_resources(&[1.0]).is_err());
+        assert!(net.set_resources(&[1.0, -1.0]).is_err());
+        net.set_resources(&[0.0, 5.0]).unwrap();
+        assert!(net.resource(1) > net.resource(0));
+        // The only edge is split; the new cell takes a third of both resources.
+        assert_eq!(net.insert(), 2);
+        assert!((net.resource(2) - 5.0 / 3.0).abs() < 1e-12);
+        assert!((net.centre(2)[0] - 0.55).abs() < 1e-12);
     }
 }

@@ -6,6 +6,7 @@ mod fem;
 mod gauss;
 mod gcr;
 mod isgcs;
+mod isgcs_peers;
 mod scenes;
 
 use crate::Ctx;
@@ -18,6 +19,7 @@ type Group = (&'static str, fn(&Ctx) -> Result<()>);
 
 const GROUPS: &[Group] = &[
     ("isgcs", isgcs::run),
+    ("isgcs-peers", isgcs_peers::run),
     ("gauss", gauss::run),
     ("scenes", scenes::run),
     ("gcr", gcr::run),

@@ -1,0 +1,433 @@
+//! The least-squares output layer of a Gaussian network with fixed centres, chosen by
+//! generalized cross-validation (the default regressor) or on a holdout (the k-means RBF
+//! reference), on standardized inputs and outputs.
+
+use crate::linalg::{RidgeFit, forward, gcv, gram_add, rademacher, ridge_fit, search_ridge};
+use ndarray::{Array2, ArrayView2, Axis, Slice};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Rows per block when the design matrix is accumulated into the Gram matrix.
+const ROW_BLOCK: usize = 2048;
+
+/// Rows whose exact leave-one-out residual enters the selection score.
+const LOO_ROWS: usize = 256;
+
+/// Per-feature affine map to zero mean and unit standard deviation (features without spread
+/// keep scale 1).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(crate) struct Standardizer {
+    pub mean: Vec<f64>,
+    pub scale: Vec<f64>,
+}
+
+impl Standardizer {
+    /// From N rows of width `d` (row-major).
+    pub fn of(data: &[f64], d: usize) -> Self {
+        let rows = (data.len() / d).max(1) as f64;
+        let mut mean = vec![0.0; d];
+        for r in data.chunks_exact(d) {
+            for (m, v) in mean.iter_mut().zip(r) {
+                *m += v;
+            }
+        }
+        mean.iter_mut().for_each(|m| *m /= rows);
+        let mut var = vec![0.0; d];
+        for r in data.chunks_exact(d) {
+            for ((s, v), m) in var.iter_mut().zip(r).zip(&mean) {
+                *s += (v - m) * (v - m);
+            }
+        }
+        let scale = var
+            .into_iter()
+            .map(|s| {
+                let sd = (s / rows).sqrt();
+                if sd > 1e-300 && sd.is_finite() {
+                    sd
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        Self { mean, scale }
+    }
+
+    /// The standardized copy of N rows.
+    pub fn apply(&self, data: &[f64]) -> Vec<f64> {
+        let d = self.mean.len();
+        let mut out = data.to_vec();
+        for r in out.chunks_exact_mut(d) {
+            for ((v, m), s) in r.iter_mut().zip(&self.mean).zip(&self.scale) {
+                *v = (*v - m) / s;
+            }
+        }
+        out
+    }
+}
+
+/// Gaussians Ω_i(x) = exp(−|x − c_i|²/(μ d_i)²) on fixed centres with base widths d_i and a
+/// width multiplier μ (not cut off); normalized (divided
+/// by their sum) or plain, optionally followed by the affine columns 1, x₁ … xₙ.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(crate) struct Basis {
+    pub n: usize,
+    /// z × n, standardized coordinates.
+    pub centres: Vec<f64>,
+    /// d_i, before the multiplier.
+    pub base: Vec<f64>,
+    pub normalized: bool,
+    pub affine: bool,
+}
+
+impl Basis {
+    pub fn cells(&self) -> usize {
+        self.base.len()
+    }
+
+    pub fn cols(&self) -> usize {
+        self.cells() + if self.affine { self.n + 1 } else { 0 }
+    }
+
+    /// The basis values at x (standardized) into `out` (length `cols`).
+    pub fn row(&self, mult: f64, x: &[f64], out: &mut [f64]) {
+        let z = self.cells();
+        let mut sum = 0.0;
+        let (mut nearest, mut nearest_d2) = (0, f64::INFINITY);
+        for i in 0..z {
+            let c = &self.centres[i * self.n..(i + 1) * self.n];
+            let r2: f64 = c.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum();
+            if r2 < nearest_d2 {
+                (nearest, nearest_d2) = (i, r2);
+            }
+            let w = mult * self.base[i];
+            let w2 = w * w;
+            // No cut-off: with small ridges the weights can be large, and a cut-off's jump
+            // (e⁻¹⁶ × weight) would show; exp underflows to 0 on its own beyond ~27 widths.
+            out[i] = if w > 0.0 { (-r2 / w2).exp() } else { 0.0 };
+            sum += out[i];
+        }
+        if self.normalized {
+            if sum > 0.0 {
+                out[..z].iter_mut().for_each(|v| *v /= sum);
+            } else if z > 0 {
+                out[nearest] = 1.0;
+            }
+        }
+        if self.affine {
+            out[z] = 1.0;
+            out[z + 1..z + 1 + self.n].copy_from_slice(x);
+        }
+    }
+
+    /// The design matrix of `rows` standardized inputs (rows × cols), rows in parallel.
+    pub fn design(&self, mult: f64, xs: &[f64]) -> Array2<f64> {
+        let cols = self.cols();
+        let rows = xs.len() / self.n;
+        let mut a = Array2::zeros((rows, cols));
+        a.as_slice_mut()
+            .expect("fresh arrays are contiguous")
+            .par_chunks_mut(cols)
+            .zip(xs.par_chunks(self.n))
+            .with_min_len(16)
+            .for_each(|(o, x)| self.row(mult, x, o));
+        a
+    }
+
+    /// G = AᵀA, B = AᵀY and Σ y² over the rows (xs N × n, ys N × m), and the blocks of the
+    /// design matrix A when `keep` (for exact residuals).
+    pub fn normal_equations(
+        &self,
+        mult: f64,
+        xs: &[f64],
+        ys: ArrayView2<'_, f64>,
+        keep: bool,
+    ) -> (Array2<f64>, Array2<f64>, f64, Vec<Array2<f64>>) {
+        let cols = self.cols();
+        let m = ys.ncols();
+        let mut g = Array2::zeros((cols, cols));
+        let mut b = Array2::zeros((cols, m));
+        let rows = ys.nrows();
+        let mut blocks = Vec::new();
+        let mut start = 0;
+        while start < rows {
+            let end = (start + ROW_BLOCK).min(rows);
+            let a = self.design(mult, &xs[start * self.n..end * self.n]);
+            gram_add(a.view(), &mut g);
+            ndarray::linalg::general_mat_mul(
+                1.0,
+                &a.t(),
+                &ys.slice_axis(Axis(0), Slice::from(start..end)),
+                1.0,
+                &mut b,
+            );
+            if keep {
+                blocks.push(a);
+            }
+            start = end;
+        }
+        let yy = ys.iter().map(|v| v * v).sum();
+        (g, b, yy, blocks)
+    }
+}
+
+/// Σ |y − A W|² over the row blocks of A.
+fn residual(blocks: &[Array2<f64>], w: &Array2<f64>, ys: ArrayView2<'_, f64>) -> f64 {
+    let mut start = 0;
+    let mut sum = 0.0;
+    for a in blocks {
+        let end = start + a.nrows();
+        let pred = a.dot(w);
+        let y = ys.slice_axis(Axis(0), Slice::from(start..end));
+        sum += pred
+            .iter()
+            .zip(y.iter())
+            .map(|(p, t)| (p - t) * (p - t))
+            .sum::<f64>();
+        start = end;
+    }
+    sum
+}
+
+/// A fitted output layer: basis, multiplier, weights, and the standardization of inputs and
+/// outputs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(crate) struct Readout {
+    pub basis: Basis,
+    pub mult: f64,
+    /// cols × m, in standardized output units.
+    pub weights: Vec<f64>,
+    pub m: usize,
+    pub x: Standardizer,
+    pub y: Standardizer,
+    /// The relative ridge used.
+    pub ridge: f64,
+}
+
+impl Readout {
+    /// Predictions for N raw inputs (N × n) into `out` (N × m), rows in parallel.
+    pub fn predict(&self, inputs: &[f64], out: &mut [f64]) {
+        let (n, m, cols) = (self.basis.n, self.m, self.basis.cols());
+        out.par_chunks_mut(m)
+            .zip(inputs.par_chunks(n))
+            .with_min_len(32)
+            .for_each_init(
+                || (vec![0.0; n], vec![0.0; cols]),
+                |(xs, row), (o, x)| {
+                    if x.iter().any(|v| !v.is_finite()) {
+                        o.fill(f64::NAN);
+                        return;
+                    }
+                    for a in 0..n {
+                        xs[a] = (x[a] - self.x.mean[a]) / self.x.scale[a];
+                    }
+                    self.basis.row(self.mult, xs, row);
+                    for c in 0..m {
+                        let mut s = 0.0;
+                        for (j, r) in row.iter().enumerate() {
+                            if *r != 0.0 {
+                                s += r * self.weights[j * m + c];
+                            }
+                        }
+                        o[c] = self.y.mean[c] + self.y.scale[c] * s;
+                    }
+                },
+            );
+    }
+}
+
+/// What a selection measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Selected {
+    pub mult: f64,
+    pub ridge: f64,
+    /// Effective degrees of freedom tr H of the final fit.
+    pub dof: f64,
+}
+
+/// The best ridge by GCV (or the given one) for one multiplier on the given rows, with its
+/// GCV score.
+fn gcv_at(
+    basis: &Basis,
+    mult: f64,
+    ridge: Option<f64>,
+    xs: &[f64],
+    ys: ArrayView2<'_, f64>,
+) -> Option<(f64, RidgeFit)> {
+    let (g, b, yy, blocks) = basis.normal_equations(mult, xs, ys, true);
+    let probes = rademacher(g.nrows(), 24, 0x5eed);
+    let rows = ys.nrows();
+    // Leave-one-out residuals e_i / (1 − h_ii) on the first rows (a random sample: the rows
+    // are shuffled), h_ii = |L⁻¹ a_i|²: unlike GCV's mean leverage this sees single rows
+    // that a cluster of narrow cells interpolates.
+    let loo_rows = rows
+        .min(LOO_ROWS)
+        .min(blocks.first().map_or(0, |a| a.nrows()));
+    let sub = blocks.first().map(|a| {
+        a.slice_axis(Axis(0), Slice::from(..loo_rows))
+            .t()
+            .to_owned()
+    });
+    let eval = |r: f64| {
+        let mut fit = ridge_fit(&g, &b, yy, r, &probes)?;
+        // The closed form yy − 2⟨W, B⟩ + ⟨W, GW⟩ cancels badly for small ridges.
+        fit.rss = residual(&blocks, &fit.weights, ys);
+        let score = match &sub {
+            Some(at) if loo_rows > 0 && ridge.is_none() => {
+                let mut v = at.clone();
+                forward(&fit.factor, &mut v);
+                let pred = at.t().dot(&fit.weights);
+                let mut press = 0.0;
+                for i in 0..loo_rows {
+                    let h = v.column(i).iter().map(|x| x * x).sum::<f64>();
+                    if h >= 1.0 - 1e-9 {
+                        return Some((f64::INFINITY, fit));
+                    }
+                    for c in 0..ys.ncols() {
+                        let e = (ys[[i, c]] - pred[[i, c]]) / (1.0 - h);
+                        press += e * e;
+                    }
+                }
+                // Blend: the subset's leave-one-out error, but never below GCV's estimate.
+                (press / loo_rows as f64).max(gcv(rows, &fit))
+            }
+            _ => gcv(rows, &fit),
+        };
+        Some((score, fit))
+    };
+    match ridge {
+        Some(r) => eval(r),
+        None => search_ridge(eval),
+    }
+}
+
+/// Chooses the width multiplier (unless given: a geometric walk by √2 from 1, on at most
+/// `select_rows` rows) and the relative ridge (unless given) by generalized cross-validation,
+/// then refits on every row. `xs`/`ys` are standardized and in random row order; returns the
+/// weights (cols × m) and what was chosen.
+pub(crate) fn fit_gcv(
+    basis: &Basis,
+    xs: &[f64],
+    ys: ArrayView2<'_, f64>,
+    mult: Option<f64>,
+    ridge: Option<f64>,
+    select_rows: usize,
+) -> Option<(Vec<f64>, Selected)> {
+    let n = basis.n;
+    let rows = ys.nrows();
+    let mult = match mult {
+        Some(m) => m,
+        None => {
+            let sel = select_rows.min(rows).max(1);
+            let (sx, sy) = (&xs[..sel * n], ys.slice_axis(Axis(0), Slice::from(..sel)));
+            let score =
+                |mult: f64| gcv_at(basis, mult, ridge, sx, sy).map_or(f64::INFINITY, |(s, _)| s);
+            let step = std::f64::consts::SQRT_2;
+            let mut best = (1.0, score(1.0));
+            for dir in [step, 1.0 / step] {
+                let mut mult = best.0 * dir;
+                let mut improved = false;
+                while (0.2..=12.0).contains(&mult) {
+                    let s = score(mult);
+                    if s < best.1 {
+                        best = (mult, s);
+                        improved = true;
+                        mult *= dir;
+                    } else {
+                        break;
+                    }
+                }
+                if improved {
+                    break;
+                }
+            }
+            best.0
+        }
+    };
+    let (_, fit) = gcv_at(basis, mult, ridge, xs, ys)?;
+    Some((
+        fit.weights.into_raw_vec_and_offset().0,
+        Selected {
+            mult,
+            ridge: fit.relative,
+            dof: fit.dof,
+        },
+    ))
+}
+
+/// Chooses multiplier and relative ridge from the grids by the mean squared error on the last
+/// `holdout` share of the rows (fitted on the others), then refits on every row.
+pub(crate) fn fit_holdout(
+    basis: &Basis,
+    xs: &[f64],
+    ys: ArrayView2<'_, f64>,
+    mults: &[f64],
+    ridges: &[f64],
+    holdout: f64,
+) -> Option<(Vec<f64>, Selected)> {
+    let n = basis.n;
+    let rows = ys.nrows();
+    let train = ((rows as f64 * (1.0 - holdout)).round() as usize).clamp(1, rows);
+    let (tx, hx) = xs.split_at(train * n);
+    let (ty, hy) = ys.split_at(Axis(0), train);
+    let zero = Array2::zeros((basis.cols(), 0));
+    let mut best: Option<(f64, f64, f64)> = None;
+    for &mult in mults {
+        let (g, b, yy, _) = basis.normal_equations(mult, tx, ty, false);
+        let a = basis.design(mult, hx);
+        for &r in ridges {
+            let Some(fit) = ridge_fit(&g, &b, yy, r, &zero) else {
+                continue;
+            };
+            let err = if hy.nrows() == 0 {
+                fit.rss
+            } else {
+                (&a.dot(&fit.weights) - &hy).mapv(|e| e * e).sum()
+            };
+            if err.is_finite() && best.is_none_or(|(e, _, _)| err < e) {
+                best = Some((err, mult, r));
+            }
+        }
+    }
+    let (_, mult, ridge) = best?;
+    let (g, b, yy, _) = basis.normal_equations(mult, xs, ys, false);
+    let fit = ridge_fit(&g, &b, yy, ridge, &zero)?;
+    Some((
+        fit.weights.into_raw_vec_and_offset().0,
+        Selected {
+            mult,
+            ridge,
+            dof: fit.dof,
+        },
+    ))
+}
+
+/// Mean distance from every centre to its `q` nearest other centres (q clamped to z − 1),
+/// rows of `centres` z × n.
+pub(crate) fn nearest_widths(centres: &[f64], n: usize, q: usize) -> Vec<f64> {
+    let z = centres.len() / n;
+    let q = q.min(z.saturating_sub(1)).max(1);
+    (0..z)
+        .into_par_iter()
+        .map(|j| {
+            let cj = &centres[j * n..(j + 1) * n];
+            let mut d: Vec<f64> = (0..z)
+                .filter(|&i| i != j)
+                .map(|i| {
+                    let ci = &centres[i * n..(i + 1) * n];
+                    ci.iter()
+                        .zip(cj)
+                        .map(|(a, b)| (a - b) * (a - b))
+                        .sum::<f64>()
+                        .sqrt()
+                })
+                .collect();
+            if d.is_empty() {
+                return 1.0;
+            }
+            let q = q.min(d.len());
+            d.select_nth_unstable_by(q - 1, |a, b| a.total_cmp(b));
+            let w = d[..q].iter().sum::<f64>() / q as f64;
+            if w > 0.0 { w } else { 1e-6 }
+        })
+        .collect()
+}

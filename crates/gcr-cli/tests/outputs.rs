@@ -5,6 +5,10 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+/// A cell budget whose solve takes long enough (over 0.1 s) to print the progress line: an
+/// error that comes with no progress line was found before the solve.
+const SOLVE_REPORTS: &str = "200";
+
 const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
 
 fn gcr(args: &[&str]) -> Output {
@@ -64,7 +68,7 @@ fn a_bad_probe_file_is_reported_before_the_solve_and_nothing_is_written() {
             "solve",
             "cornell-box",
             "--cells",
-            "20",
+            SOLVE_REPORTS,
             "--probes",
             &s(probes),
             "--probe-out",
@@ -88,7 +92,7 @@ fn a_missing_output_directory_is_reported_before_the_solve_and_nothing_is_writte
         "solve",
         "cornell-box",
         "--cells",
-        "20",
+        SOLVE_REPORTS,
         "--probes",
         "scenes/cornell-box.probes.txt",
         "--probe-out",
@@ -113,7 +117,7 @@ fn wrong_extensions_and_shared_targets_are_errors_before_the_solve() {
         ("--ply", d.join("out.txt"), ".ply"),
     ];
     for (flag, path, needle) in &cases {
-        let o = gcr(&["solve", "cornell-box", "--cells", "20", flag, &s(path)]);
+        let o = gcr(&["solve", "cornell-box", "--cells", SOLVE_REPORTS, flag, &s(path)]);
         assert_fails(&o, needle, true);
     }
     let same = s(&d.join("same.png"));
@@ -121,7 +125,7 @@ fn wrong_extensions_and_shared_targets_are_errors_before_the_solve() {
         "solve",
         "cornell-box",
         "--cells",
-        "20",
+        SOLVE_REPORTS,
         "--image",
         &same,
         "--metrics",

@@ -45,7 +45,10 @@ fn the_readmes_main_command_writes_a_lit_image_a_valid_mesh_and_metrics() {
     assert_eq!(metrics["bands"], 3);
     assert!(metrics["kernel_cells"].as_u64().unwrap() >= 10, "{metrics}");
     assert!(metrics["fem_steps"].as_u64().unwrap() >= 1, "{metrics}");
-    assert!(metrics["seconds"]["total"].as_f64().unwrap() > 0.0, "{metrics}");
+    assert!(
+        metrics["seconds"]["total"].as_f64().unwrap() > 0.0,
+        "{metrics}"
+    );
     assert!(!metrics["stopped_by"].as_str().unwrap().is_empty());
     let share = metrics["network_share"].as_f64().unwrap();
     assert!(share > 0.0 && share < 1.0, "indirect share {share}");
@@ -79,5 +82,11 @@ fn check_mesh(path: &Path, metrics: &serde_json::Value) {
     assert_eq!(indices.len(), 3 * triangles);
     assert!(indices.iter().all(|&i| (i as usize) < vertices));
     assert!(colours.iter().flatten().all(|c| c.is_finite() && *c >= 0.0));
-    assert!(colours.iter().filter(|c| c.iter().any(|&v| v > 0.05)).count() > vertices / 2);
+    assert!(
+        colours
+            .iter()
+            .filter(|c| c.iter().any(|&v| v > 0.05))
+            .count()
+            > vertices / 2
+    );
 }

@@ -31,7 +31,13 @@ impl ProgressLine {
         let _ = write!(
             err,
             "\r{:>8} kernel {:>5}/{} cells  shading {:>4}  samples {:>6}  FEM {:>3}  {:>6.1} s   ",
-            p.phase, p.kernel_cells, p.kernel_budget, p.shading_cells, p.samples, p.fem_steps, p.elapsed
+            p.phase,
+            p.kernel_cells,
+            p.kernel_budget,
+            p.shading_cells,
+            p.samples,
+            p.fem_steps,
+            p.elapsed
         );
         let _ = err.flush();
     }

@@ -16,7 +16,7 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
         seed: args.seed,
         ..baselines::Adaptive::default()
     };
-    check_target(&args.probe_out, "probe output", None)?;
+    check_target(&args.probe_out, "probe", None)?;
     let loaded = scene_sampler::load_or_builtin(&args.scene)
         .with_context(|| format!("loading scene `{}`", args.scene))?;
     for w in loaded.warnings() {

@@ -40,7 +40,7 @@ fn solve_and_write(
     started: Instant,
 ) -> Result<()> {
     let plan = OutputPlan::new(domain, args.outputs())
-        .with_context(|| format!("outputs for scene `{}`", args.scene))?;
+        .with_context(|| format!("checking the outputs for `{}`", args.scene))?;
     let mut progress = ProgressLine::new(args.quiet);
     let trained = gcr::solve::solve(domain, config, &mut |p| progress.update(p))?;
     progress.solved();

@@ -46,7 +46,10 @@ fn assert_fails(o: &Output, needle: &str, before_solve: bool) {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "succeeded: {err}");
     assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains(needle), "message {err:?} does not name {needle:?}");
+    assert!(
+        err.contains(needle),
+        "message {err:?} does not name {needle:?}"
+    );
     assert!(!err.contains("panicked"), "{err}");
     if before_solve {
         assert!(!err.contains("FEM"), "reported only after solving: {err}");
@@ -117,7 +120,14 @@ fn wrong_extensions_and_shared_targets_are_errors_before_the_solve() {
         ("--ply", d.join("out.txt"), ".ply"),
     ];
     for (flag, path, needle) in &cases {
-        let o = gcr(&["solve", "cornell-box", "--cells", SOLVE_REPORTS, flag, &s(path)]);
+        let o = gcr(&[
+            "solve",
+            "cornell-box",
+            "--cells",
+            SOLVE_REPORTS,
+            flag,
+            &s(path),
+        ]);
         assert_fails(&o, needle, true);
     }
     let same = s(&d.join("same.png"));

@@ -58,7 +58,7 @@ pub enum OutputError {
         dir: PathBuf,
     },
     /// A target whose directory does not accept new files.
-    #[error("{what} output `{}`: cannot create a file there: {source}", path.display())]
+    #[error("{what} output `{}`: cannot create a file there", path.display())]
     NotWritable {
         /// Which output.
         what: &'static str,
@@ -82,7 +82,7 @@ pub enum OutputError {
     Probes(#[from] scene_sampler::SceneError),
     /// Writing a target failed (before any target was changed; only a failed rename, after the
     /// writes all succeeded, can leave the targets renamed before it in place).
-    #[error("writing `{}`: {source}", path.display())]
+    #[error("writing `{}`", path.display())]
     Write {
         /// The target.
         path: PathBuf,

@@ -64,7 +64,9 @@ pub fn check_target(
         _ => {}
     }
     if let Some(ext) = extension {
-        let found = target.extension().map(|e| e.to_string_lossy().to_lowercase());
+        let found = target
+            .extension()
+            .map(|e| e.to_string_lossy().to_lowercase());
         if found.as_deref() != Some(ext) {
             return Err(OutputError::Extension {
                 what,
@@ -261,8 +263,11 @@ mod tests {
         assert!(ok.is_ok(), "{ok:?}");
         let e = check_target(&d.join("i.bmp"), "image", Some("png")).unwrap_err();
         assert!(e.to_string().contains(".png"), "{e}");
-        let e = check_target(&d.join("no/m.glb"), "mesh", Some("glb")).unwrap_err();
-        assert!(e.to_string().contains("no"), "{e}");
+        let e = check_target(&d.join("nodir/m.glb"), "mesh", Some("glb")).unwrap_err();
+        assert!(
+            matches!(&e, OutputError::MissingDirectory { dir, .. } if dir.ends_with("nodir")),
+            "{e}"
+        );
         let e = check_target(&d, "metrics", None).unwrap_err();
         assert!(e.to_string().contains("directory"), "{e}");
         assert!(check_target(Path::new("/dev/null"), "mesh", Some("glb")).is_ok());

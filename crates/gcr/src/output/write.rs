@@ -55,7 +55,7 @@ impl OutputPaths {
             (&self.kernel_image, "kernel image", Some("png")),
             (&self.mesh, "mesh", Some("glb")),
             (&self.ply, "PLY mesh", Some("ply")),
-            (&self.probe_out, "probe output", None),
+            (&self.probe_out, "probe", None),
             (&self.metrics, "metrics", None),
         ]
         .into_iter()

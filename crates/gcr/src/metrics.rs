@@ -1,4 +1,5 @@
-//! Metrics of one solve, written as JSON by `gcr solve --metrics`.
+//! Metrics of one solve, assembled by [`crate::output::write_outputs`] and written as JSON by
+//! `gcr solve --metrics`.
 
 use serde::Serialize;
 

@@ -2,8 +2,21 @@
 //! and a function over the kernel domain (s,t) ∈ [0,1]² as a grey image (figs. 4.1b, 4.6b: bright
 //! = small, dark = large, like the dissertation).
 
+use crate::config::SolveConfig;
+use crate::domain::Domain;
+use crate::gather::Emitters;
 use crate::output::tonemap::Exposure;
-use glam::DVec2;
+use crate::pipeline::{GatherError, radiosity_at_points};
+use crate::solve::Trained;
+use glam::{DVec2, DVec3};
+use scene_sampler::FlatlandScene;
+
+/// Side of the square [`scene_image`] in pixels.
+pub const SCENE_IMAGE_SIZE: u32 = 512;
+/// Side of each of the two square panels of [`light_flow_image`] in pixels.
+pub const LIGHT_FLOW_PANEL: u32 = 256;
+/// Pixels between the two panels of [`light_flow_image`].
+const LIGHT_FLOW_GAP: u32 = 8;
 
 /// A polyline piece with its radiosity, for [`draw_segments`].
 #[derive(Clone, Copy, Debug)]
@@ -91,6 +104,101 @@ pub fn kernel_image(size: u32, max: Option<f64>, f: impl Fn(f64, f64) -> f64 + S
         .iter()
         .map(|v| 255 - ((v / top).clamp(0.0, 1.0) * 255.0).round() as u8)
         .collect()
+}
+
+/// The Flatland scene drawn with its radiosity: every segment cut into 64 strokes, B gathered
+/// at their ends by the configured gather ([`radiosity_at_points`]), auto-exposed, drawn into a
+/// [`SCENE_IMAGE_SIZE`]² RGB image of the scene's view.
+pub fn scene_image(
+    domain: &Domain,
+    trained: &Trained,
+    emitters: &Emitters,
+    config: &SolveConfig,
+    flat: &FlatlandScene,
+) -> Result<image::RgbImage, GatherError> {
+    const PIECES: usize = 64;
+    let mut points = Vec::with_capacity(flat.segments.len() * (PIECES + 1));
+    for (si, s) in flat.segments.iter().enumerate() {
+        let n = DVec3::new(s.normal.x, s.normal.y, 0.0);
+        for j in 0..=PIECES {
+            let p = s.point(j as f64 / PIECES as f64);
+            points.push((DVec3::new(p.x, p.y, 0.0), n, si as u32));
+        }
+    }
+    let b = radiosity_at_points(domain, trained, emitters, config, &points)?;
+    let mut strokes = Vec::with_capacity(flat.segments.len() * PIECES);
+    for (si, s) in flat.segments.iter().enumerate() {
+        for j in 0..PIECES {
+            let at = si * (PIECES + 1) + j;
+            strokes.push(Stroke {
+                a: s.point(j as f64 / PIECES as f64),
+                b: s.point((j + 1) as f64 / PIECES as f64),
+                ba: b[at].radiosity,
+                bb: b[at + 1].radiosity,
+                normal: s.normal,
+            });
+        }
+    }
+    let exposure = Exposure::auto(strokes.iter().map(|s| s.ba));
+    let size = SCENE_IMAGE_SIZE;
+    let px = draw_segments(&strokes, flat.view.min, flat.view.max, size, 4.0, &exposure);
+    Ok(image::RgbImage::from_raw(size, size, px).expect("draw_segments fills size² RGB pixels"))
+}
+
+/// The light flow over (s, t) ∈ [0,1]² (fig. 4.1b): two [`LIGHT_FLOW_PANEL`]² panels, the sampled
+/// kernel K·s with GCR's own final strength s = E + B_refl on the left and the network's Ψ on the
+/// right, on one grey scale (white = 0, black = the 99th percentile of K·s; band 0), the training
+/// rays as red dots on the right. `None` for a 3-D domain (its kernel has four parameters).
+pub fn light_flow_image(domain: &Domain, trained: &Trained) -> Option<image::RgbImage> {
+    use rayon::prelude::*;
+    let Domain::Flat(sampler) = domain else {
+        return None;
+    };
+    let n = LIGHT_FLOW_PANEL as usize;
+    let pairs: Vec<(f64, f64)> = (0..n * n)
+        .into_par_iter()
+        .map(|i| {
+            let s = (i % n) as f64 / n as f64 + 0.5 / n as f64;
+            let t = 1.0 - ((i / n) as f64 + 0.5) / n as f64;
+            let ray = domain.ray(&[s, t]);
+            let strength = ray.emission_x[0] + trained.reflected_kernel(ray.x, ray.nx)[0];
+            (
+                ray.kernel[0] * strength,
+                trained.kernel.evaluate(ray.x, ray.nx, ray.y, ray.ny)[0],
+            )
+        })
+        .collect();
+    let mut sorted: Vec<f64> = pairs
+        .iter()
+        .map(|p| p.0)
+        .filter(|v| v.is_finite())
+        .collect();
+    sorted.sort_by(f64::total_cmp);
+    let top = sorted
+        .get(sorted.len() * 99 / 100)
+        .copied()
+        .filter(|v| *v > 0.0)
+        .unwrap_or(1.0);
+    let grey = |v: f64| 255 - ((v / top).clamp(0.0, 1.0) * 255.0).round() as u8;
+    let (w, gap) = (2 * n + LIGHT_FLOW_GAP as usize, LIGHT_FLOW_GAP as usize);
+    let mut img = image::RgbImage::from_pixel(w as u32, n as u32, image::Rgb([255, 255, 255]));
+    for (i, (exact, psi)) in pairs.iter().enumerate() {
+        let (x, y) = ((i % n) as u32, (i / n) as u32);
+        img.put_pixel(x, y, image::Rgb([grey(*exact); 3]));
+        img.put_pixel((n + gap) as u32 + x, y, image::Rgb([grey(*psi); 3]));
+    }
+    for smp in &trained.samples {
+        let s = sampler
+            .sampler
+            .inverse(smp.ray.face_x, smp.ray.x.truncate());
+        let t = sampler
+            .sampler
+            .inverse(smp.ray.face_y, smp.ray.y.truncate());
+        let x = (n + gap) as f64 + (s * n as f64).min(n as f64 - 1.0);
+        let y = ((1.0 - t) * n as f64).min(n as f64 - 1.0);
+        img.put_pixel(x as u32, y as u32, image::Rgb([220, 30, 30]));
+    }
+    Some(img)
 }
 
 #[cfg(test)]

@@ -1,7 +1,98 @@
-//! Writers for a solved scene: PNG image, binary glTF, PLY, and the tone mapping they share.
+//! Writers for a solved scene: PNG image, binary glTF, PLY, and the tone mapping they share;
+//! [`write`] is the output stage of a solve (all files at once, checked before the solve).
+
+use std::path::PathBuf;
 
 pub mod flatland;
 pub mod glb;
 pub mod ply;
 pub mod raster;
+pub mod staged;
 pub mod tonemap;
+pub mod write;
+
+pub use write::{OutputPaths, OutputPlan, write_outputs};
+
+/// Why outputs cannot be written (checked before the solve by [`OutputPlan::new`], or met
+/// while writing by [`write_outputs`]).
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// A mesh or PLY output for a Flatland scene.
+    #[error("a mesh or PLY output needs a 3-D scene; this is a Flatland scene")]
+    MeshNeeds3d,
+    /// A kernel image for a 3-D scene.
+    #[error(
+        "a kernel image needs a Flatland scene (the 3-D kernel has four parameters); this is a \
+         3-D scene"
+    )]
+    KernelImageNeedsFlatland,
+    /// Probes without a probe output, or the other way round.
+    #[error("probes and a probe output go together: give both or neither")]
+    ProbesWithoutOutput,
+    /// A target that is a directory or has no file name.
+    #[error("{what} output `{}`: not a file name (is it a directory?)", path.display())]
+    NotAFile {
+        /// Which output.
+        what: &'static str,
+        /// The target.
+        path: PathBuf,
+    },
+    /// A target with the wrong extension (the format follows the option, not the name).
+    #[error("{what} output `{}`: expected a .{expected} file", path.display())]
+    Extension {
+        /// Which output.
+        what: &'static str,
+        /// The target.
+        path: PathBuf,
+        /// The extension the format needs.
+        expected: &'static str,
+    },
+    /// A target whose directory does not exist.
+    #[error("{what} output `{}`: directory `{}` does not exist", path.display(), dir.display())]
+    MissingDirectory {
+        /// Which output.
+        what: &'static str,
+        /// The target.
+        path: PathBuf,
+        /// Its directory.
+        dir: PathBuf,
+    },
+    /// A target whose directory does not accept new files.
+    #[error("{what} output `{}`: cannot create a file there", path.display())]
+    NotWritable {
+        /// Which output.
+        what: &'static str,
+        /// The target.
+        path: PathBuf,
+        /// The error creating a test file beside it.
+        source: std::io::Error,
+    },
+    /// Two outputs with one target.
+    #[error("the {first} and {second} outputs both go to `{}`", path.display())]
+    SameTarget {
+        /// The first output.
+        first: &'static str,
+        /// The second output.
+        second: &'static str,
+        /// Their target.
+        path: PathBuf,
+    },
+    /// The probe file cannot be read or parsed, or a probe is off the scene's surfaces.
+    #[error(transparent)]
+    Probes(#[from] scene_sampler::SceneError),
+    /// Writing a target failed (before any target was changed; only a failed rename, after the
+    /// writes all succeeded, can leave the targets renamed before it in place).
+    #[error("writing `{}`", path.display())]
+    Write {
+        /// The target.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The metrics could not be serialized.
+    #[error("serializing the metrics: {0}")]
+    Metrics(serde_json::Error),
+    /// The radiosity could not be gathered from the solution.
+    #[error(transparent)]
+    Gather(#[from] crate::pipeline::GatherError),
+}

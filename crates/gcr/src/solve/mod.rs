@@ -86,7 +86,8 @@ pub struct Trained {
     pub fem: FemSolution,
     /// The samples at the end.
     pub samples: Vec<Sample>,
-    /// Metrics so far (the caller adds gather and output).
+    /// Metrics of the solve (`gcr::output::write_outputs` completes them with the gather and
+    /// output phases).
     pub metrics: Metrics,
 }
 

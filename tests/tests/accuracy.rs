@@ -8,10 +8,7 @@ use scene_sampler::{KernelSampler, Scene, SceneBvh, SurfacePoint};
 
 fn scene(name: &str) -> (Scene, Vec<SurfacePoint>) {
     let scene = scene_sampler::builtin(name).unwrap().into_3d().unwrap();
-    let path = format!(
-        "{}/../../scenes/{name}.probes.txt",
-        env!("CARGO_MANIFEST_DIR")
-    );
+    let path = gcr_tests::workspace_path(&format!("scenes/{name}.probes.txt"));
     let probes = scene_sampler::read_probes(path).unwrap();
     let points = scene.snap_probes(&probes, name).unwrap();
     (scene, points)

@@ -1,0 +1,171 @@
+//! The command line (clap derive): `gcr scenes`, `gcr solve`, `gcr reference`.
+
+use clap::{Args, Parser, Subcommand};
+use gcr::output::OutputPaths;
+use gcr::{GatherMode, GatherSamples, NetworkTarget, OutputFit, SolveConfig, SurfaceClusters};
+use std::path::PathBuf;
+
+/// `gcr`'s arguments.
+#[derive(Parser)]
+#[command(
+    name = "gcr",
+    version,
+    about = "Growing Cells Radiosity: radiosity on evolving networks (Bohn 2000)"
+)]
+pub struct Cli {
+    /// The subcommand.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Subcommand)]
+pub enum Command {
+    /// List the built-in scenes.
+    Scenes,
+    /// Solve a scene (a file: .obj, .gltf, .glb, Flatland .json; or a built-in name).
+    Solve(SolveArgs),
+    /// The pointwise path-traced reference (`baselines`) at probe points: B per probe with its
+    /// standard error on stderr.
+    Reference(ReferenceArgs),
+}
+
+/// `gcr solve`.
+#[derive(Args)]
+pub struct SolveArgs {
+    /// Scene file or built-in name.
+    pub scene: String,
+    /// Kernel network cell budget ("links").
+    #[arg(long, default_value_t = SolveConfig::default().kernel_cells)]
+    pub cells: usize,
+    /// Shading network cell budget.
+    #[arg(long)]
+    pub shading_cells: Option<usize>,
+    /// Training time budget in seconds.
+    #[arg(long)]
+    pub time_budget: Option<f64>,
+    /// Seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output gather: base, kernel or rays.
+    #[arg(long, default_value = "rays")]
+    pub gather: GatherMode,
+    /// Kernel output layer: `projection` (Galerkin projection of K·s on shot rays) or
+    /// `delta-rule` (the dissertation's eq. 2.8).
+    #[arg(long, default_value = "projection")]
+    pub output_fit: OutputFit,
+    /// What the kernel network learns (with the projection it only places the cells):
+    /// `clamped-kernel` (K·s with G's 1/r² clamped at 5 % of the scene's diagonal),
+    /// `kernel-value` (the dissertation's K·s, which crowds cells into the edges where K is
+    /// singular) or `sample-weight` (each shot ray's importance weight ρ·s/p_x).
+    #[arg(long, default_value = "clamped-kernel")]
+    pub network_target: NetworkTarget,
+    /// Ray gather: shadow rays and cosine rays per point (each). More rays lower the gather's
+    /// own noise (two-blockers, 200 points: 6.2 % at 64, 4.4 % at 256, 3.9 % at 4096) at a
+    /// proportional cost.
+    #[arg(long, default_value_t = GatherSamples::default().direct)]
+    pub gather_rays: usize,
+    /// Train the shading network and build its base even when the gather does not read it
+    /// (by default they are skipped: same result, less time).
+    #[arg(long)]
+    pub keep_base: bool,
+    /// Facing masks on the projected kernel's Gaussians: each lives only on surfaces facing
+    /// like the samples it was fitted to, so light does not blur across edges (sharper kernel
+    /// gather on cluttered scenes, mass lost along edges of smooth fields).
+    #[arg(long)]
+    pub kernel_facing: bool,
+    /// Surfaces with at least this many elements get a cluster tree for the FEM integrals
+    /// (nodes stand in for their elements where a Gaussian cannot resolve them).
+    #[arg(long, default_value_t = SurfaceClusters::default().min_elements)]
+    pub cluster_min_elements: usize,
+    /// Cluster criterion θ: a node replaces its elements when a·R² ≤ θ (0: exact).
+    #[arg(long, default_value_t = SurfaceClusters::default().theta)]
+    pub cluster_theta: f64,
+    /// PNG image from the scene's camera (.png).
+    #[arg(long)]
+    pub image: Option<PathBuf>,
+    /// Flatland only: PNG of the light flow over the kernel domain (s of the sender to the
+    /// right, t of the receiver upwards; fig. 4.1b): the sampled K·s on the left, the kernel
+    /// network's Ψ on the right, dark = large; the training rays marked red on the right.
+    #[arg(long)]
+    pub kernel_image: Option<PathBuf>,
+    /// Binary glTF mesh with vertex colours (.glb).
+    #[arg(long)]
+    pub mesh: Option<PathBuf>,
+    /// PLY mesh with radiosity per vertex (.ply).
+    #[arg(long)]
+    pub ply: Option<PathBuf>,
+    /// Probe points (`x y z nx ny nz` per line; Flatland `x y nx ny`).
+    #[arg(long, requires = "probe_out")]
+    pub probes: Option<PathBuf>,
+    /// Where to write radiosity at the probes (`r g b` per line).
+    #[arg(long, requires = "probes")]
+    pub probe_out: Option<PathBuf>,
+    /// JSON metrics.
+    #[arg(long)]
+    pub metrics: Option<PathBuf>,
+    /// No progress output.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+impl SolveArgs {
+    /// The solver settings (not yet validated: `SolveConfig::validate`).
+    pub fn config(&self) -> SolveConfig {
+        SolveConfig {
+            kernel_cells: self.cells,
+            shading_cells: self.shading_cells.unwrap_or((self.cells / 2).max(3)),
+            time_budget: self.time_budget,
+            seed: self.seed,
+            gather: self.gather,
+            output_fit: self.output_fit,
+            network_target: self.network_target,
+            gather_samples: GatherSamples {
+                direct: self.gather_rays,
+                indirect: self.gather_rays,
+            },
+            skip_unused_base: !self.keep_base,
+            kernel_facing: self.kernel_facing,
+            surface_clusters: SurfaceClusters {
+                min_elements: self.cluster_min_elements,
+                theta: self.cluster_theta,
+            },
+            ..SolveConfig::default()
+        }
+    }
+
+    /// The output files.
+    pub fn outputs(&self) -> OutputPaths {
+        OutputPaths {
+            image: self.image.clone(),
+            kernel_image: self.kernel_image.clone(),
+            mesh: self.mesh.clone(),
+            ply: self.ply.clone(),
+            probes_in: self.probes.clone(),
+            probe_out: self.probe_out.clone(),
+            metrics: self.metrics.clone(),
+        }
+    }
+}
+
+/// `gcr reference`.
+#[derive(Args)]
+pub struct ReferenceArgs {
+    /// Scene file or built-in name.
+    pub scene: String,
+    /// Probe points (`x y z nx ny nz` per line; Flatland `x y nx ny`).
+    #[arg(long)]
+    pub probes: PathBuf,
+    /// Where to write B at the probes (`r g b` per line; Flatland grey: `b`).
+    #[arg(long)]
+    pub probe_out: PathBuf,
+    /// Target relative standard error per probe and band.
+    #[arg(long, default_value_t = 0.01)]
+    pub rel_error: f64,
+    /// Path cap per probe.
+    #[arg(long, default_value_t = 1_000_000)]
+    pub max_paths: usize,
+    /// Seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}

@@ -1,0 +1,232 @@
+//! Output files of `gcr solve` (issue 17): every input and output path is checked before the
+//! solve, outputs are all-or-nothing (temporary files beside the targets, renamed at the end), and
+//! every write error — the last buffered chunk's included — is reported, naming the file.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A cell budget whose solve takes long enough (over 0.1 s) to print the progress line: an
+/// error that comes with no progress line was found before the solve.
+const SOLVE_REPORTS: &str = "200";
+
+const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+
+fn gcr(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_gcr"))
+        .args(args)
+        .current_dir(ROOT)
+        .output()
+        .expect("gcr runs")
+}
+
+/// A fresh, empty directory for one test.
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("gcr-cli-out-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn entries(d: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+/// Fails with a clear message naming `needle`, without a panic, and (`before_solve`) without
+/// having started the solve: the progress line (which names the FEM steps) never appeared.
+fn assert_fails(o: &Output, needle: &str, before_solve: bool) {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "succeeded: {err}");
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(needle),
+        "message {err:?} does not name {needle:?}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    if before_solve {
+        assert!(!err.contains("FEM"), "reported only after solving: {err}");
+    }
+}
+
+/// Issue 17 item 8: a bad probe line (or a probe off the scene) is reported before the solve,
+/// and nothing is written.
+#[test]
+fn a_bad_probe_file_is_reported_before_the_solve_and_nothing_is_written() {
+    let d = dir("probes");
+    let inputs = dir("probes-in");
+    let bad_line = inputs.join("bad.txt");
+    std::fs::write(&bad_line, "0.5 0 0.5 0 1 0\n0.5 0 x 0 1 0\n").unwrap();
+    let off_surface = inputs.join("off.txt");
+    std::fs::write(&off_surface, "0.5 0.3 0.5 0 1 0\n").unwrap();
+    for (probes, needle) in [(&bad_line, "bad.txt:2"), (&off_surface, "off.txt")] {
+        let o = gcr(&[
+            "solve",
+            "cornell-box",
+            "--cells",
+            SOLVE_REPORTS,
+            "--probes",
+            &s(probes),
+            "--probe-out",
+            &s(&d.join("b.txt")),
+            "--image",
+            &s(&d.join("i.png")),
+            "--metrics",
+            &s(&d.join("m.json")),
+        ]);
+        assert_fails(&o, needle, true);
+        assert!(entries(&d).is_empty(), "{:?}", entries(&d));
+    }
+}
+
+/// Issue 17 items 8 and 9: `--probe-out b.txt --image i.png --mesh nodir/m.glb` fails before the
+/// solve and leaves neither b.txt nor i.png.
+#[test]
+fn a_missing_output_directory_is_reported_before_the_solve_and_nothing_is_written() {
+    let d = dir("nodir");
+    let o = gcr(&[
+        "solve",
+        "cornell-box",
+        "--cells",
+        SOLVE_REPORTS,
+        "--probes",
+        "scenes/cornell-box.probes.txt",
+        "--probe-out",
+        &s(&d.join("b.txt")),
+        "--image",
+        &s(&d.join("i.png")),
+        "--mesh",
+        &s(&d.join("nodir/m.glb")),
+    ]);
+    assert_fails(&o, "nodir", true);
+    assert!(entries(&d).is_empty(), "{:?}", entries(&d));
+}
+
+/// Issue 17 item 9: `--image out.bmp` (unsupported) is an error before the solve, not a 0-byte
+/// file; so are the other formats' wrong extensions and two outputs on one file.
+#[test]
+fn wrong_extensions_and_shared_targets_are_errors_before_the_solve() {
+    let d = dir("ext");
+    let cases: [(&str, PathBuf, &str); 3] = [
+        ("--image", d.join("out.bmp"), ".png"),
+        ("--mesh", d.join("out.gltf"), ".glb"),
+        ("--ply", d.join("out.txt"), ".ply"),
+    ];
+    for (flag, path, needle) in &cases {
+        let o = gcr(&[
+            "solve",
+            "cornell-box",
+            "--cells",
+            SOLVE_REPORTS,
+            flag,
+            &s(path),
+        ]);
+        assert_fails(&o, needle, true);
+    }
+    let same = s(&d.join("same.png"));
+    let o = gcr(&[
+        "solve",
+        "cornell-box",
+        "--cells",
+        SOLVE_REPORTS,
+        "--image",
+        &same,
+        "--metrics",
+        &same,
+    ]);
+    assert_fails(&o, "same.png", true);
+    assert!(entries(&d).is_empty(), "{:?}", entries(&d));
+}
+
+/// Issue 17 item 9 and the .glb message: a write that fails after other outputs were produced
+/// (the mesh to a full device) names the file and leaves none of the others.
+#[test]
+fn a_failed_write_names_the_file_and_leaves_no_other_output() {
+    let d = dir("full");
+    let o = gcr(&[
+        "solve",
+        "cornell-box",
+        "--cells",
+        "20",
+        "--quiet",
+        "--probes",
+        "scenes/cornell-box.probes.txt",
+        "--probe-out",
+        &s(&d.join("b.txt")),
+        "--image",
+        &s(&d.join("i.png")),
+        "--metrics",
+        &s(&d.join("m.json")),
+        "--mesh",
+        "/dev/full",
+    ]);
+    assert_fails(&o, "/dev/full", false);
+    assert!(entries(&d).is_empty(), "{:?}", entries(&d));
+}
+
+/// Issue 17 item 5: a `.ply` whose last buffered chunk cannot be written (here: the file size
+/// limit falls inside it) is an error, not exit 0 with a truncated file.
+#[test]
+fn a_ply_write_error_in_the_last_buffered_chunk_is_reported() {
+    let d = dir("ply");
+    let args = ["solve", "cornell-box", "--cells", "20", "--quiet", "--ply"];
+    let full = d.join("full.ply");
+    let o = gcr(&[&args[..], &[&s(&full)]].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let size = std::fs::metadata(&full).unwrap().len();
+    std::fs::remove_file(&full).unwrap();
+    // Ignore SIGXFSZ so that writing past the limit is an EFBIG error instead of a kill.
+    let cut = d.join("cut.ply");
+    let o = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "trap '' XFSZ; exec prlimit --fsize={} \"$0\" \"$@\"",
+            size - 1
+        ))
+        .arg(env!("CARGO_BIN_EXE_gcr"))
+        .args(args)
+        .arg(&cut)
+        .current_dir(ROOT)
+        .output()
+        .expect("sh and prlimit run");
+    assert_fails(&o, "cut.ply", false);
+    assert!(entries(&d).is_empty(), "{:?}", entries(&d));
+}
+
+/// A successful solve writes exactly the asked-for files (no temporary file left beside them),
+/// and replaces an existing target.
+#[test]
+fn a_successful_solve_writes_exactly_its_outputs() {
+    let d = dir("ok");
+    std::fs::write(d.join("m.json"), "old").unwrap();
+    let o = gcr(&[
+        "solve",
+        "cornell-box",
+        "--cells",
+        "20",
+        "--quiet",
+        "--probes",
+        "scenes/cornell-box.probes.txt",
+        "--probe-out",
+        &s(&d.join("b.txt")),
+        "--image",
+        &s(&d.join("i.png")),
+        "--mesh",
+        &s(&d.join("m.glb")),
+        "--ply",
+        &s(&d.join("m.ply")),
+        "--metrics",
+        &s(&d.join("m.json")),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(entries(&d), ["b.txt", "i.png", "m.glb", "m.json", "m.ply"]);
+    let json = std::fs::read_to_string(d.join("m.json")).unwrap();
+    assert!(json.contains("\"kernel_cells\": 20"), "{json}");
+}

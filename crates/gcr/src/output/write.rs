@@ -1,0 +1,295 @@
+//! The output stage of a solve: every file `gcr solve` writes, and the metrics of the run.
+//!
+//! [`OutputPlan::new`] checks every path and reads the probes *before* the solve (a bad probe
+//! line or an unwritable path is reported in milliseconds, not after the solve);
+//! [`write_outputs`] gathers, renders and writes all files at once through [`StagedFiles`]:
+//! either every output reaches its target, or none does.
+
+use super::OutputError;
+use super::flatland::{light_flow_image, scene_image};
+use super::raster::{PinholeCamera, render};
+use super::staged::{StagedFiles, check_target};
+use super::tonemap::Exposure;
+use crate::config::SolveConfig;
+use crate::domain::Domain;
+use crate::gather::Emitters;
+use crate::metrics::{Metrics, peak_memory_bytes};
+use crate::pipeline::{output_mesh, radiosity_at_points};
+use crate::retriangulate::RetriangulateLimits;
+use crate::solve::Trained;
+use glam::DVec3;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Side of the 3-D camera image in pixels (square).
+pub const IMAGE_SIZE: u32 = 512;
+/// Anti-aliasing of the 3-D camera image: sub-samples per pixel side.
+const IMAGE_SUPERSAMPLING: u32 = 2;
+
+/// Where the outputs of a solve go; `None` skips an output.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct OutputPaths {
+    /// PNG image: from the scene's camera (3-D) or of the whole scene (Flatland).
+    pub image: Option<PathBuf>,
+    /// Flatland only: PNG of the light flow over the kernel domain
+    /// ([`super::flatland::light_flow_image`]).
+    pub kernel_image: Option<PathBuf>,
+    /// 3-D only: binary glTF (.glb) of the output mesh with vertex colours.
+    pub mesh: Option<PathBuf>,
+    /// 3-D only: PLY of the output mesh with radiosity per vertex.
+    pub ply: Option<PathBuf>,
+    /// Probe points to read (`x y z nx ny nz` per line; Flatland `x y nx ny`).
+    pub probes_in: Option<PathBuf>,
+    /// Where to write radiosity at the probes (`r g b` per line; grey Flatland `b`).
+    pub probe_out: Option<PathBuf>,
+    /// JSON metrics of the run.
+    pub metrics: Option<PathBuf>,
+}
+
+impl OutputPaths {
+    /// Every output target with its name (for messages) and required extension.
+    fn targets(&self) -> Vec<(&Path, &'static str, Option<&'static str>)> {
+        [
+            (&self.image, "image", Some("png")),
+            (&self.kernel_image, "kernel image", Some("png")),
+            (&self.mesh, "mesh", Some("glb")),
+            (&self.ply, "PLY mesh", Some("ply")),
+            (&self.probe_out, "probe", None),
+            (&self.metrics, "metrics", None),
+        ]
+        .into_iter()
+        .filter_map(|(p, what, ext)| p.as_deref().map(|p| (p, what, ext)))
+        .collect()
+    }
+}
+
+/// Outputs checked against a domain, with the probes read and snapped onto its surfaces: what
+/// [`write_outputs`] needs, built before the solve.
+#[derive(Clone, Debug)]
+pub struct OutputPlan {
+    paths: OutputPaths,
+    probes: Vec<(DVec3, DVec3, u32)>,
+}
+
+impl OutputPlan {
+    /// Checks every output of `paths` for `domain` before anything is solved: the outputs fit
+    /// the domain (mesh and PLY need 3-D, the kernel image Flatland), probes come with a probe
+    /// output, each target has its extension (.png, .glb, .ply) and an existing, writable
+    /// directory, no two outputs share a target, and the probe file parses and every probe
+    /// snaps onto the scene.
+    pub fn new(domain: &Domain, paths: OutputPaths) -> Result<Self, OutputError> {
+        if domain.scene_3d().is_none() && (paths.mesh.is_some() || paths.ply.is_some()) {
+            return Err(OutputError::MeshNeeds3d);
+        }
+        if domain.scene_flat().is_none() && paths.kernel_image.is_some() {
+            return Err(OutputError::KernelImageNeedsFlatland);
+        }
+        if paths.probes_in.is_some() != paths.probe_out.is_some() {
+            return Err(OutputError::ProbesWithoutOutput);
+        }
+        let targets = paths.targets();
+        for (i, (path, what, ext)) in targets.iter().enumerate() {
+            check_target(path, what, *ext)?;
+            if let Some((_, first, _)) = targets[..i].iter().find(|t| same_file(t.0, path)) {
+                return Err(OutputError::SameTarget {
+                    first,
+                    second: what,
+                    path: path.to_path_buf(),
+                });
+            }
+        }
+        let probes = match &paths.probes_in {
+            Some(path) => read_probes(domain, path)?,
+            None => Vec::new(),
+        };
+        Ok(Self { paths, probes })
+    }
+
+    /// The checked paths.
+    pub fn paths(&self) -> &OutputPaths {
+        &self.paths
+    }
+
+    /// The probes snapped onto the scene: `(point, normal, face)`, Flatland with z = 0.
+    pub fn probes(&self) -> &[(DVec3, DVec3, u32)] {
+        &self.probes
+    }
+}
+
+/// Whether two targets name the same file (same directory after resolving links, same name).
+fn same_file(a: &Path, b: &Path) -> bool {
+    let key = |p: &Path| {
+        let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
+        let dir = std::fs::canonicalize(dir.unwrap_or(Path::new("."))).ok();
+        (dir, p.file_name().map(|n| n.to_owned()))
+    };
+    a == b || key(a) == key(b)
+}
+
+/// Reads the probe file and snaps every probe onto the domain's surfaces.
+fn read_probes(domain: &Domain, path: &Path) -> Result<Vec<(DVec3, DVec3, u32)>, OutputError> {
+    let source = path.display().to_string();
+    Ok(match domain {
+        Domain::ThreeD(k) => {
+            let probes = scene_sampler::read_probes(path)?;
+            k.scene
+                .snap_probes(&probes, &source)?
+                .iter()
+                .map(|p| (p.point, p.normal, p.face))
+                .collect()
+        }
+        Domain::Flat(k) => {
+            let probes = scene_sampler::read_flat_probes(path)?;
+            k.scene
+                .snap_probes(&probes, &source)?
+                .iter()
+                .map(|p| (p.point.extend(0.0), p.normal.extend(0.0), p.segment))
+                .collect()
+        }
+    })
+}
+
+/// Gathers, renders and writes every output of `plan` for a solution, and returns the run's
+/// metrics: `trained.metrics` completed with the scene name, the gather, the output mesh, the
+/// gather and output times, the total time since `started` and the peak memory (these are what
+/// the metrics file holds). All files are written through [`StagedFiles`]: on an error no target
+/// is created or changed.
+pub fn write_outputs(
+    domain: &Domain,
+    trained: &Trained,
+    config: &SolveConfig,
+    plan: &OutputPlan,
+    scene_name: &str,
+    started: Instant,
+) -> Result<Metrics, OutputError> {
+    let paths = plan.paths();
+    let mut metrics = trained.metrics.clone();
+    metrics.scene = scene_name.to_string();
+    metrics.gather = config.gather.name().to_string();
+    metrics.scene_elements = domain.elements().len();
+    let mut staged = StagedFiles::new();
+    let emitters = Emitters::new(domain);
+    if let Some(path) = &paths.probe_out {
+        let tg = Instant::now();
+        let text = probe_values(domain, trained, &emitters, config, plan.probes())?;
+        metrics.seconds.gather += tg.elapsed().as_secs_f64();
+        staged.write_bytes(path, text.as_bytes())?;
+    }
+    if domain.scene_3d().is_some() {
+        write_3d(domain, trained, config, paths, &mut metrics, &mut staged)?;
+    } else if let Some(flat) = domain.scene_flat() {
+        let to = Instant::now();
+        if let Some(path) = &paths.image {
+            let img = scene_image(domain, trained, &emitters, config, flat)?;
+            staged.write(path, |w| write_png(&img, w))?;
+        }
+        if let Some(path) = &paths.kernel_image {
+            if let Some(img) = light_flow_image(domain, trained) {
+                staged.write(path, |w| write_png(&img, w))?;
+            }
+        }
+        metrics.seconds.output += to.elapsed().as_secs_f64();
+    }
+    metrics.seconds.total = started.elapsed().as_secs_f64();
+    metrics.peak_memory_bytes = peak_memory_bytes();
+    if let Some(path) = &paths.metrics {
+        let json = serde_json::to_string_pretty(&metrics).map_err(OutputError::Metrics)?;
+        staged.write_bytes(path, json.as_bytes())?;
+    }
+    staged.commit()?;
+    Ok(metrics)
+}
+
+/// Radiosity at the probes ([`radiosity_at_points`]), one line each: `r g b`, or `b` for a grey
+/// Flatland scene.
+pub fn probe_values(
+    domain: &Domain,
+    trained: &Trained,
+    emitters: &Emitters,
+    config: &SolveConfig,
+    probes: &[(DVec3, DVec3, u32)],
+) -> Result<String, OutputError> {
+    let grey = domain.bands() == 1 && domain.dim() == 2;
+    Ok(
+        radiosity_at_points(domain, trained, emitters, config, probes)?
+            .iter()
+            .map(|g| {
+                let b = g.radiosity;
+                if grey {
+                    format!("{}\n", b[0])
+                } else {
+                    format!("{} {} {}\n", b[0], b[1], b[2])
+                }
+            })
+            .collect(),
+    )
+}
+
+/// The 3-D outputs: the re-triangulated output mesh (when any of image, mesh, PLY is asked for),
+/// one exposure for all of them (from the non-emitting triangles), and the files.
+fn write_3d(
+    domain: &Domain,
+    trained: &Trained,
+    config: &SolveConfig,
+    paths: &OutputPaths,
+    metrics: &mut Metrics,
+    staged: &mut StagedFiles,
+) -> Result<(), OutputError> {
+    let Some(scene) = domain.scene_3d() else {
+        return Ok(());
+    };
+    if paths.image.is_none() && paths.mesh.is_none() && paths.ply.is_none() {
+        return Ok(());
+    }
+    let tg = Instant::now();
+    let (mesh, share) = output_mesh(domain, trained, config, RetriangulateLimits::default())?;
+    metrics.network_share = share;
+    metrics.output_vertices = mesh.vertex_count();
+    metrics.output_triangles = mesh.triangle_count();
+    metrics.seconds.gather += tg.elapsed().as_secs_f64();
+    let to = Instant::now();
+    let lit = mesh
+        .triangles
+        .iter()
+        .zip(&mesh.face_of_triangle)
+        .filter(|(_, f)| scene.faces[**f as usize].emission.is_zero())
+        .map(|(t, _)| mesh.radiosity[t[0] as usize]);
+    let exposure = Exposure::auto(lit);
+    if let Some(path) = &paths.image {
+        let cam = PinholeCamera {
+            eye: scene.camera.eye,
+            target: scene.camera.target,
+            up: scene.camera.up,
+            fov_y_degrees: scene.camera.fov_y_deg,
+        };
+        let (w, h) = (IMAGE_SIZE, IMAGE_SIZE);
+        let px = render(&mesh, &cam, &exposure, w, h, IMAGE_SUPERSAMPLING);
+        let img = image::RgbImage::from_raw(w, h, px).expect("render fills w·h RGB pixels");
+        staged.write(path, |w| write_png(&img, w))?;
+    }
+    if let Some(path) = &paths.mesh {
+        staged.write(path, |w| super::glb::write_glb(&mesh, &exposure, w))?;
+    }
+    if let Some(path) = &paths.ply {
+        staged.write(path, |w| super::ply::write_ply(&mesh, &exposure, w))?;
+    }
+    metrics.seconds.output += to.elapsed().as_secs_f64();
+    Ok(())
+}
+
+/// Encodes `img` as PNG into `w` (the encoder `image::save` uses for .png, same bytes).
+pub fn write_png(img: &image::RgbImage, w: &mut dyn Write) -> std::io::Result<()> {
+    use image::ImageEncoder;
+    image::codecs::png::PngEncoder::new(w)
+        .write_image(
+            img.as_raw(),
+            img.width(),
+            img.height(),
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| match e {
+            image::ImageError::IoError(e) => e,
+            other => std::io::Error::other(other),
+        })
+}

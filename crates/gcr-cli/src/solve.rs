@@ -43,6 +43,9 @@ fn solve_and_write(
     let mut progress = ProgressLine::new(args.quiet);
     let trained = gcr::solve(domain, config, &mut |p| progress.update(p))?;
     progress.solved();
+    for w in &trained.metrics.warnings {
+        eprintln!("warning: {w}");
+    }
     let metrics = write_outputs(domain, &trained, config, &plan, &args.scene, started)?;
     progress.done(&metrics);
     Ok(())

@@ -89,6 +89,8 @@ pub struct Metrics {
     pub peak_memory_bytes: Option<u64>,
     /// The reason the training stopped (`cells`, `time`, `error`, `steps`).
     pub stopped_by: String,
+    /// What the solve noticed and the user should know (the result is still what was asked).
+    pub warnings: Vec<String>,
 }
 
 /// Peak resident set size of this process (`VmHWM` from `/proc/self/status`), when available.

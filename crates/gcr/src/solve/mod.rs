@@ -55,6 +55,15 @@ pub enum SolveError {
     /// The kernel projection kept breaking the maximum-principle bound on B.
     #[error("numerically unstable solve: {0}")]
     Unstable(String),
+    /// No ray of the scene connects two surfaces: there is nothing to carry light.
+    #[error(
+        "no ray of the scene connects two surfaces ({shots} shot, all left the scene or hit \
+         nothing): nothing to solve (is the scene a single surface, or open everywhere?)"
+    )]
+    NoRays {
+        /// Rays shot.
+        shots: u64,
+    },
 }
 
 /// What the observer sees during a solve.
@@ -122,8 +131,9 @@ pub fn train(
     let mut schedule = Schedule::new(config);
     let base_used = config.needs_base();
 
-    // ⟨Shoot the initial sample set, s = E (fig. 3.1)⟩
+    // ⟨Shoot the initial sample set, s = E (fig. 3.1); check that light can flow⟩
     run.add_samples(run.initial_sample_count());
+    run.check_flow()?;
 
     loop {
         // ⟨Stop at the cell or time budget⟩

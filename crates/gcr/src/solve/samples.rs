@@ -86,6 +86,25 @@ impl Run<'_> {
         self.metrics.seconds.sampling += t0.elapsed().as_secs_f64();
     }
 
+    /// Errs when no sample connects two surfaces; warns (in the metrics) when no emitter's light
+    /// reaches a surface (every B would be E): a scene lit by lights facing away from it.
+    pub(super) fn check_flow(&mut self) -> Result<(), super::SolveError> {
+        if self.samples.is_empty() {
+            return Err(super::SolveError::NoRays { shots: self.shots });
+        }
+        let lit = self.samples.iter().any(|smp| {
+            (0..MAX_BANDS).any(|k| smp.ray.emission_x[k] > 0.0 && smp.ray.kernel[k] > 0.0)
+        });
+        if !lit {
+            self.metrics.warnings.push(format!(
+                "none of {} sampled rays carries light from an emitter to a surface: do the lights \
+                 face away from the scene? Every radiosity will be its emission",
+                self.samples.len()
+            ));
+        }
+        Ok(())
+    }
+
     /// Appends `count` area-uniform rays of which a share
     /// ([`SolveConfig::resample_critical_fraction`]) lies in the kernel network's critical
     /// regions (definition 7, eq. 2.23; sec. 2.5), the rest anywhere: the delta rule's resampling.

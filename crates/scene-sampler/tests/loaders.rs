@@ -227,22 +227,22 @@ fn malformed_inputs_give_errors() {
     .unwrap_err();
     assert!(matches!(e, SceneError::NonFinite { face: 1, .. }), "{e}");
     assert!(msg(e).contains("nan.obj"));
-    // reflectance ≥ 1
-    let e = obj(
+    // reflectance ≥ 1: clamped to RHO_MAX, one warning naming the material (issue 17)
+    let s = obj(
         "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl light\nf 1 2 3\nusemtl bad\nf 1 3 2\n",
         "rho",
     )
-    .unwrap_err();
+    .unwrap();
+    assert_eq!(s.faces[1].rho, Spectrum([RHO_MAX, 0.5, 0.5]));
+    let w: Vec<_> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("clamped"))
+        .collect();
     assert!(
-        matches!(
-            e,
-            SceneError::ReflectanceOutOfRange {
-                face: 1,
-                band: 0,
-                ..
-            }
-        ),
-        "{e}"
+        w.len() == 1 && w[0].contains("material `bad`"),
+        "{:?}",
+        s.warnings
     );
     // no emitter
     let e = obj("usemtl white\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "dark").unwrap_err();

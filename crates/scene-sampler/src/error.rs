@@ -169,6 +169,18 @@ pub enum SceneError {
         /// The tolerance used.
         tolerance: f64,
     },
+    /// A scene whose size (bounding-box diagonal) is outside what the f32 BVH can represent: stray vertices
+    /// or wrong units.
+    #[error(
+        "{source_name}: the scene is {diagonal:e} units across, outside [1e-9, 1e12]: check the units and for \
+         stray vertices"
+    )]
+    ExtentOutOfRange {
+        /// The file.
+        source_name: String,
+        /// The bounding-box diagonal.
+        diagonal: f64,
+    },
     /// A 3-D operation on a Flatland scene or vice versa.
     #[error("{0}")]
     WrongDimension(String),

@@ -157,6 +157,7 @@ impl Scene {
     /// * ρ outside `[0, 1)` in any band: error (energy would not be conserved). Negative E: error.
     /// * Degenerate faces (area ≤ 1e-14 · diagonal², or zero normal): dropped, with a count in `warnings`;
     ///   error if nothing remains.
+    /// * A bounding-box diagonal outside `[1e-9, 1e12]` (the f32 BVH's range): error.
     /// * No face with positive emission: error.
     /// * Coincident duplicate faces (same vertices and winding): merged with a warning naming them, or an
     ///   error if their materials differ (see `merge_duplicates`).
@@ -217,6 +218,16 @@ impl Scene {
             return Err(SceneError::NoFaces {
                 source_name: source.into(),
                 dropped: dropped_ids.len(),
+            });
+        }
+        // The BVH is f32 relative to the scene's centre: its boxes' surface areas (∝ size²) must stay well
+        // inside f32's range (3·10³⁸, down to 10⁻³⁸); obvhs panics on a build when they overflow (found by
+        // the fuzz test: two triangles 10³¹ across).
+        let diagonal = diag2.sqrt();
+        if !(1e-9..=1e12).contains(&diagonal) {
+            return Err(SceneError::ExtentOutOfRange {
+                source_name: source.into(),
+                diagonal,
             });
         }
         if !kept.iter().any(|f| f.emission.max() > 0.0) {

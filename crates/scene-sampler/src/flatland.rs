@@ -229,7 +229,7 @@ impl FlatlandScene {
             // ρ ≥ 1 clamped to RHO_MAX, negative or non-finite refused, naming the segment (Flatland has no
             // materials: a segment's name, or its index, stands for one)
             let label = match &s.name {
-                Some(n) => format!("segment {i} (`{n}`)"),
+                Some(n) => format!("segment {i} ({n})"),
                 None => format!("segment {i}"),
             };
             let rho = crate::load::check_file_material(

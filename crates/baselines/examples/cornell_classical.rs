@@ -56,6 +56,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &Adaptive {
             rel_error: rel,
             batch: 4096,
+            min_paths: 4096,
             max_paths: 50_000_000,
             seed: 11,
         },

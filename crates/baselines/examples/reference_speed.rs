@@ -10,7 +10,7 @@
 //! `cargo run --release -p baselines --example reference_speed -- [scene] [points] [rel_error] [paths]`
 
 use baselines::Adaptive;
-use baselines::pointwise::radiosity_adaptive;
+use baselines::pointwise::reference_at;
 use scene_sampler::{SceneBvh, SurfaceSampler};
 use std::time::Instant;
 
@@ -30,18 +30,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..Adaptive::default()
     };
     let t = Instant::now();
-    let estimates = radiosity_adaptive(&scene, &bvh, &points, &adaptive)?;
+    let verdicts = reference_at(&scene, &bvh, &points, &adaptive)?;
     let seconds = t.elapsed().as_secs_f64();
-    let paths: usize = estimates.iter().map(|e| e.paths).sum();
-    let worst = estimates.iter().map(|e| e.rel_error()).fold(0.0, f64::max);
-    let capped = estimates
+    let paths: usize = verdicts.iter().map(|v| v.estimate.paths).sum();
+    // the bound of the stopping rule: infinite at a point where no path found light
+    let worst = verdicts.iter().map(|v| v.rel_error).fold(0.0, f64::max);
+    let capped = verdicts.iter().filter(|v| !v.target_met).count();
+    let dark = verdicts
         .iter()
-        .filter(|e| e.paths >= adaptive.max_paths)
+        .filter(|v| v.estimate.mean.iter().all(|&m| m == 0.0))
         .count();
     println!(
         "{name}: {} points, target {:.2} %: {seconds:.1} s on {} threads, {paths} paths \
          ({:.0} per point, {:.2} M paths/s), largest relative standard error {:.3} %, {capped} \
-         points at the path cap",
+         points at the path cap without meeting the target ({dark} of them found no light at all)",
         points.len(),
         100.0 * rel_error,
         rayon::current_num_threads(),

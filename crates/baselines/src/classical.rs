@@ -788,6 +788,7 @@ mod tests {
         let ad = crate::Adaptive {
             rel_error: 0.015,
             batch: 2048,
+            min_paths: 2048,
             max_paths: 400_000,
             seed: 5,
         };

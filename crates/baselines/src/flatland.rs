@@ -6,7 +6,7 @@
 //! ([`cosine_halfplane`]) cancels the kernel exactly, as in 3-D: `B(y) = E(y) + ρ(y)·E_ω[B(hit(y, ω))]`.
 
 use crate::error::BaselineError;
-use crate::stats::{Adaptive, Estimate, point_rng, run_fixed};
+use crate::stats::{Adaptive, AdaptiveEstimate, Estimate, point_rng, run_fixed};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -56,6 +56,21 @@ fn path(
     out
 }
 
+/// The random stream of point `p`: keyed by its position and normal (see `stats::point_rng`).
+fn rng_of(seed: u64, p: &FlatPoint) -> ChaCha8Rng {
+    point_rng(seed, &[p.point.x, p.point.y, p.normal.x, p.normal.y])
+}
+
+/// The bands in which B can be positive at a point on segment `segment` (as
+/// [`crate::pointwise::live_bands`]).
+pub fn live_bands(scene: &FlatlandScene, segment: u32) -> [bool; 3] {
+    let s = &scene.segments[segment as usize];
+    [0, 1, 2].map(|b| {
+        s.emission.0[b] > 0.0
+            || (s.rho.0[b] > 0.0 && scene.segments.iter().any(|g| g.emission.0[b] > 0.0))
+    })
+}
+
 /// Error unless every point's segment exists.
 fn check_segments(scene: &FlatlandScene, points: &[FlatPoint]) -> Result<(), BaselineError> {
     for (index, p) in points.iter().enumerate() {
@@ -87,16 +102,17 @@ pub fn path_trace_at(
     check_segments(scene, points)?;
     Ok(points
         .par_iter()
-        .enumerate()
-        .map(|(i, &p)| {
-            let mut rng = point_rng(seed, i);
+        .map(|&p| {
+            let mut rng = rng_of(seed, &p);
             run_fixed(paths, || path(scene, vis, p, &mut rng))
         })
         .collect())
 }
 
-/// Adaptive Flatland path tracing: batches per point until the relative standard error target or the path cap
-/// of `adaptive` (see [`Adaptive`]); the first `k·batch` paths equal those of [`path_trace_at`] with the same seed.
+/// Adaptive Flatland path tracing: batches per point until the relative standard error target (by the
+/// stopping rule of [`Adaptive`], which never stops on a zero mean) or the path cap of `adaptive`; the first
+/// `k·batch` paths equal those of [`path_trace_at`] with the same seed. [`reference_at`] also gives each
+/// point's verdict.
 ///
 /// # Errors
 /// Invalid [`Adaptive`] parameters, or a point whose segment index is not in the scene.
@@ -106,14 +122,32 @@ pub fn path_trace_adaptive(
     points: &[FlatPoint],
     adaptive: &Adaptive,
 ) -> Result<Vec<Estimate>, BaselineError> {
+    Ok(reference_at(scene, vis, points, adaptive)?
+        .into_iter()
+        .map(|a| a.estimate)
+        .collect())
+}
+
+/// [`path_trace_adaptive`] with each point's bound on its relative standard error and whether it met the
+/// target (see [`AdaptiveEstimate`]).
+///
+/// # Errors
+/// Invalid [`Adaptive`] parameters, or a point whose segment index is not in the scene.
+pub fn reference_at(
+    scene: &FlatlandScene,
+    vis: &FlatVisibility,
+    points: &[FlatPoint],
+    adaptive: &Adaptive,
+) -> Result<Vec<AdaptiveEstimate>, BaselineError> {
     adaptive.validate()?;
     check_segments(scene, points)?;
     Ok(points
         .par_iter()
-        .enumerate()
-        .map(|(i, &p)| {
-            let mut rng = point_rng(adaptive.seed, i);
-            adaptive.run(|| path(scene, vis, p, &mut rng))
+        .map(|&p| {
+            let mut rng = rng_of(adaptive.seed, &p);
+            adaptive.run(live_bands(scene, p.segment), || {
+                path(scene, vis, p, &mut rng)
+            })
         })
         .collect())
 }
@@ -231,6 +265,7 @@ mod tests {
         let ad = Adaptive {
             rel_error: 0.005,
             batch: 500,
+            min_paths: 1000,
             max_paths: 1_000_000,
             seed: 9,
         };

@@ -21,7 +21,7 @@ pub mod progressive;
 mod stats;
 
 pub use error::BaselineError;
-pub use stats::{Adaptive, Estimate};
+pub use stats::{Adaptive, AdaptiveEstimate, Estimate, relative_error_bound};
 
 /// The README's code, compiled and run as a doctest.
 #[cfg(doctest)]

@@ -82,10 +82,12 @@ impl Queries {
             .collect();
         let eps = bvh.epsilon() as f32;
         let back = bvh.backoff() as f32;
+        let centre = bvh.centre();
         let rays = pairs
             .iter()
             .map(|(x, y)| {
-                let o = x.point.as_vec3a();
+                // in the BVH's frame (relative to its centre)
+                let o = (x.point - centre).as_vec3a();
                 let d = (y.point - x.point).as_vec3a();
                 let len = d.length();
                 let u = d / len.max(f32::MIN_POSITIVE);

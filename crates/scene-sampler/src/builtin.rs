@@ -52,12 +52,53 @@ fn parse_generated(name: &str) -> Option<Result<Scene>> {
         Some(n) if (40..=GENERATED_MAX).contains(&n) => Ok(generate(n)),
         _ => Err(SceneError::UnknownBuiltin {
             name: name.into(),
+            hint: String::new(),
             known: format!(
                 "{} (and {prefix}<N> for N from 40 to {GENERATED_MAX} triangles)",
                 BUILTIN_NAMES.join(", ")
             ),
         }),
     })
+}
+
+/// Levenshtein distance (insertions, deletions, substitutions; by chars).
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diag = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let next = (diag + usize::from(ca != cb))
+                .min(row[j] + 1)
+                .min(row[j + 1] + 1);
+            diag = row[j + 1];
+            row[j + 1] = next;
+        }
+    }
+    row[b.len()]
+}
+
+/// The known scene name closest to `name` (a typo such as `cornel-box`), if it is within a third of the
+/// name's length (at least 2 edits). Generated names are compared without their size.
+pub fn nearest_builtin(name: &str) -> Option<String> {
+    let bare = name.trim_end_matches(|c: char| c.is_ascii_digit() || c == '_');
+    let generated = ["random-boxes-", "tessellated-cornell-"];
+    let (d, best) = BUILTIN_NAMES
+        .iter()
+        .map(|&k| (edit_distance(name, k), k.to_string()))
+        .chain(
+            generated
+                .iter()
+                .map(|&k| (edit_distance(bare, k), format!("{k}<N>"))),
+        )
+        .min_by_key(|(d, _)| *d)?;
+    (d <= (name.chars().count() / 3).max(2)).then_some(best)
+}
+
+/// The ` — did you mean …?` part of an unknown-name message.
+pub(crate) fn hint(name: &str) -> String {
+    nearest_builtin(name).map_or_else(String::new, |n| format!(" — did you mean `{n}`?"))
 }
 
 /// Whether [`builtin`] accepts `name`: one of [`BUILTIN_NAMES`], `random-boxes-<N>` or
@@ -86,6 +127,7 @@ pub fn builtin(name: &str) -> Result<AnyScene> {
         _ => {
             return Err(SceneError::UnknownBuiltin {
                 name: name.into(),
+                hint: hint(name),
                 known: format!(
                     "{}, random-boxes-<N>, tessellated-cornell-<N>",
                     BUILTIN_NAMES.join(", ")

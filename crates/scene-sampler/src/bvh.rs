@@ -14,6 +14,14 @@
 //! with `eps = 1e-5 · max(diagonal, largest |coordinate|)` ([`SceneBvh::epsilon`]) — about 170 f32 ulps of the
 //! largest coordinate, and 10⁻⁵ of the scene size, far below any feature a radiosity solver resolves. The price
 //! is that occluders thinner than `eps`, or closer than `eps` to an end point, are missed.
+//!
+//! # Coordinates relative to the BVH's centre
+//! The f32 triangles and rays are stored relative to the centre `c` of the scene's bounding box: the
+//! subtraction `p − c` is made in f64 before rounding to f32. So "largest |coordinate|" above is measured
+//! from `c` (at most half the diagonal) and the f32 error scales with the scene's size, not with its distance
+//! from the origin: the Cornell box moved by 10⁶ along x has the same visibility as at the origin (in f32 at
+//! 10⁶ the spacing of representable numbers is 0.06, a tenth of the box). Inputs and outputs ([`Hit::point`])
+//! stay in the scene's own coordinates.
 
 use crate::{FlatPoint, FlatlandScene, Scene, SurfacePoint};
 use glam::{DVec2, DVec3, Vec3A};
@@ -57,6 +65,8 @@ pub struct SceneBvh {
     normals: Vec<DVec3>,
     /// Face centroids (f64), by face index: `trace_from` nudges origins toward them, away from edges.
     centroids: Vec<DVec3>,
+    /// The centre of the scene's bounds: the origin of the f32 frame (module docs).
+    centre: DVec3,
     eps: f64,
 }
 
@@ -81,13 +91,15 @@ impl SceneBvh {
 
     /// Builds the BVH with the given build quality.
     pub fn with_quality(scene: &Scene, quality: BuildQuality) -> Self {
+        let (lo, hi) = scene.bounds;
+        let centre = 0.5 * (lo + hi);
         let tris: Vec<Triangle> = scene
             .faces
             .iter()
             .map(|f| Triangle {
-                v0: v3a(f.v[0]),
-                v1: v3a(f.v[1]),
-                v2: v3a(f.v[2]),
+                v0: v3a(f.v[0] - centre),
+                v1: v3a(f.v[1] - centre),
+                v2: v3a(f.v[2] - centre),
             })
             .collect();
         let params = match quality {
@@ -97,8 +109,8 @@ impl SceneBvh {
         let bvh = build_cwbvh_from_tris(&tris, params, &mut std::time::Duration::default());
         let face_of: Vec<u32> = bvh.primitive_indices.clone();
         let tris = face_of.iter().map(|&i| tris[i as usize]).collect();
-        let (lo, hi) = scene.bounds;
-        let max_abs = lo.abs().max(hi.abs()).max_element();
+        // the largest |coordinate| in the f32 frame: (hi − lo)/2 per axis
+        let max_abs = (0.5 * (hi - lo)).max_element();
         let eps = 1e-5 * scene.diagonal().max(max_abs);
         SceneBvh {
             bvh,
@@ -106,6 +118,7 @@ impl SceneBvh {
             face_of,
             normals: scene.faces.iter().map(|f| f.normal).collect(),
             centroids: scene.faces.iter().map(|f| f.centroid()).collect(),
+            centre,
             eps,
         }
     }
@@ -147,7 +160,7 @@ impl SceneBvh {
         let dir = d / len;
         let back = self.backoff();
         let ray = Ray::new(
-            v3a(a - dir * back),
+            v3a(a - dir * back - self.centre),
             v3a(dir),
             (back + self.eps) as f32,
             (back + len - self.eps) as f32,
@@ -185,7 +198,12 @@ impl SceneBvh {
         } else {
             f32::INFINITY
         };
-        let ray = Ray::new(v3a(origin - u * back), v3a(u), back as f32, tmax_world);
+        let ray = Ray::new(
+            v3a(origin - u * back - self.centre),
+            v3a(u),
+            back as f32,
+            tmax_world,
+        );
         let mut hit = obvhs::ray::RayHit::none();
         // Two-sided thin geometry is two coincident faces with opposite normals, and a ray meets
         // both at the same t. The one facing the ray must win (the other one's back is not a
@@ -244,10 +262,16 @@ impl SceneBvh {
     }
 
     /// A bare obvhs occlusion query, as obvhs's examples make it: no face skipping, no offsets (for
-    /// [`crate::bench`]).
+    /// [`crate::bench`]). The ray is in the BVH's frame: see [`SceneBvh::centre`].
     pub(crate) fn bare_miss(&self, ray: &Ray) -> bool {
         self.bvh
             .ray_traverse_miss(*ray, |r, id| self.tris[id].intersect(r))
+    }
+
+    /// The origin of the BVH's f32 frame (the centre of the scene's bounds): a bare [`Ray`] for the BVH
+    /// has its origin at `p − centre` for a scene point `p`.
+    pub fn centre(&self) -> DVec3 {
+        self.centre
     }
 
     /// Number of BVH primitives (more than the face count when spatial splits duplicated references).

@@ -32,13 +32,68 @@ pub enum SceneError {
         /// The file.
         path: PathBuf,
     },
-    /// A built-in scene name that does not exist.
-    #[error("unknown built-in scene `{name}` (known: {known})")]
+    /// A built-in scene name that does not exist (and no file of that name either).
+    #[error("unknown built-in scene `{name}`{hint} (known: {known})")]
     UnknownBuiltin {
         /// The name asked for.
         name: String,
+        /// ` — did you mean `cornell-box`?` when a known name is close, else empty.
+        hint: String,
         /// The known names, comma-separated.
         known: String,
+    },
+    /// An OBJ file's `mtllib` names a material library that cannot be read.
+    #[error("{source_name}:{line}: material library `{path}` cannot be read: {source}", path = path.display())]
+    MaterialLibrary {
+        /// The OBJ file.
+        source_name: String,
+        /// 1-based line of the `mtllib` statement (0 if unknown).
+        line: usize,
+        /// The path tried (the `mtllib` name relative to the OBJ file's directory).
+        path: PathBuf,
+        /// The underlying I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A `usemtl` names a material that no material library defines.
+    #[error("{source_name}:{line}: `usemtl {name}`: no material of that name is defined ({known})")]
+    UndefinedMaterial {
+        /// The OBJ file.
+        source_name: String,
+        /// 1-based line of the `usemtl` statement.
+        line: usize,
+        /// The material name.
+        name: String,
+        /// The defined names, or why there are none.
+        known: String,
+    },
+    /// A material whose reflectance or emission is negative or not finite.
+    #[error("{source_name}: material `{material}`: {message}")]
+    BadMaterial {
+        /// The file (OBJ, MTL, glTF or Flatland JSON).
+        source_name: String,
+        /// The material's name (glTF: its name or `material <index>`; Flatland: the segment).
+        material: String,
+        /// What is wrong, with the value.
+        message: String,
+    },
+    /// Two coincident faces of the same orientation but different materials: which one a ray sees would
+    /// be decided by rounding, so the answer would be arbitrary.
+    #[error(
+        "{source_name}: face {face} (object `{object}`) coincides with face {other} (object `{other_object}`) \
+         but has a different material: remove one of them"
+    )]
+    ConflictingDuplicate {
+        /// The file.
+        source_name: String,
+        /// The later face (load order).
+        face: usize,
+        /// Its object.
+        object: String,
+        /// The earlier face it coincides with.
+        other: usize,
+        /// That face's object.
+        other_object: String,
     },
     /// A vertex coordinate, normal or attribute is NaN or infinite.
     #[error("{source_name}: face {face}: non-finite {what}")]
@@ -113,6 +168,18 @@ pub enum SceneError {
         distance: f64,
         /// The tolerance used.
         tolerance: f64,
+    },
+    /// A scene whose size (bounding-box diagonal) is outside what the f32 BVH can represent: stray vertices
+    /// or wrong units.
+    #[error(
+        "{source_name}: the scene is {diagonal:e} units across, outside [1e-9, 1e12]: check the units and for \
+         stray vertices"
+    )]
+    ExtentOutOfRange {
+        /// The file.
+        source_name: String,
+        /// The bounding-box diagonal.
+        diagonal: f64,
     },
     /// A 3-D operation on a Flatland scene or vice versa.
     #[error("{0}")]

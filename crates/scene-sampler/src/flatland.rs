@@ -208,6 +208,7 @@ impl FlatlandScene {
             message: e.to_string(),
         })?;
         let mut rgb = false;
+        let mut warnings = Vec::new();
         let mut objects: Vec<String> = Vec::new();
         let mut segs = Vec::with_capacity(file.segments.len());
         for (i, s) in file.segments.iter().enumerate() {
@@ -225,10 +226,23 @@ impl FlatlandScene {
                     objects.len() - 1
                 }
             };
+            // ρ ≥ 1 clamped to RHO_MAX, negative or non-finite refused, naming the segment (Flatland has no
+            // materials: a segment's name, or its index, stands for one)
+            let label = match &s.name {
+                Some(n) => format!("segment {i} ({n})"),
+                None => format!("segment {i}"),
+            };
+            let rho = crate::load::check_file_material(
+                source,
+                &label,
+                s.rho.spectrum(),
+                s.emission.spectrum(),
+                &mut warnings,
+            )?;
             segs.push(Segment::new(
                 DVec2::from(s.a),
                 DVec2::from(s.b),
-                s.rho.spectrum(),
+                rho,
                 s.emission.spectrum(),
                 obj as u32,
                 i as u32,
@@ -238,7 +252,9 @@ impl FlatlandScene {
             min: DVec2::from(v.min),
             max: DVec2::from(v.max),
         });
-        FlatlandScene::new(name, source, segs, objects, view, rgb)
+        let mut scene = FlatlandScene::new(name, source, segs, objects, view, rgb)?;
+        scene.warnings.extend(warnings);
+        Ok(scene)
     }
 
     /// Writes the scene in the Flatland JSON format, one segment per line (round-trips through

@@ -39,14 +39,14 @@ pub mod sample;
 pub mod scene;
 pub mod spectrum;
 
-pub use builtin::{BUILTIN_NAMES, builtin, is_builtin, random_boxes};
+pub use builtin::{BUILTIN_NAMES, builtin, is_builtin, nearest_builtin, random_boxes};
 pub use bvh::{BuildQuality, FlatHit, FlatVisibility, Hit, SceneBvh};
 pub use error::{Result, SceneError};
 pub use flatland::{FlatView, FlatlandScene, Segment};
 pub use kernel::{FlatKernelSample, FlatKernelSampler, KernelSample, KernelSampler, Samples};
 pub use load::{
-    load, load_flatland, load_gltf, load_obj, load_or_builtin, to_gltf, to_obj, write_flatland,
-    write_gltf, write_obj,
+    RHO_MAX, load, load_flatland, load_gltf, load_obj, load_or_builtin, to_gltf, to_obj,
+    write_flatland, write_gltf, write_obj,
 };
 pub use probe::{FlatProbe, Probe, parse_flat_probes, parse_probes, read_flat_probes, read_probes};
 pub use sample::{

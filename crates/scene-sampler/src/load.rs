@@ -39,12 +39,30 @@ pub fn load(path: impl AsRef<Path>) -> Result<AnyScene> {
 
 /// Loads `name` as a built-in if [`crate::builtin::is_builtin`] says so (one of [`crate::BUILTIN_NAMES`] or
 /// `random-boxes-<N>`), else as a file.
+///
+/// A name that is neither a built-in nor an existing file, and has no scene extension (`cornel-box`), is an
+/// unknown built-in ([`SceneError::UnknownBuiltin`], with the nearest known name), not an "unsupported
+/// format".
 pub fn load_or_builtin(name: &str) -> Result<AnyScene> {
     if crate::builtin::is_builtin(name) {
-        crate::builtin(name)
-    } else {
-        load(name)
+        return crate::builtin(name);
     }
+    let path = Path::new(name);
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let scene_ext = matches!(ext.as_deref(), Some("obj" | "gltf" | "glb" | "json"));
+    if !scene_ext && !path.exists() {
+        return Err(SceneError::UnknownBuiltin {
+            name: name.into(),
+            hint: crate::builtin::hint(name),
+            known: format!(
+                "{}, random-boxes-<N>, tessellated-cornell-<N>; or a .obj, .gltf, .glb or .json file",
+                crate::BUILTIN_NAMES.join(", ")
+            ),
+        });
+    }
+    load(path)
 }
 
 /// Loads a Flatland JSON scene (format in FORMATS.md and [`FlatlandScene::from_json`]).
@@ -54,22 +72,216 @@ pub fn load_flatland(path: impl AsRef<Path>) -> Result<FlatlandScene> {
     FlatlandScene::from_json(&stem(path), &path.display().to_string(), &text)
 }
 
+/// The largest reflectance a scene file may give: a file's ρ ≥ 1 in some band (which would create energy) is
+/// clamped to this, with one warning naming the material. Not refused: white (1, 1, 1) is the common
+/// default of modelling tools, e.g. glTF's `baseColorFactor`.
+pub const RHO_MAX: f64 = 0.98;
+
+/// Checks a file's material, clamping ρ ≥ 1 to [`RHO_MAX`] (one warning in `warnings`). Negative or
+/// non-finite ρ or emission is an error naming the material. `e` is the emitted radiosity (already ×π).
+pub(crate) fn check_file_material(
+    source: &str,
+    material: &str,
+    rho: Spectrum,
+    e: Spectrum,
+    warnings: &mut Vec<String>,
+) -> Result<Spectrum> {
+    let bad = |message: String| SceneError::BadMaterial {
+        source_name: source.into(),
+        material: material.into(),
+        message,
+    };
+    for (what, v) in [("reflectance", rho), ("emission", e)] {
+        if let Some(x) = v.0.iter().find(|x| !x.is_finite()) {
+            return Err(bad(format!("non-finite {what} {x}")));
+        }
+        if let Some(x) = v.0.iter().find(|&&x| x < 0.0) {
+            return Err(bad(format!("negative {what} {x}")));
+        }
+    }
+    if rho.0.iter().any(|&x| x >= 1.0) {
+        warnings.push(format!(
+            "{source}: material `{material}`: reflectance {} {} {} is not below 1 (it would create energy); \
+             clamped to {RHO_MAX}",
+            rho.0[0], rho.0[1], rho.0[2]
+        ));
+        return Ok(Spectrum(rho.0.map(|x| if x >= 1.0 { RHO_MAX } else { x })));
+    }
+    Ok(rho)
+}
+
+/// The 1-based line of byte offset `at` in `bytes`.
+fn line_of(bytes: &[u8], at: usize) -> usize {
+    1 + bytes[..at.min(bytes.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+}
+
+/// Reads a text file as UTF-8, or an error naming the first line that is not.
+fn read_text(path: &Path) -> Result<String> {
+    let bytes = std::fs::read(path).map_err(io(path))?;
+    String::from_utf8(bytes).map_err(|e| SceneError::Parse {
+        source_name: path.display().to_string(),
+        message: format!(
+            "line {}: not UTF-8 text",
+            line_of(e.as_bytes(), e.utf8_error().valid_up_to())
+        ),
+    })
+}
+
+/// The MTL keywords the loader uses (`Kd` → ρ, `Ke` → emitted radiance) and the colour keywords that share
+/// their syntax.
+const MTL_COLOURS: [&str; 5] = ["Ka", "Kd", "Ks", "Ke", "Tf"];
+
+/// Rewrites MTL text into the subset tobj parses without trouble: only `newmtl`, `Kd` and `Ke` lines are kept,
+/// and a colour with one number (`Kd 0.5`, grey in the MTL format) is written out as three. A colour
+/// keyword with no number, two numbers, or a word that is not a number is an error naming file and line
+/// (tobj 4 panics on the one-number form and names no line for the others).
+fn sanitize_mtl(source: &str, text: &str) -> Result<String> {
+    let mut out = String::with_capacity(text.len());
+    for (k, raw) in text.lines().enumerate() {
+        let line = k + 1;
+        let err = |message: String| SceneError::Parse {
+            source_name: source.into(),
+            message: format!("line {line}: {message}"),
+        };
+        let l = raw.trim();
+        let mut words = l.split_whitespace();
+        let Some(key) = words.next() else { continue };
+        if key == "newmtl" {
+            let name = l[6..].trim();
+            if name.is_empty() {
+                return Err(err("`newmtl` without a material name".into()));
+            }
+            out.push_str("newmtl ");
+            out.push_str(name);
+            out.push('\n');
+        } else if MTL_COLOURS.contains(&key) {
+            let vals: Vec<f64> = words
+                .map(|w| {
+                    w.parse::<f64>().map_err(|_| {
+                        err(format!(
+                            "`{key}`: `{w}` is not a number (spectral and xyz colours are not supported)"
+                        ))
+                    })
+                })
+                .collect::<Result<_>>()?;
+            let rgb = match vals[..] {
+                [] => {
+                    return Err(err(format!(
+                        "`{key}` without a value: give one number (grey) or three (r g b)"
+                    )));
+                }
+                [v] => [v; 3],
+                [_, _] => {
+                    return Err(err(format!(
+                        "`{key}` with two numbers: give one (grey) or three (r g b)"
+                    )));
+                }
+                [r, g, b, ..] => [r, g, b],
+            };
+            if key == "Kd" || key == "Ke" {
+                out.push_str(&format!("{key} {:?} {:?} {:?}\n", rgb[0], rgb[1], rgb[2]));
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// A statement of an OBJ file found by the loader's own scan: keyword, argument (as tobj reads it) and line.
+struct Statement {
+    line: usize,
+    key: &'static str,
+    arg: String,
+}
+
+/// The `mtllib` and `usemtl` statements of OBJ text, with their lines, read as tobj reads them (the argument
+/// is everything after the first space, trimmed).
+fn scan_obj(text: &str) -> Vec<Statement> {
+    let mut out = Vec::new();
+    for (k, raw) in text.lines().enumerate() {
+        let key = match raw.split_whitespace().next() {
+            Some("mtllib") => "mtllib",
+            Some("usemtl") => "usemtl",
+            _ => continue,
+        };
+        out.push(Statement {
+            line: k + 1,
+            key,
+            arg: raw.split_once(' ').unwrap_or_default().1.trim().to_owned(),
+        });
+    }
+    out
+}
+
 /// Loads an OBJ file and its MTL library.
 ///
-/// Polygons are triangulated as fans (tobj). `Kd` → ρ, `Ke` → emitted radiance (E = π·Ke). Faces without a
-/// material get ρ = 0.5 grey, E = 0 (reported in `warnings`). Each OBJ object/group becomes an object; each
-/// input polygon one surface. Windings are kept as written (front side = counter-clockwise).
+/// Polygons are triangulated as fans (tobj). Coordinates are read in f64, so a scene far from the origin
+/// keeps its shape. `Kd` → ρ, `Ke` → emitted radiance (E = π·Ke); a colour with one number is grey (MTL
+/// format); ρ ≥ 1 is clamped to [`RHO_MAX`] with a warning naming the material. Faces without a material get
+/// ρ = 0.5 grey, E = 0 (reported in `warnings`); a `usemtl` naming a material that is not defined, or an
+/// `mtllib` that cannot be read, is an error naming the line. Each OBJ object/group becomes an object; each
+/// input polygon one surface. Windings are kept as written (front side = counter-clockwise); faces whose `vn`
+/// normals point against their winding are counted in a warning naming the object.
 pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene> {
     let path = path.as_ref();
     let source = path.display().to_string();
-    // Read first: a missing file is an I/O error, not a parse error.
-    std::fs::metadata(path).map_err(io(path))?;
+    let text = read_text(path)?;
+    let statements = scan_obj(&text);
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
         ..Default::default()
     };
-    let (models, materials) = tobj::load_obj(path, &opts).map_err(|e| SceneError::Parse {
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let problem: std::cell::RefCell<Option<SceneError>> = std::cell::RefCell::new(None);
+    let material_loader = |mtl: &Path| -> tobj::MTLLoadResult {
+        let full = dir.join(mtl);
+        let read = std::fs::read(&full)
+            .map_err(|e| {
+                let line = statements
+                    .iter()
+                    .find(|s| s.key == "mtllib" && Path::new(&s.arg) == mtl)
+                    .map_or(0, |s| s.line);
+                SceneError::MaterialLibrary {
+                    source_name: source.clone(),
+                    line,
+                    path: full.clone(),
+                    source: e,
+                }
+            })
+            .and_then(|bytes| {
+                let mtl_source = full.display().to_string();
+                let text = String::from_utf8(bytes).map_err(|e| SceneError::Parse {
+                    source_name: mtl_source.clone(),
+                    message: format!(
+                        "line {}: not UTF-8 text",
+                        line_of(e.as_bytes(), e.utf8_error().valid_up_to())
+                    ),
+                })?;
+                sanitize_mtl(&mtl_source, &text)
+            });
+        match read {
+            Ok(clean) => tobj::load_mtl_buf(&mut clean.as_bytes()),
+            Err(e) => {
+                problem.borrow_mut().get_or_insert(e);
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+        }
+    };
+    // tobj is third-party parsing of user input: a panic inside it becomes a parse error, never an abort.
+    let loaded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        tobj::load_obj_buf(&mut text.as_bytes(), &opts, material_loader)
+    }))
+    .map_err(|_| SceneError::Parse {
+        source_name: source.clone(),
+        message: "the OBJ parser (tobj) failed on this file".into(),
+    })?;
+    if let Some(e) = problem.into_inner() {
+        return Err(e);
+    }
+    let (models, materials) = loaded.map_err(|e| SceneError::Parse {
         source_name: source.clone(),
         message: e.to_string(),
     })?;
@@ -77,22 +289,57 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene> {
         source_name: source.clone(),
         message: format!("material library: {e}"),
     })?;
+    // tobj silently gives no material for an undefined name: the faces would turn grey and, if the name
+    // was the light's, the scene would fail later with "no face emits light".
+    for s in statements.iter().filter(|s| s.key == "usemtl") {
+        if !materials.iter().any(|m| m.name == s.arg) {
+            let known = if materials.is_empty() {
+                if statements.iter().any(|s| s.key == "mtllib") {
+                    "the material libraries define none".to_string()
+                } else {
+                    "the file has no `mtllib` line".to_string()
+                }
+            } else {
+                let names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+                format!("defined: {}", names.join(", "))
+            };
+            return Err(SceneError::UndefinedMaterial {
+                source_name: source,
+                line: s.line,
+                name: s.arg.clone(),
+                known,
+            });
+        }
+    }
+    let mut warnings = Vec::new();
+    let mut checked: Vec<Option<(Spectrum, Spectrum)>> = vec![None; materials.len()];
     let mut faces = Vec::new();
-    let mut objects = Vec::new();
+    let mut objects: Vec<String> = Vec::new();
     let mut missing_material = 0usize;
+    let mut against_normals: Vec<(String, usize)> = Vec::new();
     let mut surface = 0u32;
-    for (oi, m) in models.iter().enumerate() {
-        objects.push(m.name.clone());
-        let mesh = &m.mesh;
-        let (rho, e) = match mesh.material_id.and_then(|i| materials.get(i)) {
-            Some(mat) => {
-                let kd = mat.diffuse.unwrap_or([0.0; 3]);
-                let ke = mat.emissive.unwrap_or([0.0; 3]);
-                (
-                    Spectrum(kd.map(f64::from)),
-                    Spectrum(ke.map(|v| f64::from(v) * PI)),
-                )
+    for m in &models {
+        // tobj splits an object at every `usemtl`: parts of one name stay one object
+        let oi = match objects.iter().position(|o| *o == m.name) {
+            Some(k) => k,
+            None => {
+                objects.push(m.name.clone());
+                objects.len() - 1
             }
+        };
+        let mesh = &m.mesh;
+        let (rho, e) = match mesh.material_id.filter(|&i| i < materials.len()) {
+            Some(i) => match checked[i] {
+                Some(v) => v,
+                None => {
+                    let mat = &materials[i];
+                    let kd = Spectrum(mat.diffuse.unwrap_or([0.0; 3]));
+                    let e = Spectrum(mat.emissive.unwrap_or([0.0; 3]).map(|v| v * PI));
+                    let rho = check_file_material(&source, &mat.name, kd, e, &mut warnings)?;
+                    checked[i] = Some((rho, e));
+                    (rho, e)
+                }
+            },
             None => {
                 missing_material += mesh.indices.len() / 3;
                 (Spectrum::grey(0.5), Spectrum::ZERO)
@@ -101,32 +348,58 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene> {
         let pos = |i: u32| -> Result<DVec3> {
             let i = i as usize * 3;
             match mesh.positions.get(i..i + 3) {
-                Some(p) => Ok(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)),
+                Some(p) => Ok(DVec3::new(p[0], p[1], p[2])),
                 None => Err(SceneError::Parse {
                     source_name: source.clone(),
                     message: format!("object `{}`: vertex index {} out of range", m.name, i / 3),
                 }),
             }
         };
+        let normal = |i: u32| -> Option<DVec3> {
+            let i = i as usize * 3;
+            mesh.normals
+                .get(i..i + 3)
+                .map(|n| DVec3::new(n[0], n[1], n[2]))
+        };
+        let with_normals = mesh.normal_indices.len() == mesh.indices.len();
+        let mut against = 0usize;
         // tobj gives face_arities only when not triangulating; with triangulation each polygon's fan shares a
         // surface id only if we track it, which tobj does not expose: one surface per triangle then.
-        for t in mesh.indices.chunks_exact(3) {
-            faces.push(Face::new(
-                [pos(t[0])?, pos(t[1])?, pos(t[2])?],
-                rho,
-                e,
-                oi as u32,
-                surface,
-            ));
+        for (k, t) in mesh.indices.chunks_exact(3).enumerate() {
+            let v = [pos(t[0])?, pos(t[1])?, pos(t[2])?];
+            if with_normals {
+                let n = &mesh.normal_indices[3 * k..3 * k + 3];
+                if let (Some(a), Some(b), Some(c)) = (normal(n[0]), normal(n[1]), normal(n[2])) {
+                    let winding = (v[1] - v[0]).cross(v[2] - v[0]);
+                    if (a + b + c).dot(winding) < 0.0 {
+                        against += 1;
+                    }
+                }
+            }
+            faces.push(Face::new(v, rho, e, oi as u32, surface));
             surface += 1;
+        }
+        if against > 0 {
+            match against_normals.iter_mut().find(|(o, _)| *o == m.name) {
+                Some((_, n)) => *n += against,
+                None => against_normals.push((m.name.clone(), against)),
+            }
         }
     }
     let mut scene = Scene::new(&stem(path), &source, faces, objects, None)?;
+    warnings.extend(against_normals.into_iter().map(|(o, n)| {
+        format!(
+            "{source}: object `{o}`: {n} face(s) whose `vn` normals point against their winding; the front \
+             side comes from the winding (counter-clockwise), so these faces are lit from behind and \
+             look black: fix the winding or the normals"
+        )
+    }));
     if missing_material > 0 {
-        scene.warnings.push(format!(
+        warnings.push(format!(
             "{source}: {missing_material} face(s) without material: ρ = 0.5, E = 0"
         ));
     }
+    scene.warnings.extend(warnings);
     Ok(scene)
 }
 
@@ -134,13 +407,21 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene> {
 ///
 /// Every triangle primitive of every mesh instance in the default scene (or the first) is loaded with its
 /// node's world transform applied (windings flipped under mirroring transforms). `baseColorFactor.rgb` → ρ,
-/// `emissiveFactor × KHR_materials_emissive_strength` → emitted radiance, E = π·that. Textures are ignored.
-/// Non-triangle primitives (points, lines, strips) are skipped with a warning.
+/// `emissiveFactor × KHR_materials_emissive_strength` → emitted radiance, E = π·that (ρ ≥ 1, such as the
+/// default material's white, is clamped to [`RHO_MAX`] with a warning naming the material). Textures are
+/// ignored. Triangle strips and fans are loaded as triangles; points and lines are skipped with a warning
+/// naming their mesh, and a file with nothing else is an error saying so.
 pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
     let path = path.as_ref();
     let source = path.display().to_string();
     std::fs::metadata(path).map_err(io(path))?;
-    let (doc, buffers, _images) = gltf::import(path).map_err(|e| SceneError::Parse {
+    // gltf is third-party parsing of user input: a panic inside it becomes a parse error, never an abort.
+    let imported =
+        std::panic::catch_unwind(|| gltf::import(path)).map_err(|_| SceneError::Parse {
+            source_name: source.clone(),
+            message: "the glTF parser failed on this file".into(),
+        })?;
+    let (doc, buffers, _images) = imported.map_err(|e| SceneError::Parse {
         source_name: source.clone(),
         message: e.to_string(),
     })?;
@@ -153,26 +434,45 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
         })?;
     let mut faces = Vec::new();
     let mut objects = Vec::new();
-    let mut skipped = 0usize;
+    let mut warnings = Vec::new();
+    let mut skipped: Vec<String> = Vec::new();
+    let mut checked: Vec<(Option<usize>, Spectrum)> = Vec::new();
     let mut surface = 0u32;
-    let mut stack: Vec<(gltf::Node, DMat4)> = scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
-    while let Some((node, parent)) = stack.pop() {
+    let mut stack: Vec<(gltf::Node, DMat4, usize)> =
+        scene.nodes().map(|n| (n, DMat4::IDENTITY, 0)).collect();
+    while let Some((node, parent, depth)) = stack.pop() {
+        // a node graph with a cycle (invalid glTF, but parseable) would never end
+        if depth > 256 {
+            return Err(SceneError::Parse {
+                source_name: source.clone(),
+                message: format!(
+                    "node {} is nested more than 256 deep (a cycle?)",
+                    node.index()
+                ),
+            });
+        }
+        // node transforms are composed in f64: only the mesh-local positions are f32 (glTF spec)
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
         let world = parent * local;
         for child in node.children() {
-            stack.push((child, world));
+            stack.push((child, world, depth + 1));
         }
         let Some(mesh) = node.mesh() else { continue };
         let obj = objects.len() as u32;
-        objects.push(
-            node.name()
-                .or(mesh.name())
-                .map_or_else(|| format!("node{}", node.index()), String::from),
-        );
+        let obj_name = node
+            .name()
+            .or(mesh.name())
+            .map_or_else(|| format!("node{}", node.index()), String::from);
+        objects.push(obj_name.clone());
         let flip = world.determinant() < 0.0;
         for prim in mesh.primitives() {
-            if prim.mode() != gltf::mesh::Mode::Triangles {
-                skipped += 1;
+            use gltf::mesh::Mode;
+            let mode = prim.mode();
+            if !matches!(
+                mode,
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
+                skipped.push(format!("`{obj_name}` ({mode:?})"));
                 continue;
             }
             let mat = prim.material();
@@ -180,16 +480,26 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
             let bc = pbr.base_color_factor();
             let strength = f64::from(mat.emissive_strength().unwrap_or(1.0));
             let ef = mat.emissive_factor();
-            let rho = Spectrum([bc[0], bc[1], bc[2]].map(f64::from));
             let e = Spectrum(ef.map(|v| f64::from(v) * strength * PI));
+            let rho = match checked.iter().find(|(i, _)| *i == mat.index()) {
+                Some(&(_, rho)) => rho,
+                None => {
+                    let name = match (mat.name(), mat.index()) {
+                        (Some(n), _) => n.to_string(),
+                        (None, Some(i)) => format!("material {i}"),
+                        (None, None) => "the default material".to_string(),
+                    };
+                    let rho = Spectrum([bc[0], bc[1], bc[2]].map(f64::from));
+                    let rho = check_file_material(&source, &name, rho, e, &mut warnings)?;
+                    checked.push((mat.index(), rho));
+                    rho
+                }
+            };
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
             let Some(pos) = reader.read_positions() else {
                 return Err(SceneError::Parse {
                     source_name: source.clone(),
-                    message: format!(
-                        "mesh `{}`: primitive without POSITION",
-                        mesh.name().unwrap_or("?")
-                    ),
+                    message: format!("mesh `{obj_name}`: primitive without POSITION"),
                 });
             };
             let pos: Vec<DVec3> = pos
@@ -199,13 +509,33 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
                 Some(i) => i.into_u32().collect(),
                 None => (0..pos.len() as u32).collect(),
             };
-            for t in idx.chunks_exact(3) {
+            // strips and fans as triangle lists (glTF 2.0 §3.7.2.1: strip triangle i is (i, i+1, i+2) for even
+            // i and (i+1, i, i+2) for odd i, so that every triangle winds like the first; fan i is (i+1, i+2, 0))
+            let tris: Vec<[u32; 3]> = match mode {
+                Mode::TriangleStrip => (0..idx.len().saturating_sub(2))
+                    .map(|i| {
+                        if i % 2 == 0 {
+                            [idx[i], idx[i + 1], idx[i + 2]]
+                        } else {
+                            [idx[i + 1], idx[i], idx[i + 2]]
+                        }
+                    })
+                    .collect(),
+                Mode::TriangleFan => (1..idx.len().saturating_sub(1))
+                    .map(|i| [idx[i], idx[i + 1], idx[0]])
+                    .collect(),
+                _ => idx.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+            };
+            for t in tris {
                 let get = |i: u32| {
                     pos.get(i as usize)
                         .copied()
                         .ok_or_else(|| SceneError::Parse {
                             source_name: source.clone(),
-                            message: format!("index {i} out of range ({} vertices)", pos.len()),
+                            message: format!(
+                                "mesh `{obj_name}`: index {i} out of range ({} vertices)",
+                                pos.len()
+                            ),
                         })
                 };
                 let (a, b, c) = (get(t[0])?, get(t[1])?, get(t[2])?);
@@ -215,19 +545,31 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
             }
         }
     }
+    if faces.is_empty() && !skipped.is_empty() {
+        return Err(SceneError::Parse {
+            source_name: source,
+            message: format!(
+                "no triangles: every primitive is points or lines ({}), which have no area to light",
+                skipped.join(", ")
+            ),
+        });
+    }
     let camera: Option<Camera> = None;
     let mut scene = Scene::new(&stem(path), &source, faces, objects, camera)?;
-    if skipped > 0 {
-        scene.warnings.push(format!(
-            "{source}: skipped {skipped} non-triangle primitive(s)"
+    if !skipped.is_empty() {
+        warnings.push(format!(
+            "{source}: skipped {} point/line primitive(s): {}",
+            skipped.len(),
+            skipped.join(", ")
         ));
     }
+    scene.warnings.extend(warnings);
     Ok(scene)
 }
 
 /// Writes a scene as OBJ text plus MTL text (one material per distinct (ρ, E) pair, `Ke = E/π`), with
-/// `mtllib <mtl_name>`. Numbers are written with full f64 precision; tobj parses them as f32, so a round trip
-/// through [`load_obj`] reproduces the faces to f32 rounding.
+/// `mtllib <mtl_name>`. Numbers are written with full f64 precision and [`load_obj`] reads them in f64, so a
+/// round trip reproduces the faces exactly.
 pub fn to_obj(scene: &Scene, mtl_name: &str) -> (String, String) {
     use std::fmt::Write;
     let mut obj = format!(

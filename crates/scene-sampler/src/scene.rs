@@ -157,9 +157,12 @@ impl Scene {
     /// * ρ outside `[0, 1)` in any band: error (energy would not be conserved). Negative E: error.
     /// * Degenerate faces (area ≤ 1e-14 · diagonal², or zero normal): dropped, with a count in `warnings`;
     ///   error if nothing remains.
+    /// * A bounding-box diagonal outside `[1e-9, 1e12]` (the f32 BVH's range): error.
     /// * No face with positive emission: error.
+    /// * Coincident duplicate faces (same vertices and winding): merged with a warning naming them, or an
+    ///   error if their materials differ (see `merge_duplicates`).
     /// * Inconsistent windings (two faces of one object sharing an edge traversed in the same direction):
-    ///   reported in `warnings`, never "fixed" (FORMATS.md: report, don't guess).
+    ///   reported in `warnings` per object, never "fixed" (FORMATS.md: report, don't guess).
     ///
     /// `camera = None` picks a camera framing the scene bounds.
     pub fn new(
@@ -217,19 +220,21 @@ impl Scene {
                 dropped: dropped_ids.len(),
             });
         }
+        // The BVH is f32 relative to the scene's centre: its boxes' surface areas (∝ size²) must stay well
+        // inside f32's range (3·10³⁸, down to 10⁻³⁸); obvhs panics on a build when they overflow (found by
+        // the fuzz test: two triangles 10³¹ across).
+        let diagonal = diag2.sqrt();
+        if !(1e-9..=1e12).contains(&diagonal) {
+            return Err(SceneError::ExtentOutOfRange {
+                source_name: source.into(),
+                diagonal,
+            });
+        }
         if !kept.iter().any(|f| f.emission.max() > 0.0) {
             return Err(SceneError::NoEmitter {
                 source_name: source.into(),
             });
         }
-        let inconsistent = inconsistent_windings(&kept);
-        if inconsistent > 0 {
-            warnings.push(format!(
-                "{source}: {inconsistent} edge(s) shared by two faces of one object with the same direction: \
-                 inconsistent windings (normals) — front sides may be wrong"
-            ));
-        }
-        let grey = kept.iter().all(|f| f.rho.is_grey() && f.emission.is_grey());
         let mut objects = objects;
         let max_obj = kept
             .iter()
@@ -239,6 +244,21 @@ impl Scene {
         while objects.len() < max_obj {
             objects.push(format!("object{}", objects.len()));
         }
+        let kept = merge_duplicates(
+            source,
+            kept,
+            &kept_ids(n_in, &dropped_ids),
+            &objects,
+            &mut warnings,
+        )?;
+        for (object, edges) in inconsistent_windings(&kept) {
+            warnings.push(format!(
+                "{source}: object `{}`: {edges} edge(s) shared by two of its faces with the same direction: \
+                 inconsistent windings (normals) — front sides may be wrong",
+                objects[object as usize]
+            ));
+        }
+        let grey = kept.iter().all(|f| f.rho.is_grey() && f.emission.is_grey());
         let camera = camera.unwrap_or_else(|| Camera::framing(lo, hi));
         Ok(Scene {
             name: name.into(),
@@ -315,21 +335,113 @@ pub(crate) fn check_material(source: &str, i: usize, rho: Spectrum, e: Spectrum)
     Ok(())
 }
 
-/// Counts directed edges that appear twice within one object (the two faces sharing them wind the same way,
-/// so one of them has its normal flipped relative to the other). Vertices are matched exactly.
-fn inconsistent_windings(faces: &[Face]) -> usize {
+/// The load-order indices of the faces kept after dropping `dropped` (sorted) from `0..n`.
+fn kept_ids(n: usize, dropped: &[usize]) -> Vec<usize> {
+    let mut d = dropped.iter().peekable();
+    (0..n)
+        .filter(|i| {
+            if d.peek() == Some(&i) {
+                d.next();
+                false
+            } else {
+                true
+            }
+        })
+        .collect()
+}
+
+/// Removes coincident duplicate faces: the same three vertices (within `1e-9 · diagonal`, each coordinate
+/// rounded to that grid) in the same cyclic order, i.e. the same triangle with the same front side. A light
+/// quad written twice would otherwise emit twice: B doubles in the solvers that integrate over faces, and
+/// not in a path tracer (which sees only the face a ray hits first). Duplicates with the same material are
+/// merged (the first kept) with a warning naming them; with different materials the scene is refused
+/// ([`SceneError::ConflictingDuplicate`]), since which one a ray sees would be decided by rounding.
+/// Coincident faces with *opposite* windings are two-sided thin geometry and are kept.
+fn merge_duplicates(
+    source: &str,
+    faces: Vec<Face>,
+    ids: &[usize],
+    objects: &[String],
+    warnings: &mut Vec<String>,
+) -> Result<Vec<Face>> {
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for f in &faces {
+        for v in f.v {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    let grid = 1e-9 * (hi - lo).length();
+    let q = |p: DVec3| {
+        let c = (p - lo) / grid;
+        [c.x.round() as i64, c.y.round() as i64, c.z.round() as i64]
+    };
+    // the rotation of the vertex cycle that starts at its smallest vertex: equal for the same triangle with
+    // the same winding, whatever vertex it was written from
+    let key = |f: &Face| {
+        let k = f.v.map(q);
+        let s = (0..3).min_by_key(|&i| k[i]).unwrap_or(0);
+        [k[s], k[(s + 1) % 3], k[(s + 2) % 3]]
+    };
+    let name = |o: u32| objects.get(o as usize).cloned().unwrap_or_default();
+    let mut first: HashMap<[[i64; 3]; 3], usize> = HashMap::with_capacity(faces.len());
+    let mut merged: Vec<String> = Vec::new();
+    let mut out: Vec<Face> = Vec::with_capacity(faces.len());
+    let mut out_ids: Vec<usize> = Vec::with_capacity(faces.len());
+    for (k, f) in faces.into_iter().enumerate() {
+        let key = key(&f);
+        if let Some(&j) = first.get(&key) {
+            let g = &out[j];
+            if g.rho != f.rho || g.emission != f.emission {
+                return Err(SceneError::ConflictingDuplicate {
+                    source_name: source.into(),
+                    face: ids[k],
+                    object: name(f.object),
+                    other: out_ids[j],
+                    other_object: name(g.object),
+                });
+            }
+            merged.push(format!(
+                "face {} (object `{}`) = face {} (object `{}`)",
+                ids[k],
+                name(f.object),
+                out_ids[j],
+                name(g.object)
+            ));
+        } else {
+            first.insert(key, out.len());
+            out.push(f);
+            out_ids.push(ids[k]);
+        }
+    }
+    if !merged.is_empty() {
+        warnings.push(format!(
+            "{source}: merged {} coincident duplicate face(s) (same vertices, winding and material; each \
+             would have counted twice): {}{}",
+            merged.len(),
+            merged[..merged.len().min(10)].join(", "),
+            if merged.len() > 10 { ", ..." } else { "" }
+        ));
+    }
+    Ok(out)
+}
+
+/// Counts, per object, directed edges that appear twice within it (the two faces sharing them wind the same
+/// way, so one of them has its normal flipped relative to the other). Vertices are matched exactly. Returns
+/// `(object, edges)` for the objects with at least one, in object order.
+fn inconsistent_windings(faces: &[Face]) -> Vec<(u32, usize)> {
     let key = |p: DVec3| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
     let mut seen: HashMap<(u32, [u64; 3], [u64; 3]), u32> = HashMap::new();
-    let mut bad = 0;
+    let mut bad: std::collections::BTreeMap<u32, usize> = Default::default();
     for f in faces {
         for k in 0..3 {
             let e = (f.object, key(f.v[k]), key(f.v[(k + 1) % 3]));
             let c = seen.entry(e).or_insert(0);
             *c += 1;
             if *c == 2 {
-                bad += 1;
+                *bad.entry(f.object).or_insert(0) += 1;
             }
         }
     }
-    bad
+    bad.into_iter().collect()
 }

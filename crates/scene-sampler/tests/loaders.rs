@@ -227,22 +227,22 @@ fn malformed_inputs_give_errors() {
     .unwrap_err();
     assert!(matches!(e, SceneError::NonFinite { face: 1, .. }), "{e}");
     assert!(msg(e).contains("nan.obj"));
-    // reflectance ≥ 1
-    let e = obj(
+    // reflectance ≥ 1: clamped to RHO_MAX, one warning naming the material (issue 17)
+    let s = obj(
         "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl light\nf 1 2 3\nusemtl bad\nf 1 3 2\n",
         "rho",
     )
-    .unwrap_err();
+    .unwrap();
+    assert_eq!(s.faces[1].rho, Spectrum([RHO_MAX, 0.5, 0.5]));
+    let w: Vec<_> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("clamped"))
+        .collect();
     assert!(
-        matches!(
-            e,
-            SceneError::ReflectanceOutOfRange {
-                face: 1,
-                band: 0,
-                ..
-            }
-        ),
-        "{e}"
+        w.len() == 1 && w[0].contains("material `bad`"),
+        "{:?}",
+        s.warnings
     );
     // no emitter
     let e = obj("usemtl white\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "dark").unwrap_err();
@@ -288,22 +288,21 @@ fn malformed_inputs_give_errors() {
     assert!(ok.warnings.is_empty(), "{:?}", ok.warnings);
     // Flatland: ρ out of range, negative emission, NaN, no emitter
     let f = |t: &str| FlatlandScene::from_json("t", "t.json", t);
-    let e = f(r#"{"segments": [{"a": [0,0], "b": [1,0], "rho": [0.5, 1.0, 0.5], "emission": 1}]}"#)
-        .unwrap_err();
+    // ρ ≥ 1: clamped with a warning naming the segment (issue 17)
+    let s = f(r#"{"segments": [{"a": [0,0], "b": [1,0], "rho": [0.5, 1.0, 0.5], "emission": 1}]}"#)
+        .unwrap();
+    assert_eq!(s.segments[0].rho, Spectrum([0.5, RHO_MAX, 0.5]));
     assert!(
-        matches!(
-            e,
-            SceneError::ReflectanceOutOfRange {
-                face: 0,
-                band: 1,
-                ..
-            }
-        ),
-        "{e}"
+        s.warnings.len() == 1 && s.warnings[0].contains("segment 0"),
+        "{:?}",
+        s.warnings
     );
     let e =
         f(r#"{"segments": [{"a": [0,0], "b": [1,0], "rho": 0.5, "emission": -1}]}"#).unwrap_err();
-    assert!(matches!(e, SceneError::NegativeEmission { .. }), "{e}");
+    assert!(
+        matches!(&e, SceneError::BadMaterial { material, .. } if material == "segment 0"),
+        "{e}"
+    );
     let e =
         f(r#"{"segments": [{"a": [0,0], "b": [1,0], "rho": 0.5, "emission": 0}]}"#).unwrap_err();
     assert!(matches!(e, SceneError::NoEmitter { .. }), "{e}");

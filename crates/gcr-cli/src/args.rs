@@ -159,6 +159,10 @@ pub struct ReferenceArgs {
     /// Where to write B at the probes (`r g b` per line; Flatland grey: `b`).
     #[arg(long)]
     pub probe_out: PathBuf,
+    /// Where to write each probe's standard error of B (same layout as `--probe-out`) and its
+    /// path count and relative error bound (`inf` where no path found light).
+    #[arg(long)]
+    pub std_out: Option<PathBuf>,
     /// Target relative standard error per probe and band.
     #[arg(long, default_value_t = 0.01)]
     pub rel_error: f64,

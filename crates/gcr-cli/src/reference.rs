@@ -17,6 +17,9 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
         ..baselines::Adaptive::default()
     };
     check_target(&args.probe_out, "probe", None)?;
+    if let Some(std_out) = &args.std_out {
+        check_target(std_out, "standard error", None)?;
+    }
     let loaded = scene_sampler::load_or_builtin(&args.scene)
         .with_context(|| format!("loading scene `{}`", args.scene))?;
     for w in loaded.warnings() {
@@ -28,39 +31,64 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
         AnyScene::ThreeD(s) => {
             let points = s.snap_probes(&scene_sampler::read_probes(probes)?, &source)?;
             let bvh = SceneBvh::new(&s);
-            let est = baselines::pointwise::radiosity_adaptive(&s, &bvh, &points, &adaptive)?;
+            let est = baselines::pointwise::reference_at(&s, &bvh, &points, &adaptive)?;
             (est, false)
         }
         AnyScene::Flatland(s) => {
             let points = s.snap_probes(&scene_sampler::read_flat_probes(probes)?, &source)?;
             let vis = scene_sampler::FlatVisibility::new(&s);
-            let est = baselines::flatland::path_trace_adaptive(&s, &vis, &points, &adaptive)?;
+            let est = baselines::flatland::reference_at(&s, &vis, &points, &adaptive)?;
             (est, s.bands == 1)
         }
     };
-    let mut out = String::new();
-    let (mut paths, mut worst) = (0usize, 0.0f64);
-    for e in &estimates {
+    let bands = |v: [f64; 3]| {
         if grey {
-            out.push_str(&format!("{}\n", e.mean[0]));
+            format!("{}", v[0])
         } else {
-            out.push_str(&format!("{} {} {}\n", e.mean[0], e.mean[1], e.mean[2]));
+            format!("{} {} {}", v[0], v[1], v[2])
         }
-        paths += e.paths;
-        for b in 0..3 {
-            if e.mean[b] > 0.0 {
-                worst = worst.max(e.std_error[b] / e.mean[b]);
-            }
-        }
+    };
+    let (mut out, mut std) = (String::new(), String::new());
+    for e in &estimates {
+        out.push_str(&format!("{}\n", bands(e.estimate.mean)));
+        std.push_str(&format!(
+            "{} {} {}\n",
+            bands(e.estimate.std_error),
+            e.estimate.paths,
+            e.rel_error
+        ));
     }
     let mut staged = StagedFiles::new();
     staged.write_bytes(&args.probe_out, out.as_bytes())?;
+    if let Some(std_out) = &args.std_out {
+        staged.write_bytes(std_out, std.as_bytes())?;
+    }
     staged.commit()?;
+    summarize(&estimates, args.rel_error, start);
+    Ok(())
+}
+
+/// The closing lines: probes, paths, the worst relative error bound (∞ where no path found
+/// light), and the probes (1-based lines) that missed the target at the path cap.
+fn summarize(estimates: &[baselines::AdaptiveEstimate], target: f64, start: Instant) {
+    let paths: usize = estimates.iter().map(|e| e.estimate.paths).sum();
+    let worst = estimates.iter().map(|e| e.rel_error).fold(0.0, f64::max);
     eprintln!(
-        "reference: {} probes, {paths} paths, worst relative standard error {:.4}, {:.1} s",
+        "reference: {} probes, {paths} paths, worst relative standard error {worst:.4}, {:.1} s",
         estimates.len(),
-        worst,
         start.elapsed().as_secs_f64()
     );
-    Ok(())
+    let missed: Vec<String> = (estimates.iter().enumerate())
+        .filter(|(_, e)| !e.target_met)
+        .map(|(i, e)| format!("{} ({:.4})", i + 1, e.rel_error))
+        .collect();
+    if !missed.is_empty() {
+        eprintln!(
+            "warning: {} of {} probes missed the target {target} at the path cap (line and \
+             relative error; raise --max-paths): {}",
+            missed.len(),
+            estimates.len(),
+            missed.join(", ")
+        );
+    }
 }

@@ -40,6 +40,52 @@ fn reference_writes_one_line_per_probe_and_reaches_its_target() {
     }
 }
 
+/// `--std-out` writes each probe's standard errors, path count and relative error bound; probes
+/// that miss the target at the path cap are named on stderr (issue: the summary hid them).
+#[test]
+fn reference_writes_standard_errors_and_names_missed_probes() {
+    let (out, std_out) = (tmp("ref-b.txt"), tmp("ref-se.txt"));
+    let o = gcr(&[
+        "reference",
+        "cornell-box",
+        "--probes",
+        "scenes/cornell-box.probes.txt",
+        "--probe-out",
+        &out,
+        "--std-out",
+        &std_out,
+        "--rel-error",
+        "0.001",
+        "--max-paths",
+        "5000",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("missed the target 0.001"),
+        "the missed probes are named: {stderr}"
+    );
+    let se = std::fs::read_to_string(&std_out).unwrap();
+    assert_eq!(se.lines().count(), 19);
+    for line in se.lines() {
+        let v: Vec<f64> = line
+            .split_whitespace()
+            .map(|x| x.parse().unwrap())
+            .collect();
+        assert_eq!(
+            v.len(),
+            5,
+            "r g b standard errors, paths, relative error: {line}"
+        );
+        assert!(v[..3].iter().all(|x| x.is_finite() && *x >= 0.0));
+        assert!(
+            v[3] >= 4096.0 && v[3] <= 5000.0,
+            "paths within [min_paths, cap]: {line}"
+        );
+        assert!(v[4] >= 0.0);
+    }
+}
+
 #[test]
 fn solve_writes_probe_values_for_a_3d_scene() {
     let out = tmp("solve.txt");

@@ -165,7 +165,9 @@ pub fn train(
                 OutputFit::Projection => projected::fem_step(kernel, shading, &mut run)?,
                 OutputFit::DeltaRule => delta_rule::fem_step(kernel, shading, &mut run),
             }
-            run.metrics.seconds.fem += tf.elapsed().as_secs_f64();
+            let took = tf.elapsed().as_secs_f64();
+            run.metrics.seconds.fem += took;
+            schedule.fem_took(took, kernel.cell_count());
         }
         // ⟨Report progress⟩
         run.report("training", kernel, shading, observer, false);

@@ -2,6 +2,10 @@
 
 use crate::config::SolveConfig;
 
+/// The final FEM step's cost relative to the last training step's, scaled to the same cells
+/// ([`Schedule::final_reserve`]).
+const FINAL_STEP_FACTOR: f64 = 2.0;
+
 /// The loop's clock: the budgets and the FEM steps' spacing.
 pub(super) struct Schedule {
     kernel_cells: usize,
@@ -11,6 +15,8 @@ pub(super) struct Schedule {
     base_used: bool,
     last_fem_insertions: u64,
     last_projected_cells: usize,
+    /// Seconds and kernel cells of the last FEM step, to reserve time for the final one.
+    last_fem: Option<(f64, usize)>,
 }
 
 impl Schedule {
@@ -23,19 +29,40 @@ impl Schedule {
             base_used: config.needs_base(),
             last_fem_insertions: 0,
             last_projected_cells: 0,
+            last_fem: None,
         }
     }
 
     /// Why training stops now, if it does: the kernel cell budget (`"cells"`) or the time budget
-    /// (`"time"`).
+    /// (`"time"`). The time budget covers the final FEM step too: training stops when the time
+    /// left is what that step is expected to take ([`Schedule::final_reserve`]).
     pub(super) fn stop(&self, kernel_cells: usize, elapsed: f64) -> Option<&'static str> {
         if kernel_cells >= self.kernel_cells {
             Some("cells")
-        } else if self.time_budget.is_some_and(|t| elapsed >= t) {
+        } else if self
+            .time_budget
+            .is_some_and(|t| elapsed + self.final_reserve(kernel_cells) >= t)
+        {
             Some("time")
         } else {
             None
         }
+    }
+
+    /// The expected cost of the final FEM step with `kernel_cells` cells: the last step's time
+    /// scaled by the Gram matrix's growth (cells²), doubled for the final step's longer bounce
+    /// iteration (measured on cornell-box at 400–800 cells: the final step took 1.3–2× the last
+    /// training step scaled this way).
+    fn final_reserve(&self, kernel_cells: usize) -> f64 {
+        self.last_fem.map_or(0.0, |(seconds, cells)| {
+            let growth = kernel_cells as f64 / cells.max(1) as f64;
+            FINAL_STEP_FACTOR * seconds * growth * growth
+        })
+    }
+
+    /// Records how long the FEM step just run took.
+    pub(super) fn fem_took(&mut self, seconds: f64, kernel_cells: usize) {
+        self.last_fem = Some((seconds, kernel_cells));
     }
 
     /// Whether a FEM step is due, recording it when it is: every `fem_every` kernel insertions
@@ -77,6 +104,24 @@ mod tests {
         assert_eq!(s.stop(100, 1.0), Some("cells"));
         assert_eq!(s.stop(100, 3.0), Some("cells"));
         assert_eq!(s.stop(50, 2.0), Some("time"));
+    }
+
+    /// The time budget keeps room for the final FEM step: the last step's time scaled by the
+    /// cells' growth squared, twice.
+    #[test]
+    fn the_time_budget_reserves_the_final_fem_step() {
+        let config = SolveConfig {
+            kernel_cells: 1000,
+            time_budget: Some(10.0),
+            ..SolveConfig::default()
+        };
+        let mut s = Schedule::new(&config);
+        assert_eq!(s.stop(100, 9.0), None, "no step measured yet");
+        s.fem_took(0.5, 100);
+        assert_eq!(s.stop(100, 8.9), None, "reserve 1 s");
+        assert_eq!(s.stop(100, 9.0), Some("time"));
+        assert_eq!(s.stop(200, 6.0), Some("time"), "reserve 4 s at twice the cells");
+        assert_eq!(s.stop(200, 5.9), None);
     }
 
     /// The projection's steps need the kernel 25 % larger than at the last step; the delta rule

@@ -102,18 +102,60 @@ fn report(
         .collect()
 }
 
+/// ρ = (0.5, 0.8, 0.95), E = 1: B = (2, 5, 20). The final propagation's direct solve lands on
+/// the fixed point in one step (before: the blue band at 18.8, −6 %). Measured (seed 1, 200
+/// cells, ray gather): mean (2.002, 4.999, 19.97), relative L2 (0.016, 0.042, 0.067); seeds 2–4
+/// give blue means 19.58, 19.86, 20.24 (docs/gcr-algorithm.md).
 #[test]
-fn measure_rgb() {
+fn an_rgb_furnace_converges_per_band() {
     let scene = scene_sampler::builtin::furnace(Spectrum([1.0; 3]), Spectrum([0.5, 0.8, 0.95]));
-    for cells in [100, 200] {
-        report("rgb", &scene, &config(cells), [2.0, 5.0, 20.0]);
+    let exact = [2.0, 5.0, 20.0];
+    let r = report("rgb", &scene, &config(200), exact);
+    let (mean, l2) = r[1];
+    for k in 0..3 {
+        assert!(
+            (mean[k] / exact[k] - 1.0).abs() < 0.01,
+            "band {k}: mean {mean:?}"
+        );
+        assert!(l2[k] < [0.03, 0.06, 0.10][k], "band {k}: rel L2 {l2:?}");
     }
 }
 
+/// Grey ρ = 0.99, E = 1: B = 100 (before: 45 at 100 cells). Measured (seed 1, 100 cells, ray
+/// gather): mean 99.6, relative L2 0.082.
 #[test]
-fn measure_grey() {
+fn a_grey_099_furnace_converges() {
     let scene = scene_sampler::builtin::furnace(Spectrum([1.0; 3]), Spectrum([0.99; 3]));
-    for cells in [100, 200] {
-        report("grey99", &scene, &config(cells), [100.0; 3]);
+    let r = report("grey", &scene, &config(100), [100.0; 3]);
+    let (mean, l2) = r[1];
+    assert!((mean[0] / 100.0 - 1.0).abs() < 0.02, "mean {mean:?}");
+    assert!(l2[0] < 0.12, "rel L2 {l2:?}");
+}
+
+#[test]
+#[ignore]
+fn measure_seeds() {
+    let rgb = scene_sampler::builtin::furnace(Spectrum([1.0; 3]), Spectrum([0.5, 0.8, 0.95]));
+    let grey = scene_sampler::builtin::furnace(Spectrum([1.0; 3]), Spectrum([0.99; 3]));
+    for direct in [0, 3000] {
+        let cfg = SolveConfig {
+            seed: 4,
+            direct_solve_cells: direct,
+            ..config(100)
+        };
+        let r = std::panic::catch_unwind(|| {
+            report(&format!("grey direct {direct}"), &grey, &cfg, [100.0; 3])
+        });
+        eprintln!("ok: {}", r.is_ok());
+    }
+    for cells in [200] {
+        for seed in 1..=4 {
+            let cfg = SolveConfig {
+                seed,
+                ..config(cells)
+            };
+            report(&format!("rgb seed {seed}"), &rgb, &cfg, [2.0, 5.0, 20.0]);
+            report(&format!("grey seed {seed}"), &grey, &cfg, [100.0; 3]);
+        }
     }
 }

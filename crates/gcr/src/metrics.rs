@@ -89,6 +89,11 @@ pub struct Metrics {
     pub peak_memory_bytes: Option<u64>,
     /// The reason the training stopped (`cells`, `time`, `error`, `steps`).
     pub stopped_by: String,
+    /// Direct solves of the linearized bounce (the final propagation's fixed point, found by LU
+    /// instead of ~1/(1 − ρ) bounces; `SolveConfig::direct_solve_cells`).
+    pub direct_solves: usize,
+    /// Bounces of the final propagation alone (after a direct solve: the polishing bounces).
+    pub final_bounces: usize,
     /// What the solve noticed and the user should know (the result is still what was asked).
     pub warnings: Vec<String>,
 }

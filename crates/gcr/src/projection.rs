@@ -308,6 +308,59 @@ pub fn sampled_reflected_power(
     p
 }
 
+/// Reflected power per band that the samples carry, for a closed scene (every shot landed) whose
+/// strengths are `s = E + B_refl` with a known `∫_S B_refl = generated` (the reflected power of
+/// the kernel collection that bounced them): the ratio estimator
+///
+/// ```text
+/// P̃_k = ρ̂_k·(u·E_k + generated_k),   ρ̂_k = Σ_i ρ_k(y_i) s_ik u_i / Σ_i s_ik u_i,   u_i = inv_px_i/N.
+/// ```
+///
+/// [`sampled_reflected_power`] estimates `∫ B_refl` of the strengths by Monte Carlo, with a
+/// relative error ε that the bounces amplify by 1/(1 − ρ) (a grey ρ = 0.99 furnace settled at
+/// B = 44 instead of 100 with ε ≈ −1.3 %); here only the mean albedo ρ̂ is sampled (exact in a
+/// furnace) and the reflected part of ∫s is the exact integral of the collection.
+pub fn closed_reflected_power(
+    samples: &[Sample],
+    shots: u64,
+    reflectance: &(impl Fn(u32) -> Bands + Sync),
+    generated: Bands,
+) -> Bands {
+    let partial: Vec<[Bands; 3]> = samples
+        .par_chunks(1024)
+        .map(|part| {
+            let mut acc = [[0.0; MAX_BANDS]; 3];
+            for smp in part.iter().filter(|smp| smp.inv_px != 0.0) {
+                let rho = reflectance(smp.ray.face_y);
+                for k in 0..MAX_BANDS {
+                    if smp.ray.kernel[k] > 0.0 {
+                        acc[0][k] += rho[k] * smp.s[k] * smp.inv_px;
+                    }
+                    acc[1][k] += smp.s[k] * smp.inv_px;
+                    acc[2][k] += smp.ray.emission_x[k] * smp.inv_px;
+                }
+            }
+            acc
+        })
+        .collect();
+    let mut sum = [[0.0; MAX_BANDS]; 3];
+    for acc in partial {
+        for (t, a) in sum.iter_mut().zip(acc) {
+            for k in 0..MAX_BANDS {
+                t[k] += a[k];
+            }
+        }
+    }
+    let inv = 1.0 / shots.max(1) as f64;
+    let mut p = [0.0; MAX_BANDS];
+    for k in 0..MAX_BANDS {
+        if sum[1][k] > 0.0 {
+            p[k] = sum[0][k] / sum[1][k] * (sum[2][k] * inv + generated[k]);
+        }
+    }
+    p
+}
+
 /// Reflected power per band of the kernel collection: `∫_S B_refl = Σ_o v_o·c_o·r_o` with the
 /// sender integrals c_o and receiver integrals r_o ([`crate::fem::receiver_integrals`]).
 pub fn kernel_reflected_power(kernel: &KernelCells, sender: &[f64], receiver: &[f64]) -> Bands {
@@ -318,6 +371,156 @@ pub fn kernel_reflected_power(kernel: &KernelCells, sender: &[f64], receiver: &[
         }
     }
     p
+}
+
+/// One bounce of the projected kernel, linearized in weight space (the clamp `max(0, ·)` of
+/// [`crate::solve`]'s strengths left out), per band k:
+///
+/// ```text
+/// s = E + A v,          A_ip = c_p·g_p^y(x_i)            (N × m: the kernel collection at x_i)
+/// b(s) = M_k s,         M_k,oi = g_o(ξ_i)·w_k,i          (m × N: the moments, eq. above)
+/// w_k,i = ρ_k(y_i)·inv_px_i / N                         (the sampled-power weights)
+/// ```
+///
+/// so that a fit of the bounced strengths is `G⁻¹ (M_k E + (M_k A) v)`. Holds the parts that do
+/// not depend on v: `M_k A` (m × m), `M_k E`, `A^T w_k` and `w_k·E`.
+pub struct BounceOperator {
+    /// `(M_k A)` per band, m × m (rows: moments o, columns: weights p).
+    pub ma: Vec<DMatrix<f64>>,
+    /// `M_k E`: the moments of the emission alone.
+    pub me: Vec<Bands>,
+    /// `(A^T w_k)_p`: the sampled power of cell p's unit contribution to s.
+    pub atw: Vec<Bands>,
+    /// `w_k·E`: the sampled power of the emission alone.
+    pub we: Bands,
+    /// `(A^T u)_p` with the area weights `u_i = inv_px_i / N` ([`closed_reflected_power`]).
+    pub atu: Vec<Bands>,
+    /// `u·E`: the sampled emitted power.
+    pub ue: Bands,
+}
+
+/// Per sample, the cells `p` whose receiver half covers its sender x_i, with `A_ip = c_p·g_p^y(x_i)`
+/// (the kernel collection, fig. 4.13c, cut where `g_p^y < tol`; facing masks apply).
+fn collection_at(
+    kernel: &KernelCells,
+    sender: &[f64],
+    (a, cut): (&[f64], f64),
+    smp: &Sample,
+) -> Vec<(u32, f64)> {
+    let mut out = Vec::new();
+    for p in 0..kernel.len() {
+        if sender[p] == 0.0 || !kernel.accepts_receiver(p, smp.ray.nx) {
+            continue;
+        }
+        let e = a[p] * kernel.wy[p].distance_squared(smp.ray.x);
+        if e <= cut {
+            out.push((p as u32, sender[p] * (-e).exp()));
+        }
+    }
+    out
+}
+
+/// The sampled-power weights `w_k,i·N = ρ_k(y_i)·inv_px_i` of a sample (0 in bands without
+/// kernel, as in [`kernel_moments`]).
+fn power_weights(smp: &Sample, rho: Bands) -> Bands {
+    let mut w = [0.0; MAX_BANDS];
+    for k in 0..MAX_BANDS {
+        if smp.ray.kernel[k] > 0.0 {
+            w[k] = rho[k] * smp.inv_px;
+        }
+    }
+    w
+}
+
+/// Assembles the [`BounceOperator`] of the frozen `kernel` with sender integrals `sender` on the
+/// shot samples. Cost O(N·m) to find the cells at each sample, then O(N·k_o·k_p) for `M A`
+/// (k_o cells at ξ_i, k_p at x_i). Rows are summed over the samples in index order: the result
+/// does not depend on the threads.
+pub fn bounce_operator(
+    kernel: &KernelCells,
+    sender: &[f64],
+    samples: &[Sample],
+    shots: u64,
+    reflectance: &(impl Fn(u32) -> Bands + Sync),
+    (tol, excluded): (f64, &[bool]),
+) -> BounceOperator {
+    let m = kernel.len();
+    let cut = (1.0 / tol).ln();
+    let a: Vec<f64> = kernel.width.iter().map(|d| 1.0 / (d * d)).collect();
+    let inv = 1.0 / shots.max(1) as f64;
+    // ⟨Per sample: its power weights, the cells at ξ_i (moments), the cells at x_i (collection)⟩
+    let shot: Vec<usize> = (0..samples.len())
+        .filter(|&i| samples[i].inv_px != 0.0)
+        .collect();
+    type AtSample = (Bands, Vec<(u32, f64)>, Vec<(u32, f64)>);
+    let per: Vec<AtSample> = shot
+        .par_iter()
+        .map(|&i| {
+            let smp = &samples[i];
+            let w = power_weights(smp, reflectance(smp.ray.face_y));
+            let mut at = Vec::new();
+            for_each_cell_at(kernel, (&a, cut), excluded, smp, |o, g| {
+                at.push((o as u32, g))
+            });
+            (w, at, collection_at(kernel, sender, (&a, cut), smp))
+        })
+        .collect();
+    // ⟨Invert the moments' lists: per cell o, the samples in its support⟩
+    let mut by_cell: Vec<Vec<(u32, f64)>> = vec![Vec::new(); m];
+    for (j, (_, at, _)) in per.iter().enumerate() {
+        for &(o, g) in at {
+            by_cell[o as usize].push((j as u32, g));
+        }
+    }
+    // ⟨Rows of M A, M E; A^T w; w·E⟩
+    let rows: Vec<(Vec<Bands>, Bands)> = by_cell
+        .par_iter()
+        .map(|list| {
+            let mut row = vec![[0.0; MAX_BANDS]; m];
+            let mut me = [0.0; MAX_BANDS];
+            for &(j, g) in list {
+                let (w, _, coll) = &per[j as usize];
+                let e = &samples[shot[j as usize]].ray.emission_x;
+                for k in 0..MAX_BANDS {
+                    me[k] += g * w[k] * e[k] * inv;
+                }
+                for &(p, ap) in coll {
+                    for k in 0..MAX_BANDS {
+                        row[p as usize][k] += g * w[k] * ap * inv;
+                    }
+                }
+            }
+            (row, me)
+        })
+        .collect();
+    let (mut atw, mut atu) = (vec![[0.0; MAX_BANDS]; m], vec![[0.0; MAX_BANDS]; m]);
+    let (mut we, mut ue) = ([0.0; MAX_BANDS], [0.0; MAX_BANDS]);
+    for (j, (w, _, coll)) in per.iter().enumerate() {
+        let smp = &samples[shot[j]];
+        let (e, u) = (&smp.ray.emission_x, smp.inv_px * inv);
+        for k in 0..MAX_BANDS {
+            we[k] += w[k] * e[k] * inv;
+            ue[k] += u * e[k];
+        }
+        for &(p, ap) in coll {
+            for k in 0..MAX_BANDS {
+                atw[p as usize][k] += w[k] * ap * inv;
+                atu[p as usize][k] += u * ap;
+            }
+        }
+    }
+    let ma = (0..MAX_BANDS)
+        .map(|k| DMatrix::from_fn(m, m, |o, p| rows[o].0[p][k]))
+        .collect();
+    let me = rows.iter().map(|r| r.1).collect();
+    BounceOperator {
+        ma,
+        me,
+        atw,
+        we,
+        atu,
+        ue,
+    }
 }
 
 /// The factored Gram matrix of a frozen kernel network: the expensive half of a projection,
@@ -365,6 +568,11 @@ impl KernelProjection {
             tol,
             report,
         }
+    }
+
+    /// `G⁻¹ u` over the kept cells (the weights of moments `u`; rejected cells get 0).
+    pub fn solve(&self, u: &[f64]) -> Vec<f64> {
+        self.ortho.solve(u)
     }
 
     /// Rejections and Gram size.

@@ -16,7 +16,7 @@ pub(super) fn fem_step(
     shading: &impl GrowingNetwork,
     run: &mut Run,
 ) -> Result<(), SolveError> {
-    let p = propagate(kernel, run, TRAINING_BOUNCES)?;
+    let p = propagate(kernel, run, TRAINING_BOUNCES, false)?;
     record(run, &p);
     run.base_step(p.kernel, p.sender, shading);
     if run.config.strength_from == StrengthFrom::Base {
@@ -32,8 +32,9 @@ pub(super) fn finish(
     shading: &impl GrowingNetwork,
     run: &mut Run,
 ) -> Result<(KernelCells, Vec<f64>), SolveError> {
-    let p = propagate(kernel, run, FINAL_BOUNCES)?;
+    let p = propagate(kernel, run, FINAL_BOUNCES, true)?;
     record(run, &p);
+    run.metrics.final_bounces = p.bounces;
     run.metrics.energy_balance = run.config.energy_correction.then_some(p.energy_balance);
     // The bounces and the gathers use c_o; the base step may replace its copy by c̄_o.
     run.base_step(p.kernel.clone(), p.sender.clone(), shading);
@@ -43,6 +44,7 @@ pub(super) fn finish(
 fn record(run: &mut Run, p: &Propagated) {
     let m = &mut run.metrics;
     m.bounces += p.bounces;
+    m.direct_solves += p.direct_solves;
     m.diverging_bounces_stopped += usize::from(p.diverged);
     m.stabilized_projections += p.stabilized;
     m.unsupported_cells = p.unsupported;

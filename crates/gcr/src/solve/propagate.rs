@@ -144,121 +144,55 @@ pub(super) fn propagate(
 /// Projects K·s onto the frozen kernel's Gaussians at the relative pivot threshold `rejection`
 /// and iterates `s ← E + B_refl(s)` with the kernel collection (one light bounce per iteration)
 /// until the total strength changes by less than [`BOUNCE_TOLERANCE`] or `max_bounces` is
-/// reached. With `direct`, the bounces start from the fixed point of the linearized bounce
-/// ([`direct_weights`]) and only polish it (the clamp, the guards).
+/// reached. With `direct`, and when the bounces would converge slowly ([`slow_bounces`]), the
+/// bounces start from the fixed point of the linearized bounce ([`jump_to_fixed_point`]) and only
+/// polish it (the clamp, the guards).
 fn propagate_at(
     prepared: &Frozen,
     run: &mut Run,
     (max_bounces, direct): (usize, bool),
     rejection: f64,
 ) -> Propagated {
-    let Frozen {
-        kernel,
-        sender,
-        receiver,
-        excluded,
-        gram,
-    } = prepared;
     let (domain, config, shots) = (run.domain, run.config, run.shots);
     let samples = &mut run.samples[..];
-    let mut frozen = kernel.clone();
-    let projection =
-        KernelProjection::from_gram(gram, config.projection_tolerance, rejection, excluded);
     let reflectance = |f| domain.reflectance(f);
-    let total =
-        |samples: &[Sample]| -> f64 { samples.iter().map(|s| s.s.iter().sum::<f64>()).sum() };
-    // The projection conserves energy only up to its fit error and the cells it rejects; with ρ
-    // near 1 the bounce iteration amplifies any excess (a ρ = 0.95 furnace ran away to 15× the
-    // exact B). Rescaling the weights so that the kernel reflects exactly the power the samples
-    // carry makes the iteration's gain that of the scene. Returns the balance before the
-    // rescaling (None when not measured).
-    //
-    // In a closed scene whose strengths the current weights bounced (`generated`), the sampled
-    // power is the ratio estimator of [`closed_reflected_power`]: the raw Monte-Carlo power's
-    // error would be amplified by 1/(1 − ρ) as well.
-    let closed = samples.iter().filter(|s| s.inv_px != 0.0).count() as u64 == shots;
-    let fit = |frozen: &mut KernelCells, samples: &[Sample], generated: bool| -> Option<f64> {
-        let generated = (closed && generated && !receiver.is_empty())
-            .then(|| kernel_reflected_power(frozen, sender, receiver));
-        projection.fit(frozen, samples, shots, &reflectance);
-        if !config.energy_correction {
-            return None;
-        }
-        let sampled = match generated {
-            Some(g) => closed_reflected_power(samples, shots, &reflectance, g),
-            None => sampled_reflected_power(samples, shots, &reflectance),
-        };
-        let model = kernel_reflected_power(frozen, sender, receiver);
-        let (mut num, mut den) = (0.0, 0.0);
-        for k in 0..MAX_BANDS {
-            num += model[k];
-            den += sampled[k];
-            let ratio = sampled[k] / model[k];
-            if sampled[k] > 0.0 && model[k] > 0.0 && ratio.is_finite() {
-                for v in frozen.v.iter_mut() {
-                    v[k] *= ratio;
-                }
-            }
-        }
-        (den > 0.0 && num.is_finite()).then_some(num / den)
+    let fitter = Fitter {
+        projection: KernelProjection::from_gram(
+            &prepared.gram,
+            config.projection_tolerance,
+            rejection,
+            &prepared.excluded,
+        ),
+        prepared,
+        shots,
+        closed: samples.iter().filter(|s| s.inv_px != 0.0).count() as u64 == shots,
+        correct: config.energy_correction,
+        reflectance: &reflectance,
     };
+    let mut frozen = prepared.kernel.clone();
     let bound = domain.radiosity_bound();
-    let mut balance = 1.0;
-    let mut before = total(samples);
-    let mut bounces = 0;
-    let mut watch = BounceWatch::default();
-    let mut diverged = false;
-    // ⟨Jump to the fixed point of the linearized bounce, then polish it with ordinary bounces⟩
-    let mut direct_solves = 0;
-    let mut generated = false;
-    if direct {
-        let op = bounce_operator(
-            &frozen,
-            sender,
-            samples,
-            shots,
-            &reflectance,
-            (config.projection_tolerance, excluded),
-        );
-        let start = start_correction(
-            &projection,
+    // ⟨Jump to the fixed point of the linearized bounce when bouncing would be slow⟩
+    let jumped = direct
+        && slow_bounces(samples, &reflectance)
+        && jump_to_fixed_point(
+            &fitter,
             &mut frozen,
             samples,
-            (shots, sender, receiver),
-            &reflectance,
+            &bound,
+            config.projection_tolerance,
         );
-        let q: Vec<f64> = if receiver.is_empty() {
-            Vec::new()
-        } else {
-            sender.iter().zip(receiver).map(|(c, r)| c * r).collect()
-        };
-        if let Some(v) = direct_weights(&projection, &op, (&q, closed), start) {
-            let (kept_v, kept_s) = (
-                frozen.v.clone(),
-                samples.iter().map(|smp| smp.s).collect::<Vec<_>>(),
-            );
-            frozen.v = v;
-            samples.par_iter_mut().for_each(|smp| {
-                smp.s = kernel_strength(&smp.ray, &frozen, sender);
-            });
-            // A projected kernel with a mode of gain above 1 has a fixed point the bounces never
-            // reach (measured: a ρ = 0.99 furnace, 100 cells, seed 4, 11× the bound): keep
-            // bouncing from where the strengths were instead.
-            if bound_excess(samples, &bound) > DIRECT_LIMIT {
-                frozen.v = kept_v;
-                for (smp, s) in samples.iter_mut().zip(kept_s) {
-                    smp.s = s;
-                }
-            } else {
-                direct_solves = 1;
-                generated = true;
-                before = total(samples);
-            }
-        }
-    }
+    // ⟨Bounce until settled, guarded⟩
+    let mut generated = jumped;
+    let mut balance = 1.0;
+    let total =
+        |samples: &[Sample]| -> f64 { samples.iter().map(|s| s.s.iter().sum::<f64>()).sum() };
+    let mut before = total(samples);
+    let (mut bounces, mut diverged) = (0, false);
+    let mut watch = BounceWatch::default();
+    let sender = &prepared.sender;
     while bounces < max_bounces {
         // ⟨Fit the weights to the current strengths; stop at once on a broken balance⟩
-        let measured = fit(&mut frozen, samples, generated);
+        let measured = fitter.fit(&mut frozen, samples, generated);
         balance = measured.unwrap_or(balance);
         if measured.is_some_and(balance_broken) {
             diverged = true;
@@ -285,21 +219,156 @@ fn propagate_at(
         }
         watch.record(change, samples);
     }
-    // The weights that go with the final strengths.
-    if let Some(b) = fit(&mut frozen, samples, generated) {
+    // ⟨The weights that go with the final strengths⟩
+    if let Some(b) = fitter.fit(&mut frozen, samples, generated) {
         balance = b;
     }
     Propagated {
         kernel: frozen,
         sender: sender.clone(),
         bounces,
-        direct_solves,
+        direct_solves: usize::from(jumped),
         energy_balance: balance,
         diverged,
         settled: watch.settled(),
         stabilized: 0,
-        unsupported: excluded.iter().filter(|e| **e).count(),
+        unsupported: prepared.excluded.iter().filter(|e| **e).count(),
     }
+}
+
+/// Whether the bounce iteration would be slow: its gain is about the flux-weighted reflectance
+/// of the scene (what one bounce keeps of the power the samples carry), and it needs
+/// ln(tolerance)/ln(gain) bounces; beyond [`SLOW_BOUNCES`] the direct solve pays (it costs
+/// O(cells³), a bounce O(samples · cells)). Ordinary scenes (gain ≈ 0.5, 17 bounces) keep the
+/// plain iteration.
+fn slow_bounces(samples: &[Sample], reflectance: &(impl Fn(u32) -> Bands + Sync)) -> bool {
+    let (mut kept, mut carried) = ([0.0; MAX_BANDS], [0.0; MAX_BANDS]);
+    for smp in samples.iter().filter(|s| s.inv_px != 0.0) {
+        let rho = reflectance(smp.ray.face_y);
+        for k in 0..MAX_BANDS {
+            if smp.ray.kernel[k] > 0.0 {
+                kept[k] += rho[k] * smp.s[k] * smp.inv_px;
+                carried[k] += smp.s[k] * smp.inv_px;
+            }
+        }
+    }
+    let gain = (0..MAX_BANDS)
+        .filter(|&k| carried[k] > 0.0)
+        .map(|k| kept[k] / carried[k])
+        .fold(0.0, f64::max);
+    gain > 0.0 && gain < 1.0 && BOUNCE_TOLERANCE.ln() / gain.ln() > SLOW_BOUNCES || gain >= 1.0
+}
+
+/// Bounces beyond which [`slow_bounces`] calls the iteration slow (gain ≈ 0.83).
+const SLOW_BOUNCES: f64 = 60.0;
+
+/// The fit of the weights to the samples' strengths, with the energy correction.
+struct Fitter<'a, R> {
+    projection: KernelProjection,
+    prepared: &'a Frozen,
+    shots: u64,
+    /// Every shot landed: the scene is closed.
+    closed: bool,
+    correct: bool,
+    reflectance: &'a R,
+}
+
+impl<R: Fn(u32) -> Bands + Sync> Fitter<'_, R> {
+    /// Fits `frozen`'s weights to the strengths and applies the energy correction: the
+    /// projection conserves energy only up to its fit error and the cells it rejects; with ρ near
+    /// 1 the bounce iteration amplifies any excess (a ρ = 0.95 furnace ran away to 15× the exact
+    /// B). Rescaling the weights so that the kernel reflects exactly the power the samples carry
+    /// makes the iteration's gain that of the scene. In a closed scene whose strengths the current
+    /// weights bounced (`generated`), the sampled power is the ratio estimator of
+    /// [`closed_reflected_power`]: the raw Monte-Carlo power's error would be amplified by
+    /// 1/(1 − ρ) as well. Returns the balance before the rescaling (None when not measured).
+    fn fit(&self, frozen: &mut KernelCells, samples: &[Sample], generated: bool) -> Option<f64> {
+        let Frozen {
+            sender, receiver, ..
+        } = self.prepared;
+        let generated = (self.closed && generated && !receiver.is_empty())
+            .then(|| kernel_reflected_power(frozen, sender, receiver));
+        self.projection
+            .fit(frozen, samples, self.shots, self.reflectance);
+        if !self.correct {
+            return None;
+        }
+        let sampled = match generated {
+            Some(g) => closed_reflected_power(samples, self.shots, self.reflectance, g),
+            None => sampled_reflected_power(samples, self.shots, self.reflectance),
+        };
+        let model = kernel_reflected_power(frozen, sender, receiver);
+        let (mut num, mut den) = (0.0, 0.0);
+        for k in 0..MAX_BANDS {
+            num += model[k];
+            den += sampled[k];
+            let ratio = sampled[k] / model[k];
+            if sampled[k] > 0.0 && model[k] > 0.0 && ratio.is_finite() {
+                for v in frozen.v.iter_mut() {
+                    v[k] *= ratio;
+                }
+            }
+        }
+        (den > 0.0 && num.is_finite()).then_some(num / den)
+    }
+}
+
+/// Sets the weights and strengths to the fixed point of the linearized bounce
+/// ([`direct_weights`]). A projected kernel with a mode of gain above 1 has a fixed point the
+/// bounces never reach (measured: a ρ = 0.99 furnace, 100 cells, seed 4, 11× the bound): then, or
+/// when the system is singular, everything stays as it was and `false` is returned.
+fn jump_to_fixed_point<R: Fn(u32) -> Bands + Sync>(
+    fitter: &Fitter<R>,
+    frozen: &mut KernelCells,
+    samples: &mut [Sample],
+    bound: &Bands,
+    tolerance: f64,
+) -> bool {
+    let Frozen {
+        sender,
+        receiver,
+        excluded,
+        ..
+    } = fitter.prepared;
+    let shots = fitter.shots;
+    let op = bounce_operator(
+        frozen,
+        sender,
+        samples,
+        shots,
+        fitter.reflectance,
+        (tolerance, excluded),
+    );
+    let start = start_correction(
+        &fitter.projection,
+        frozen,
+        samples,
+        (shots, sender, receiver),
+        fitter.reflectance,
+    );
+    let q: Vec<f64> = if receiver.is_empty() {
+        Vec::new()
+    } else {
+        sender.iter().zip(receiver).map(|(c, r)| c * r).collect()
+    };
+    let Some(v) = direct_weights(&fitter.projection, &op, (&q, fitter.closed), start) else {
+        return false;
+    };
+    let (kept_v, kept_s) = (
+        std::mem::replace(&mut frozen.v, v),
+        samples.iter().map(|smp| smp.s).collect::<Vec<_>>(),
+    );
+    samples.par_iter_mut().for_each(|smp| {
+        smp.s = kernel_strength(&smp.ray, frozen, sender);
+    });
+    if bound_excess(samples, bound) > DIRECT_LIMIT {
+        frozen.v = kept_v;
+        for (smp, s) in samples.iter_mut().zip(kept_s) {
+            smp.s = s;
+        }
+        return false;
+    }
+    true
 }
 
 /// The energy correction factor per band that a fit of the current strengths would apply

@@ -120,7 +120,11 @@ mod tests {
         s.fem_took(0.5, 100);
         assert_eq!(s.stop(100, 8.9), None, "reserve 1 s");
         assert_eq!(s.stop(100, 9.0), Some("time"));
-        assert_eq!(s.stop(200, 6.0), Some("time"), "reserve 4 s at twice the cells");
+        assert_eq!(
+            s.stop(200, 6.0),
+            Some("time"),
+            "reserve 4 s at twice the cells"
+        );
         assert_eq!(s.stop(200, 5.9), None);
     }
 

@@ -30,84 +30,12 @@
 use crate::config::GatherSamples;
 use crate::domain::Domain;
 use crate::element::{Bands, MAX_BANDS};
+use crate::emitters::Emitters;
 use glam::{DVec2, DVec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use scene_sampler::{cosine_halfplane, cosine_hemisphere};
+use scene_sampler::{cosine_halfplane, cosine_hemisphere, uniform_triangle};
 use std::f64::consts::PI;
-
-/// Emitters with a power-proportional selection table.
-#[derive(Clone, Debug)]
-pub struct Emitters {
-    faces: Vec<u32>,
-    cdf: Vec<f64>,
-    measure: Vec<f64>,
-}
-
-impl Emitters {
-    /// Collects the emitting faces (segments) of the domain; selection ∝ measure × mean emission.
-    pub fn new(domain: &Domain) -> Self {
-        let mut faces = Vec::new();
-        let mut weights = Vec::new();
-        let mut measure = Vec::new();
-        match domain {
-            Domain::ThreeD(k) => {
-                for (i, f) in k.scene.faces.iter().enumerate() {
-                    if f.area > 0.0 && !f.emission.is_zero() {
-                        faces.push(i as u32);
-                        weights.push(f.area * f.emission.mean());
-                        measure.push(f.area);
-                    }
-                }
-            }
-            Domain::Flat(k) => {
-                for (i, s) in k.scene.segments.iter().enumerate() {
-                    if !s.emission.is_zero() {
-                        faces.push(i as u32);
-                        weights.push(s.length * s.emission.mean());
-                        measure.push(s.length);
-                    }
-                }
-            }
-        }
-        let total: f64 = weights.iter().sum();
-        let mut acc = 0.0;
-        let mut cdf = vec![0.0];
-        for w in &weights {
-            acc += w / total;
-            cdf.push(acc);
-        }
-        Self {
-            faces,
-            cdf,
-            measure,
-        }
-    }
-
-    /// Area (Flatland: length) density of the emitter sampling at a point of `face`: the
-    /// probability of choosing the face over its measure, 0 for a face that does not emit.
-    fn density(&self, face: u32) -> f64 {
-        match self.faces.binary_search(&face) {
-            Ok(i) => (self.cdf[i + 1] - self.cdf[i]) / self.measure[i],
-            Err(_) => 0.0,
-        }
-    }
-
-    /// Picks an emitter face by `u ∈ [0,1)` (a point on it then has [`Emitters::density`]).
-    fn pick(&self, u: f64) -> u32 {
-        let i = self
-            .cdf
-            .partition_point(|&c| c <= u)
-            .saturating_sub(1)
-            .min(self.faces.len() - 1);
-        self.faces[i]
-    }
-
-    /// True when the scene has no emitter.
-    pub fn is_empty(&self) -> bool {
-        self.faces.is_empty()
-    }
-}
 
 /// Result of a gather at one point.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -142,7 +70,7 @@ pub fn gather(
     if !emitters.is_empty() && samples.direct > 0 {
         for i in 0..samples.direct {
             let u0 = (i as f64 + rng.random::<f64>()) / samples.direct as f64;
-            let ef = emitters.pick(u0);
+            let ef = emitters.pick_by_power(u0);
             if ef == face {
                 continue;
             }
@@ -206,7 +134,7 @@ impl Mis<'_> {
         if self.emitters.is_empty() {
             0.0
         } else {
-            self.n_e * self.emitters.density(face)
+            self.n_e * self.emitters.power_density(face)
         }
     }
 
@@ -254,8 +182,8 @@ fn emitter_geometry(
     match domain {
         Domain::ThreeD(k) => {
             let f = &k.scene.faces[ef as usize];
-            let s = u[0].sqrt();
-            let x = f.point(s * (1.0 - u[1]), s * u[1]);
+            let [b1, b2] = uniform_triangle(u);
+            let x = f.point(b1, b2);
             let d = y - x;
             let r2 = d.length_squared();
             let (cx, cy) = (f.normal.dot(d), -n.dot(d));

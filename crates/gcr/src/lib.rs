@@ -31,6 +31,7 @@ mod cluster;
 mod config;
 mod domain;
 mod element;
+mod emitters;
 mod fem;
 mod gather;
 mod mesh;
@@ -52,7 +53,8 @@ pub use config::{
 };
 pub use domain::{Domain, Ray};
 pub use element::{Bands, MAX_BANDS};
-pub use gather::{Emitters, Gathered};
+pub use emitters::Emitters;
+pub use gather::Gathered;
 pub use mesh::ShadedMesh;
 pub use metrics::{Metrics, PhaseTimes, peak_memory_bytes};
 pub use network::GrowingNetwork;

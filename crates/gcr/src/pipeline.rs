@@ -4,7 +4,8 @@
 use crate::config::{GatherMode, SolveConfig};
 use crate::domain::Domain;
 use crate::element::{Bands, MAX_BANDS};
-use crate::gather::{Emitters, Gathered, gather};
+use crate::emitters::Emitters;
+use crate::gather::{Gathered, gather};
 use crate::mesh::ShadedMesh;
 use crate::retriangulate::{RetriangulateLimits, retriangulate};
 use crate::solve::Trained;

@@ -23,9 +23,12 @@
 //! needs (see [`crate::projection`]) have finite, small variance, and no clamp of `r` is involved.
 
 use crate::domain::{Domain, Endpoints, Ray};
+use crate::emitters::Emitters;
 use glam::DVec2;
 use rand::Rng;
-use scene_sampler::{FlatPoint, SurfacePoint, cosine_halfplane, cosine_hemisphere};
+use scene_sampler::{
+    FlatPoint, SurfacePoint, cosine_halfplane, cosine_hemisphere, uniform_triangle,
+};
 
 /// A shot ray with its sender density.
 #[derive(Clone, Copy, Debug)]
@@ -36,74 +39,33 @@ pub struct Shot {
     pub inv_px: f64,
 }
 
-/// The sender density `p_x` (module docs) with its sampling tables.
+/// The sender density `p_x` (module docs) over the scene's emitter table.
 #[derive(Clone, Debug)]
 pub struct SenderDensity {
     /// Share of the senders drawn area-uniformly over all of S.
     pub alpha: f64,
     total: f64,
-    emitter_total: f64,
-    emitter_faces: Vec<u32>,
-    emitter_cdf: Vec<f64>,
-    is_emitter: Vec<bool>,
+    emitters: Emitters,
 }
 
 impl SenderDensity {
     /// The default density: α = 1/2 when the scene has emitters, α = 1 otherwise.
     pub fn new(domain: &Domain) -> Self {
-        let (measures, emitting): (Vec<f64>, Vec<bool>) = match domain {
-            Domain::ThreeD(k) => k
-                .scene
-                .faces
-                .iter()
-                .map(|f| (f.area, !f.emission.is_zero()))
-                .unzip(),
-            Domain::Flat(k) => k
-                .scene
-                .segments
-                .iter()
-                .map(|s| (s.length, !s.emission.is_zero()))
-                .unzip(),
-        };
-        let mut emitter_faces = Vec::new();
-        let mut emitter_cdf = vec![0.0];
-        let mut acc = 0.0;
-        for (i, (&m, &e)) in measures.iter().zip(&emitting).enumerate() {
-            if e && m > 0.0 {
-                emitter_faces.push(i as u32);
-                acc += m;
-                emitter_cdf.push(acc);
-            }
-        }
-        let alpha = if acc > 0.0 { 0.5 } else { 1.0 };
+        let emitters = Emitters::new(domain);
         Self {
-            alpha,
+            alpha: if emitters.is_empty() { 1.0 } else { 0.5 },
             total: domain.total_measure(),
-            emitter_total: acc,
-            emitter_faces,
-            emitter_cdf,
-            is_emitter: emitting,
+            emitters,
         }
     }
 
     /// `p_x` on face (segment) `face`, per unit area (length).
     pub fn pdf(&self, face: u32) -> f64 {
         let mut p = self.alpha / self.total;
-        if self.emitter_total > 0.0 && self.is_emitter[face as usize] {
-            p += (1.0 - self.alpha) / self.emitter_total;
+        if self.emitters.emits(face) {
+            p += (1.0 - self.alpha) / self.emitters.area();
         }
         p
-    }
-
-    /// An emitter face drawn in proportion to its area from `u ∈ [0,1)`.
-    fn pick_emitter(&self, u: f64) -> u32 {
-        let target = u * self.emitter_total;
-        let i = self
-            .emitter_cdf
-            .partition_point(|&c| c <= target)
-            .saturating_sub(1)
-            .min(self.emitter_faces.len() - 1);
-        self.emitter_faces[i]
     }
 
     /// Shoots one ray (module docs). `None` when it leaves the scene (open scenes): such a ray
@@ -114,12 +76,11 @@ impl SenderDensity {
         let ends = match domain {
             Domain::ThreeD(k) => {
                 let x = if on_emitter {
-                    let face = self.pick_emitter(u[0]);
+                    let face = self.emitters.pick_by_area(u[0]);
                     let f = &k.scene.faces[face as usize];
-                    // Uniform on the triangle (square-root warp).
-                    let r = u[1].sqrt();
+                    let [b1, b2] = uniform_triangle([u[1], u[2]]);
                     SurfacePoint {
-                        point: f.point(r * (1.0 - u[2]), r * u[2]),
+                        point: f.point(b1, b2),
                         normal: f.normal,
                         face,
                     }
@@ -132,7 +93,7 @@ impl SenderDensity {
             }
             Domain::Flat(k) => {
                 let x = if on_emitter {
-                    let seg = self.pick_emitter(u[0]);
+                    let seg = self.emitters.pick_by_area(u[0]);
                     let s = &k.scene.segments[seg as usize];
                     FlatPoint {
                         point: s.point(u[1]),

@@ -4,7 +4,7 @@
 //! `1 / total_area`), [`FlatSampler`] maps `s ∈ [0,1]` to a point uniform by arc length over all segments. Both
 //! are invertible, which the Flatland kernel plots over `(s, t)` (figs. 4.1b, 4.6b) need.
 
-use crate::{FlatlandScene, Scene, Spectrum};
+use crate::{Discrete, FlatlandScene, Scene, Spectrum};
 use glam::{DVec2, DVec3};
 
 /// A point on a 3-D scene's surface.
@@ -43,8 +43,8 @@ pub struct FlatPoint {
 /// face a binary search over the whole table would.
 #[derive(Clone, Debug)]
 pub struct SurfaceSampler {
-    /// `cdf[i]` = (area of faces `0..i`) / total, `cdf[n] = 1`.
-    cdf: Vec<f64>,
+    /// The faces by area: `cdf[i]` = (area of faces `0..i`) / total, `cdf[n] = 1`.
+    table: Discrete,
     /// `guide[k]` = face containing `k / guide.len()` (plus a sentinel `n - 1`).
     guide: Vec<u32>,
     /// Per face: its parameter interval and geometry in one record, so a look-up touches one place.
@@ -57,18 +57,13 @@ pub struct SurfaceSampler {
 impl SurfaceSampler {
     /// Builds the cumulative area table (O(faces)).
     pub fn new(scene: &Scene) -> Self {
-        let total: f64 = scene.faces.iter().map(|f| f.area).sum();
-        let mut cdf = Vec::with_capacity(scene.faces.len() + 1);
-        let mut acc = 0.0;
-        cdf.push(0.0);
-        for f in &scene.faces {
-            acc += f.area;
-            cdf.push(acc / total);
-        }
-        *cdf.last_mut().expect("non-empty") = 1.0;
+        let areas: Vec<f64> = scene.faces.iter().map(|f| f.area).collect();
+        let table = Discrete::new(&areas).expect("a validated scene has faces of positive area");
+        let (cdf, total) = (table.cdf(), table.total());
         let n = scene.faces.len();
-        let find = |u: f64| (cdf.partition_point(|&c| c <= u).saturating_sub(1)).min(n - 1) as u32;
-        let mut guide: Vec<u32> = (0..n).map(|k| find(k as f64 / n as f64)).collect();
+        let mut guide: Vec<u32> = (0..n)
+            .map(|k| table.sample(k as f64 / n as f64) as u32)
+            .collect();
         guide.push((n - 1) as u32);
         let recs = scene
             .faces
@@ -89,11 +84,11 @@ impl SurfaceSampler {
             })
             .collect();
         SurfaceSampler {
-            cdf,
             guide,
             recs,
             rho: scene.faces.iter().map(|f| f.rho).collect(),
             total_area: total,
+            table,
         }
     }
 
@@ -120,7 +115,7 @@ impl SurfaceSampler {
         let n = self.recs.len();
         if first_lo > u {
             // u·n rounded up across a bucket boundary: fall back to the full search
-            return (self.cdf.partition_point(|&c| c <= u).saturating_sub(1)).min(n - 1);
+            return self.table.sample(u);
         }
         // faces lo..=hi; the first i in there with cdf[i+1] > u. Face `lo` is the common answer: test it
         // alone first, so the usual look-up touches one record (the `hi`s are non-decreasing, so this is
@@ -129,7 +124,7 @@ impl SurfaceSampler {
         if first_hi > u {
             return lo;
         }
-        let i = lo + 1 + self.cdf[lo + 2..=hi + 1].partition_point(|&c| c <= u);
+        let i = lo + 1 + self.table.cdf()[lo + 2..=hi + 1].partition_point(|&c| c <= u);
         i.min(n - 1)
     }
 
@@ -222,7 +217,7 @@ impl SurfaceSampler {
         for ux in [u[0], u[2]] {
             let (lo, _) = self.bucket(ux.clamp(0.0, 1.0));
             self.recs[lo].prefetch();
-            prefetch(&self.cdf[lo + 1]);
+            prefetch(&self.table.cdf()[lo + 1]);
         }
     }
 
@@ -255,7 +250,10 @@ impl SurfaceSampler {
             0.0
         };
         let up = su * su;
-        [self.cdf[i] + up * (self.cdf[i + 1] - self.cdf[i]), uy]
+        [
+            self.table.cdf()[i] + up * (self.table.cdf()[i + 1] - self.table.cdf()[i]),
+            uy,
+        ]
     }
 }
 
@@ -319,7 +317,8 @@ pub fn barycentric(v: [DVec3; 3], p: DVec3) -> (f64, f64) {
 /// the total length.
 #[derive(Clone, Debug)]
 pub struct FlatSampler {
-    cdf: Vec<f64>,
+    /// The segments by length (cumulative, from 0 to 1).
+    table: Discrete,
     segs: Vec<(DVec2, DVec2, DVec2)>,
     total_length: f64,
 }
@@ -327,16 +326,12 @@ pub struct FlatSampler {
 impl FlatSampler {
     /// Builds the cumulative length table.
     pub fn new(scene: &FlatlandScene) -> Self {
-        let total: f64 = scene.segments.iter().map(|s| s.length).sum();
-        let mut cdf = vec![0.0];
-        let mut acc = 0.0;
-        for s in &scene.segments {
-            acc += s.length;
-            cdf.push(acc / total);
-        }
-        *cdf.last_mut().expect("non-empty") = 1.0;
+        let lengths: Vec<f64> = scene.segments.iter().map(|s| s.length).collect();
+        let table =
+            Discrete::new(&lengths).expect("a validated scene has segments of positive length");
+        let total = table.total();
         FlatSampler {
-            cdf,
+            table,
             segs: scene
                 .segments
                 .iter()
@@ -355,10 +350,7 @@ impl FlatSampler {
     }
     /// Maps `s ∈ [0,1]` (clamped) to a point.
     pub fn sample(&self, s: f64) -> FlatPoint {
-        let s = s.clamp(0.0, 1.0);
-        let n = self.segs.len();
-        let i = (self.cdf.partition_point(|&c| c <= s).saturating_sub(1)).min(n - 1);
-        let t = ((s - self.cdf[i]) / (self.cdf[i + 1] - self.cdf[i])).clamp(0.0, 1.0);
+        let (i, t) = self.table.sample_remapped(s.clamp(0.0, 1.0));
         let (a, b, normal) = self.segs[i];
         FlatPoint {
             point: a + t * (b - a),
@@ -372,11 +364,14 @@ impl FlatSampler {
         let (a, b, _) = self.segs[i];
         let d = b - a;
         let t = ((point - a).dot(d) / d.length_squared()).clamp(0.0, 1.0);
-        self.cdf[i] + t * (self.cdf[i + 1] - self.cdf[i])
+        self.table.cdf()[i] + t * (self.table.cdf()[i + 1] - self.table.cdf()[i])
     }
     /// The parameter interval `[s0, s1]` that segment `segment` occupies.
     pub fn segment_range(&self, segment: u32) -> (f64, f64) {
-        (self.cdf[segment as usize], self.cdf[segment as usize + 1])
+        (
+            self.table.cdf()[segment as usize],
+            self.table.cdf()[segment as usize + 1],
+        )
     }
 }
 

@@ -4,7 +4,7 @@
 
 use crate::config::SolveConfig;
 use crate::domain::Domain;
-use crate::gather::Emitters;
+use crate::emitters::Emitters;
 use crate::output::tonemap::Exposure;
 use crate::pipeline::{GatherError, radiosity_at_points};
 use crate::solve::Trained;

@@ -12,7 +12,7 @@ use super::staged::{StagedFiles, check_target};
 use super::tonemap::Exposure;
 use crate::config::SolveConfig;
 use crate::domain::Domain;
-use crate::gather::Emitters;
+use crate::emitters::Emitters;
 use crate::metrics::{Metrics, peak_memory_bytes};
 use crate::pipeline::{output_mesh, radiosity_at_points};
 use crate::retriangulate::RetriangulateLimits;

@@ -364,7 +364,9 @@ mod tests {
         for i in 0..z {
             gi[[i, i]] += 1e-3;
         }
-        let err = (&gi.dot(&x) - &b).mapv(f64::abs).fold(0.0f64, |m, &v| m.max(v));
+        let err = (&gi.dot(&x) - &b)
+            .mapv(f64::abs)
+            .fold(0.0f64, |m, &v| m.max(v));
         assert!(err < 1e-8, "{err}");
     }
 

@@ -338,7 +338,10 @@ fn metric_root(e: &[f64], n: usize, floor: f64, xs: &[f64]) -> Option<Vec<f64>> 
     if !(top > 0.0 && top.is_finite()) {
         return None;
     }
-    let roots: Vec<f64> = values.iter().map(|&l| l.max(floor * floor * top).sqrt()).collect();
+    let roots: Vec<f64> = values
+        .iter()
+        .map(|&l| l.max(floor * floor * top).sqrt())
+        .collect();
     let mut t = vec![0.0; n * n];
     for a in 0..n {
         for b in 0..n {
@@ -385,7 +388,9 @@ fn learn_metric(
     let mut best: (f64, Option<Vec<f64>>) = (f64::INFINITY, None);
     let mut t: Option<Vec<f64>> = None;
     for _ in 0..3 {
-        let tx = t.as_ref().map_or_else(|| sx.to_vec(), |t| apply_transform(t, sx, n));
+        let tx = t
+            .as_ref()
+            .map_or_else(|| sx.to_vec(), |t| apply_transform(t, sx, n));
         let centres = crate::rbf::kmeans(&tx, n, z0, 10, params.seed ^ 0x3e7a);
         let basis = Basis {
             n,
@@ -397,7 +402,7 @@ fn learn_metric(
         let Some((weights, sel)) = fit_gcv(&basis, &tx, yv, None, None, sample) else {
             break;
         };
-        if !(sel.score < best.0) {
+        if sel.score.is_nan() || sel.score >= best.0 {
             break;
         }
         best = (sel.score, t.clone());

@@ -5,10 +5,12 @@
 //!
 //! 1. **Standardization** of inputs and outputs (zero mean, unit standard deviation per
 //!    column), so no input's units dominate the distances.
-//! 1b. **Input metric** (`metric`, default on): recursive expected gradient outer product of
-//!    pilot networks (100 k-means centres, ≤ 2000 rows): T = E^½ of the pilot's mean gradient
-//!    outer product, directions floored at 10 %, up to three rounds, the metric with the lowest
-//!    pilot leave-one-out score kept (identity if none beats it); everything below runs on T·x.
+//!
+//! **Input metric** (`metric`, step 1b, default on): recursive expected gradient outer product
+//! of pilot networks (100 k-means centres, ≤ 2000 rows): T = E^½ of the pilot's mean gradient
+//! outer product, directions floored at 10 %, up to three rounds, the metric with the lowest
+//! pilot leave-one-out score kept (identity if none beats it); everything below runs on T·x.
+//!
 //! 2. **Topology and start**: k (when not given) is the number of principal components of the
 //!    standardized inputs that carry at least 10 % of the largest component's variance, at most
 //!    3 and at most n; the initial k-simplex sits at the mean, vertex i moved by one standard

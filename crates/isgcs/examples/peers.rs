@@ -41,6 +41,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         seed,
         affine: arg::<u8>(&args, "--affine", 0) == 1,
         normalized: arg::<u8>(&args, "--normalized", 1) == 1,
+        metric: arg::<u8>(&args, "--metric", 1) == 1,
+        choose_basis: arg::<u8>(&args, "--choose", 1) == 1,
         lambda: args
             .iter()
             .position(|a| a == "--lambda")

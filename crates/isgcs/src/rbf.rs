@@ -301,6 +301,7 @@ impl KMeansRbf {
                 x: xstd,
                 y: ystd,
                 ridge: chosen.ridge,
+                transform: None,
             },
         })
     }

@@ -201,6 +201,10 @@ pub(crate) struct Readout {
     pub y: Standardizer,
     /// The relative ridge used.
     pub ridge: f64,
+    /// The learned input metric T (n × n row-major): the basis sees T·x of the standardized
+    /// input x. `None`: the identity.
+    #[serde(default)]
+    pub transform: Option<Vec<f64>>,
 }
 
 impl Readout {
@@ -211,14 +215,20 @@ impl Readout {
             .zip(inputs.par_chunks(n))
             .with_min_len(32)
             .for_each_init(
-                || (vec![0.0; n], vec![0.0; cols]),
-                |(xs, row), (o, x)| {
+                || (vec![0.0; n], vec![0.0; n], vec![0.0; cols]),
+                |(xs, ts, row), (o, x)| {
                     if x.iter().any(|v| !v.is_finite()) {
                         o.fill(f64::NAN);
                         return;
                     }
                     for a in 0..n {
                         xs[a] = (x[a] - self.x.mean[a]) / self.x.scale[a];
+                    }
+                    if let Some(t) = &self.transform {
+                        for (a, ta) in ts.iter_mut().enumerate() {
+                            *ta = (0..n).map(|b| t[a * n + b] * xs[b]).sum();
+                        }
+                        std::mem::swap(xs, ts);
                     }
                     self.basis.row(self.mult, xs, row);
                     for c in 0..m {
@@ -242,6 +252,9 @@ pub(crate) struct Selected {
     pub ridge: f64,
     /// Effective degrees of freedom tr H of the final fit.
     pub dof: f64,
+    /// The selection score (leave-one-out estimate of the mean squared error per row) of the
+    /// final fit.
+    pub score: f64,
 }
 
 /// The best ridge by GCV (or the given one) for one multiplier on the given rows, with its
@@ -343,13 +356,14 @@ pub(crate) fn fit_gcv(
             best.0
         }
     };
-    let (_, fit) = gcv_at(basis, mult, ridge, xs, ys)?;
+    let (score, fit) = gcv_at(basis, mult, ridge, xs, ys)?;
     Some((
         fit.weights.into_raw_vec_and_offset().0,
         Selected {
             mult,
             ridge: fit.relative,
             dof: fit.dof,
+            score,
         },
     ))
 }
@@ -389,6 +403,7 @@ pub(crate) fn fit_holdout(
         }
     }
     let (_, mult, ridge) = best?;
+    let best = best.map(|(e, m, r)| (e / hy.nrows().max(1) as f64, m, r));
     let (g, b, yy, _) = basis.normal_equations(mult, xs, ys, false);
     let fit = ridge_fit(&g, &b, yy, ridge, &zero)?;
     Some((
@@ -397,8 +412,76 @@ pub(crate) fn fit_holdout(
             mult,
             ridge,
             dof: fit.dof,
+            score: best.map_or(f64::NAN, |b| b.0),
         },
     ))
+}
+
+/// The expected gradient outer product E = (1/N) Σ_rows Σ_c ∇f_c ∇f_cᵀ (n × n row-major) of
+/// the fitted layer f (weights cols × m) over the rows `xs` (N × n, the basis' coordinates),
+/// from the analytic gradients of the Gaussians.
+pub(crate) fn egop(basis: &Basis, mult: f64, weights: &[f64], m: usize, xs: &[f64]) -> Vec<f64> {
+    let (n, z, cols) = (basis.n, basis.cells(), basis.cols());
+    let rows = (xs.len() / n).max(1);
+    // Fixed chunks of rows summed in order, so the result does not depend on the threads.
+    let chunks: Vec<Vec<f64>> = xs
+        .par_chunks(n * 64)
+        .map(|chunk| {
+            let (mut e, mut phi, mut grad) = (vec![0.0; n * n], vec![0.0; cols], vec![0.0; n]);
+            for x in chunk.chunks_exact(n) {
+                basis.row(mult, x, &mut phi);
+                // Un-normalized values and their sum (the row is normalized when asked).
+                let mut raw = vec![0.0; z];
+                let mut sum = 0.0;
+                for i in 0..z {
+                    let c = &basis.centres[i * n..(i + 1) * n];
+                    let w = mult * basis.base[i];
+                    let r2: f64 = c.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum();
+                    raw[i] = if w > 0.0 { (-r2 / (w * w)).exp() } else { 0.0 };
+                    sum += raw[i];
+                }
+                for out in 0..m {
+                    let f: f64 = (0..z).map(|i| phi[i] * weights[i * m + out]).sum();
+                    grad.fill(0.0);
+                    for i in 0..z {
+                        if raw[i] == 0.0 {
+                            continue;
+                        }
+                        let w = mult * basis.base[i];
+                        // ∂φ_i/∂x = −2 (x − c_i)/w² φ_i; normalized: ∂f = Σ (v_i − f) ∂φ_i / S.
+                        let coef = if basis.normalized {
+                            if sum <= 0.0 {
+                                continue;
+                            }
+                            (weights[i * m + out] - f) * raw[i] / sum
+                        } else {
+                            weights[i * m + out] * raw[i]
+                        } * (-2.0 / (w * w));
+                        let c = &basis.centres[i * n..(i + 1) * n];
+                        for a in 0..n {
+                            grad[a] += coef * (x[a] - c[a]);
+                        }
+                    }
+                    if basis.affine {
+                        for a in 0..n {
+                            grad[a] += weights[(z + 1 + a) * m + out];
+                        }
+                    }
+                    for a in 0..n {
+                        for b in 0..n {
+                            e[a * n + b] += grad[a] * grad[b];
+                        }
+                    }
+                }
+            }
+            e
+        })
+        .collect();
+    let mut partial = vec![0.0; n * n];
+    for c in &chunks {
+        partial.iter_mut().zip(c).for_each(|(p, q)| *p += q);
+    }
+    partial.into_iter().map(|v| v / rows as f64).collect()
 }
 
 /// Mean distance from every centre to its `q` nearest other centres (q clamped to z − 1),

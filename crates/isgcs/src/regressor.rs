@@ -5,6 +5,12 @@
 //!
 //! 1. **Standardization** of inputs and outputs (zero mean, unit standard deviation per
 //!    column), so no input's units dominate the distances.
+//!
+//! **Input metric** (`metric`, step 1b, default on): recursive expected gradient outer product
+//! of pilot networks (100 k-means centres, ≤ 2000 rows): T = E^½ of the pilot's mean gradient
+//! outer product, directions floored at 10 %, up to three rounds, the metric with the lowest
+//! pilot leave-one-out score kept (identity if none beats it); everything below runs on T·x.
+//!
 //! 2. **Topology and start**: k (when not given) is the number of principal components of the
 //!    standardized inputs that carry at least 10 % of the largest component's variance, at most
 //!    3 and at most n; the initial k-simplex sits at the mean, vertex i moved by one standard
@@ -27,12 +33,13 @@
 //!    leave-one-out error estimate: the exact closed-form leave-one-out residuals
 //!    e_i/(1 − h_ii) of 256 random rows, but never below the GCV estimate N·RSS/(N − tr H)²
 //!    (tr H by 24 Rademacher probes). GCV alone (mean leverage) missed single rows that a
-//!    cluster of narrow cells interpolates (the jump function: rms/σ 0.30 → 0.12).
+//!    cluster of narrow cells interpolates (the jump function: rms/σ 0.30 → 0.12). With
+//!    `choose_basis` (default) this runs for normalized and plain Gaussians; the lower score wins.
 //!
 //! Cost: growth O(steps · z · n); the output layer O(N · z²) per candidate multiplier (dense
 //! matrix products on two threads) plus O(z³) per candidate ridge.
 
-use crate::readout::{Basis, Readout, Standardizer, fit_gcv, nearest_widths};
+use crate::readout::{Basis, Readout, Standardizer, egop, fit_gcv, nearest_widths};
 use crate::{GoalFunction, Isgcs, IsgcsError, Params, Termination};
 use ndarray::ArrayView2;
 use rand::{Rng, SeedableRng};
@@ -100,6 +107,18 @@ pub struct RegressorParams {
     pub normalized: bool,
     /// Append the affine columns 1, x₁ … xₙ to the output layer. Default false.
     pub affine: bool,
+    /// Fit the output layer with normalized and with plain Gaussians and keep the one with the
+    /// lower leave-one-out score (`normalized` then only applies to the growth rounds).
+    /// Default true.
+    #[serde(default = "yes")]
+    pub choose_basis: bool,
+    /// Learn an input metric from the data (module docs, step 1b). Default true.
+    #[serde(default = "yes")]
+    pub metric: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 impl Default for RegressorParams {
@@ -114,6 +133,8 @@ impl Default for RegressorParams {
             width_multiplier: None,
             normalized: true,
             affine: false,
+            metric: true,
+            choose_basis: true,
         }
     }
 }
@@ -305,6 +326,124 @@ pub(crate) fn topology_from_data(xs: &[f64], n: usize, k: Option<usize>) -> (usi
     (k, simplex)
 }
 
+/// x' = T x for every row of `xs` (N × n), T n × n row-major.
+fn apply_transform(t: &[f64], xs: &[f64], n: usize) -> Vec<f64> {
+    let mut out = vec![0.0; xs.len()];
+    for (o, x) in out.chunks_exact_mut(n).zip(xs.chunks_exact(n)) {
+        for a in 0..n {
+            o[a] = (0..n).map(|b| t[a * n + b] * x[b]).sum();
+        }
+    }
+    out
+}
+
+/// The symmetric square root of a positive semi-definite n × n matrix, eigenvalues floored at
+/// `floor` × the largest, scaled so that the rows `xs` map to a mean squared norm of n.
+fn metric_root(e: &[f64], n: usize, floor: f64, xs: &[f64]) -> Option<Vec<f64>> {
+    let (values, vectors) = symmetric_eigen(e.to_vec(), n);
+    let top = values[0];
+    if !(top > 0.0 && top.is_finite()) {
+        return None;
+    }
+    let roots: Vec<f64> = values
+        .iter()
+        .map(|&l| l.max(floor * floor * top).sqrt())
+        .collect();
+    let mut t = vec![0.0; n * n];
+    for a in 0..n {
+        for b in 0..n {
+            t[a * n + b] = (0..n)
+                .map(|j| vectors[a * n + j] * roots[j] * vectors[b * n + j])
+                .sum();
+        }
+    }
+    let tx = apply_transform(&t, xs, n);
+    let rows = (xs.len() / n).max(1) as f64;
+    let ms = tx.iter().map(|v| v * v).sum::<f64>() / rows;
+    if !(ms > 0.0 && ms.is_finite()) {
+        return None;
+    }
+    let scale = (n as f64 / ms).sqrt();
+    t.iter_mut().for_each(|v| *v *= scale);
+    Some(t)
+}
+
+/// Rows of the metric search.
+const METRIC_ROWS: usize = 2000;
+/// Centres of the metric search's pilot networks.
+const METRIC_CELLS: usize = 100;
+
+/// The input metric (module docs, step 2): pilot Gaussian networks (k-means centres, output
+/// layer chosen by leave-one-out) in the identity metric and then, recursively, in the metric
+/// of the previous pilot's expected gradient outer product; the metric whose pilot has the
+/// lowest leave-one-out score wins (`None`: the identity).
+fn learn_metric(
+    xs: &[f64],
+    ys: &[f64],
+    n: usize,
+    m: usize,
+    params: &RegressorParams,
+) -> Option<Vec<f64>> {
+    let rows = xs.len() / n;
+    let sample = rows.min(METRIC_ROWS);
+    let z0 = params.max_cells.min(METRIC_CELLS).min(sample / 4);
+    if z0 < 4 || n < 2 {
+        return None;
+    }
+    let (sx, sy) = (&xs[..sample * n], &ys[..sample * m]);
+    let yv = ArrayView2::from_shape((sample, m), sy).expect("shape");
+    let mut best: (f64, Option<Vec<f64>>) = (f64::INFINITY, None);
+    let mut t: Option<Vec<f64>> = None;
+    for _ in 0..3 {
+        let tx = t
+            .as_ref()
+            .map_or_else(|| sx.to_vec(), |t| apply_transform(t, sx, n));
+        let centres = crate::rbf::kmeans(&tx, n, z0, 10, params.seed ^ 0x3e7a);
+        let basis = Basis {
+            n,
+            base: nearest_widths(&centres, n, n + 1),
+            centres,
+            normalized: params.normalized,
+            affine: params.affine,
+        };
+        let Some((weights, sel)) = fit_gcv(&basis, &tx, yv, None, None, sample) else {
+            break;
+        };
+        if sel.score.is_nan() || sel.score >= best.0 {
+            break;
+        }
+        best = (sel.score, t.clone());
+        // E in the original coordinates: ∇ₓf = Tᵀ ∇f(Tx), so E = Tᵀ E' T.
+        let e1 = egop(&basis, sel.mult, &weights, m, &tx);
+        let e = match &t {
+            None => e1,
+            Some(t) => {
+                let mut e = vec![0.0; n * n];
+                for a in 0..n {
+                    for b in 0..n {
+                        let mut v = 0.0;
+                        for p in 0..n {
+                            for q in 0..n {
+                                v += t[p * n + a] * e1[p * n + q] * t[q * n + b];
+                            }
+                        }
+                        e[a * n + b] = v;
+                    }
+                }
+                e
+            }
+        };
+        let Some(next) = metric_root(&e, n, METRIC_FLOOR, sx) else {
+            break;
+        };
+        t = Some(next);
+    }
+    best.1
+}
+
+/// Smallest scale of a direction in the learned metric, relative to the largest.
+const METRIC_FLOOR: f64 = 0.1;
+
 impl Regressor {
     /// Fits N rows: `inputs` N × n and `targets` N × m, row-major (module docs).
     pub fn fit(
@@ -354,6 +493,15 @@ impl Regressor {
         };
         let xs = xstd.apply(&permute(inputs, n));
         let ys = ystd.apply(&permute(targets, m));
+        let transform = if params.metric {
+            learn_metric(&xs, &ys, n, m, params)
+        } else {
+            None
+        };
+        let xs = match &transform {
+            Some(t) => apply_transform(t, &xs, n),
+            None => xs,
+        };
 
         let (k, simplex) = topology_from_data(&xs, n, params.topology_dim);
         if params.max_cells < k + 1 || params.max_cells > rows {
@@ -432,6 +580,7 @@ impl Regressor {
                         scale: vec![1.0; m],
                     },
                     ridge: sel.ridge,
+                    transform: None,
                 };
                 let mut pred = vec![0.0; sample * m];
                 readout.predict(&xs[..sample * n], &mut pred);
@@ -465,15 +614,34 @@ impl Regressor {
         };
         let yv = ArrayView2::from_shape((rows, m), &ys).expect("shape checked");
         let select_rows = (3 * basis.cols()).max(1500);
-        let (weights, chosen) = fit_gcv(
-            &basis,
-            &xs,
-            yv,
-            params.width_multiplier,
-            params.ridge,
-            select_rows,
-        )
-        .ok_or_else(|| RegressorError::Solve("no row activates any cell".into()))?;
+        // Normalized and plain Gaussians (unless fixed): the lower leave-one-out score wins.
+        let kinds: &[bool] = if params.choose_basis {
+            &[true, false]
+        } else {
+            std::slice::from_ref(&params.normalized)
+        };
+        let mut best: Option<(Basis, Vec<f64>, crate::readout::Selected)> = None;
+        for &normalized in kinds {
+            let basis = Basis {
+                normalized,
+                ..basis.clone()
+            };
+            let fitted = fit_gcv(
+                &basis,
+                &xs,
+                yv,
+                params.width_multiplier,
+                params.ridge,
+                select_rows,
+            );
+            if let Some((w, sel)) = fitted {
+                if best.as_ref().is_none_or(|b| sel.score < b.2.score) {
+                    best = Some((basis, w, sel));
+                }
+            }
+        }
+        let (basis, weights, chosen) =
+            best.ok_or_else(|| RegressorError::Solve("no row activates any cell".into()))?;
         let readout = Readout {
             basis,
             mult: chosen.mult,
@@ -482,6 +650,7 @@ impl Regressor {
             x: xstd,
             y: ystd,
             ridge: chosen.ridge,
+            transform,
         };
         Ok(Self {
             net,

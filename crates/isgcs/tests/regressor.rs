@@ -97,10 +97,27 @@ fn input_units_do_not_matter_and_fits_are_deterministic() {
             .flat_map(|r| [r[0], 10.0 * r[1], r[2]])
             .collect()
     };
-    let c = Regressor::fit(&params(80, 2), &scale(&x), &y, 3, 1).unwrap();
-    let pc = predict(&c, &scale(&tx));
-    let diff = rms_over_sd(&pc, &pa);
+    // Exactly (to 1e-6) without the learned metric; with it (the default) the discrete
+    // choices of the metric search (pilot k-means, leave-one-out comparisons) can flip on
+    // rounding-level differences, so there the two fits must only be about equally accurate.
+    let fixed = RegressorParams {
+        metric: false,
+        ..params(80, 2)
+    };
+    let a0 = Regressor::fit(&fixed, &x, &y, 3, 1).unwrap();
+    let c0 = Regressor::fit(&fixed, &scale(&x), &y, 3, 1).unwrap();
+    let diff = rms_over_sd(&predict(&c0, &scale(&tx)), &predict(&a0, &tx));
     assert!(diff < 1e-6, "relative rms difference {diff}");
+    let (_, ty) = p.sample(500, false, 5);
+    let c = Regressor::fit(&params(80, 2), &scale(&x), &y, 3, 1).unwrap();
+    let (ea, ec) = (
+        rms_over_sd(&pa, &ty),
+        rms_over_sd(&predict(&c, &scale(&tx)), &ty),
+    );
+    assert!(
+        ec < 1.3 * ea && ea < 1.3 * ec,
+        "rms/σ {ea} vs {ec} in other units"
+    );
 }
 
 #[test]

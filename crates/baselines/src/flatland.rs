@@ -4,9 +4,14 @@
 //! The Flatland radiosity equation is `B(y) = E(y) + ρ(y) ∫ cos θx cos θy / (2 r) · V(x,y) · B(x) dx`
 //! (eq. 1.4 with the 2-D kernel of MATH.md §7). Sampling directions at `y` with density `cos θ / 2` per radian
 //! ([`cosine_halfplane`]) cancels the kernel exactly, as in 3-D: `B(y) = E(y) + ρ(y)·E_ω[B(hit(y, ω))]`.
+//! As in 3-D, every path vertex also sends a shadow ray to the emitters (next-event estimation, combined with
+//! the cosine continuation's hits by the power heuristic).
 
 use crate::error::BaselineError;
-use crate::stats::{Adaptive, AdaptiveEstimate, Estimate, point_rng, run_fixed};
+use crate::stats::{
+    Adaptive, AdaptiveEstimate, EmitterTable, Estimate, mis_cosine, mis_light, point_rng, run_fixed,
+};
+use glam::DVec2;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -15,22 +20,47 @@ use scene_sampler::{FlatPoint, FlatVisibility, FlatlandScene, cosine_halfplane};
 mod exact;
 pub use exact::{ExactOptions, ExactSolver, crossed_strings, point_to_segment};
 
+/// The emitting segments of `scene` for next-event estimation (selection ∝ length × mean emission).
+fn emitters(scene: &FlatlandScene) -> EmitterTable {
+    EmitterTable::new(
+        scene
+            .segments
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (i as u32, s.length, s.emission.mean())),
+    )
+}
+
+/// The length density of a cosine-weighted direction (density `cos θ / 2` per radian) from `y` (normal `ny`)
+/// at the point `x` (normal `nx`): `G = cos θx cos θy / (2 r)`, 0 when they do not face each other.
+fn geometry(y: DVec2, ny: DVec2, x: DVec2, nx: DVec2) -> f64 {
+    let d = y - x;
+    let (cx, cy) = (nx.dot(d), -ny.dot(d));
+    if cx <= 0.0 || cy <= 0.0 {
+        return 0.0;
+    }
+    cx * cy / (2.0 * d.length().powi(3))
+}
+
 /// One Flatland path's radiosity contribution leaving `p` (emission included): the estimator of MATH.md §8
-/// with Russian roulette after three bounces (survival ∝ the largest throughput, at most 0.95).
+/// with next-event estimation and MIS as in 3-D (`crate::pointwise`): at every vertex a shadow ray to a point
+/// drawn on the emitting segments (segment ∝ power, point uniform) and the cosine continuation, the two
+/// weighted by the power heuristic; Russian roulette after three bounces (survival ∝ the largest
+/// throughput, at most 0.95).
 fn path(
     scene: &FlatlandScene,
     vis: &FlatVisibility,
+    lights: &EmitterTable,
     p: FlatPoint,
     rng: &mut ChaCha8Rng,
 ) -> [f64; 3] {
-    let mut out = [0.0; 3];
+    let mut out = scene.segments[p.segment as usize].emission.0;
     let mut throughput = [1.0; 3];
     let mut at = p;
     for depth in 0.. {
         let s = &scene.segments[at.segment as usize];
-        for b in 0..3 {
-            out[b] += throughput[b] * s.emission.0[b];
-            throughput[b] *= s.rho.0[b];
+        for (t, r) in throughput.iter_mut().zip(s.rho.0) {
+            *t *= r;
         }
         let q = throughput.iter().cloned().fold(0.0, f64::max).min(0.95);
         if q <= 0.0 {
@@ -42,6 +72,30 @@ fn path(
             }
             throughput.iter_mut().for_each(|t| *t /= q);
         }
+        // ⟨next-event estimation: one shadow ray⟩
+        let (u0, u1) = (rng.random::<f64>(), rng.random::<f64>());
+        if !lights.is_empty() {
+            let (ef, p_e) = lights.pick(u0);
+            let e = &scene.segments[ef as usize];
+            if ef != at.segment {
+                let x = e.point(u1);
+                let g = geometry(at.point, at.normal, x, e.normal);
+                if g > 0.0 {
+                    let xp = FlatPoint {
+                        point: x,
+                        normal: e.normal,
+                        segment: ef,
+                    };
+                    if vis.visible(&xp, &at) {
+                        let w = mis_light(g, p_e);
+                        for b in 0..3 {
+                            out[b] += throughput[b] * w * e.emission.0[b];
+                        }
+                    }
+                }
+            }
+        }
+        // ⟨the cosine continuation; emission at its hit is the second technique⟩
         let dir = cosine_halfplane(at.normal, rng.random());
         let Some(hit) = vis.trace_from(&at, dir) else {
             break;
@@ -50,6 +104,16 @@ fn path(
         // only the front side radiates
         if next.normal.dot(-dir) <= 0.0 {
             break;
+        }
+        let ns = &scene.segments[next.segment as usize];
+        if !ns.emission.is_zero() {
+            let w = mis_cosine(
+                geometry(at.point, at.normal, next.point, next.normal),
+                lights.density(next.segment),
+            );
+            for b in 0..3 {
+                out[b] += throughput[b] * w * ns.emission.0[b];
+            }
         }
         at = next;
     }
@@ -100,11 +164,12 @@ pub fn path_trace_at(
     seed: u64,
 ) -> Result<Vec<Estimate>, BaselineError> {
     check_segments(scene, points)?;
+    let lights = emitters(scene);
     Ok(points
         .par_iter()
         .map(|&p| {
             let mut rng = rng_of(seed, &p);
-            run_fixed(paths, || path(scene, vis, p, &mut rng))
+            run_fixed(paths, || path(scene, vis, &lights, p, &mut rng))
         })
         .collect())
 }
@@ -141,12 +206,13 @@ pub fn reference_at(
 ) -> Result<Vec<AdaptiveEstimate>, BaselineError> {
     adaptive.validate()?;
     check_segments(scene, points)?;
+    let lights = emitters(scene);
     Ok(points
         .par_iter()
         .map(|&p| {
             let mut rng = rng_of(adaptive.seed, &p);
             adaptive.run(live_bands(scene, p.segment), || {
-                path(scene, vis, p, &mut rng)
+                path(scene, vis, &lights, p, &mut rng)
             })
         })
         .collect())
@@ -169,7 +235,6 @@ pub fn point_on(scene: &FlatlandScene, segment: u32, t: f64) -> FlatPoint {
 /// # Errors
 /// `rho` outside `[0,1)`, negative `e` (from [`FlatlandScene::new`]), or `split == 0`.
 pub fn flat_furnace(e: f64, rho: f64, split: usize) -> Result<FlatlandScene, BaselineError> {
-    use glam::DVec2;
     use scene_sampler::{Segment, Spectrum};
     if split == 0 {
         return Err(BaselineError::InvalidParameter {

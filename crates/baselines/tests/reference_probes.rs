@@ -35,9 +35,9 @@ fn every_lit_cornell_probe_is_positive_and_its_verdict_is_honest() {
         assert!(e.mean.iter().all(|&m| m > 0.0), "line {line}: {e:?}");
         assert!(e.paths >= ad.min_paths, "line {line}: {e:?}");
     }
-    // The verdict is honest: met means within the target; missed means the cap was reached (most
-    // of these probes need more than 10⁶ paths for 1 %: the path tracer finds the small light only
-    // by hitting it).
+    // The verdict is honest: met means within the target; missed means the cap was reached (before
+    // next-event estimation most of these probes needed more than 10⁶ paths for 1 %: the path
+    // tracer found the small light only by hitting it).
     let verdicts = pointwise::reference_at(&scene, &bvh, &points, &ad).unwrap();
     let mut missed = Vec::new();
     for (line, (v, e)) in (1..).zip(verdicts.iter().zip(&est)) {

@@ -12,6 +12,7 @@ pub const BUILTIN_NAMES: &[&str] = &[
     "wall-floor",
     "two-blockers",
     "furnace",
+    "closed-room",
     "flatland-corner",
     "flatland-blocker",
 ];
@@ -122,6 +123,7 @@ pub fn builtin(name: &str) -> Result<AnyScene> {
         "wall-floor" => AnyScene::ThreeD(wall_floor()),
         "two-blockers" => AnyScene::ThreeD(two_blockers()),
         "furnace" => AnyScene::ThreeD(furnace(Spectrum::grey(1.0), Spectrum::grey(0.5))),
+        "closed-room" => AnyScene::ThreeD(closed_room()),
         "flatland-corner" => AnyScene::Flatland(flatland_corner()),
         "flatland-blocker" => AnyScene::Flatland(flatland_blocker()),
         _ => {
@@ -332,6 +334,92 @@ pub fn cornell_box() -> Scene {
             target: mm(278.0, 273.0, 0.0),
             up: DVec3::Y,
             fov_y_deg: fov,
+        },
+    )
+}
+
+/// A closed room with high albedo (issue 16): many bounces carry a large part of B, unlike the open
+/// scenes. The box `[0,4]×[0,2.5]×[0,3]` (x, y up, z), closed on all six sides, normals inward: white
+/// ceiling ρ = 0.85, light-grey floor ρ = (0.75, 0.72, 0.68), back (z = 3) and front (z = 0) walls
+/// ρ = 0.8 grey, red left wall (x = 0) ρ = (0.85, 0.3, 0.25), green right wall (x = 4) ρ = (0.3, 0.8, 0.35);
+/// a 0.8 × 1.4 × 0.8 grey box (ρ = 0.7) standing on the floor at `[1.4,2.2]×[0,1.4]×[1.2,2.0]` (no bottom
+/// face), and a 0.6 × 0.6 ceiling light centred over `(2, 1.5)`, cut out of the ceiling (the ceiling is four
+/// quads around it), facing down, ρ = 0, E = 30 (grey). Every ray from inside hits a face from its front.
+pub fn closed_room() -> Scene {
+    let mut b = Builder::new();
+    let (sx, sy, sz) = (4.0, 2.5, 3.0);
+    let inside = DVec3::new(sx / 2.0, sy / 2.0, sz / 2.0);
+    let z = Spectrum::ZERO;
+    let floor = b.object("floor");
+    b.poly(
+        floor,
+        &rect_xz(0.0, sx, 0.0, sz, 0.0),
+        DVec3::Y,
+        Spectrum::rgb(0.75, 0.72, 0.68),
+        z,
+    );
+    let (lx0, lx1, lz0, lz1) = (1.7, 2.3, 1.2, 1.8);
+    let light = b.object("light");
+    b.poly(
+        light,
+        &rect_xz(lx0, lx1, lz0, lz1, sy),
+        -DVec3::Y,
+        Spectrum::ZERO,
+        Spectrum::grey(30.0),
+    );
+    let ceiling = b.object("ceiling");
+    let white = Spectrum::grey(0.85);
+    for q in [
+        rect_xz(0.0, sx, 0.0, lz0, sy),
+        rect_xz(0.0, sx, lz1, sz, sy),
+        rect_xz(0.0, lx0, lz0, lz1, sy),
+        rect_xz(lx1, sx, lz0, lz1, sy),
+    ] {
+        b.poly(ceiling, &q, -DVec3::Y, white, z);
+    }
+    let wall = |x0: f64, z0: f64, x1: f64, z1: f64| {
+        [
+            DVec3::new(x0, 0.0, z0),
+            DVec3::new(x1, 0.0, z1),
+            DVec3::new(x1, sy, z1),
+            DVec3::new(x0, sy, z0),
+        ]
+    };
+    let grey = Spectrum::grey(0.8);
+    for (name, p, rho) in [
+        ("back wall", wall(0.0, sz, sx, sz), grey),
+        ("front wall", wall(0.0, 0.0, sx, 0.0), grey),
+        (
+            "left wall (red)",
+            wall(0.0, 0.0, 0.0, sz),
+            Spectrum::rgb(0.85, 0.3, 0.25),
+        ),
+        (
+            "right wall (green)",
+            wall(sx, 0.0, sx, sz),
+            Spectrum::rgb(0.3, 0.8, 0.35),
+        ),
+    ] {
+        let o = b.object(name);
+        let toward = inside - (p[0] + p[2]) / 2.0;
+        b.poly(o, &p, toward, rho, z);
+    }
+    let blocker = b.object("blocker");
+    let top = rect_xz(1.4, 2.2, 1.2, 2.0, 1.4);
+    b.block(
+        blocker,
+        top.map(|p| DVec3::new(p.x, 0.0, p.z)),
+        top,
+        Spectrum::grey(0.7),
+        false,
+    );
+    b.finish(
+        "closed-room",
+        Camera {
+            eye: DVec3::new(3.7, 1.9, 0.2),
+            target: DVec3::new(1.6, 0.7, 2.2),
+            up: DVec3::Y,
+            fov_y_deg: 70.0,
         },
     )
 }
@@ -689,6 +777,47 @@ pub fn random_boxes(n: usize, seed: u64) -> Scene {
 #[cfg(test)]
 mod random_boxes_name_tests {
     use super::*;
+
+    /// The closed room loads by name and is closed: rays from points spread through the free interior, in
+    /// directions spread over the sphere, all hit a face, and from its front side.
+    #[test]
+    fn closed_room_is_closed() {
+        let s = builtin("closed-room").unwrap().into_3d().unwrap();
+        assert!(s.faces.iter().all(|f| f.rho.max() <= 0.85));
+        assert!(
+            s.faces.iter().any(|f| f.rho.0[0] != f.rho.0[1]),
+            "coloured walls"
+        );
+        assert_eq!(s.emitters().len(), 2);
+        let bvh = crate::SceneBvh::new(&s);
+        let mut k = 0u32;
+        for i in 0..64 {
+            let f = |a: f64| (0.5 + a * i as f64).fract();
+            let o = DVec3::new(
+                0.05 + 3.9 * f(0.618_034),
+                0.05 + 2.4 * f(0.754_878),
+                0.05 + 2.9 * f(0.569_840),
+            );
+            // outside the blocker
+            if (1.4..=2.2).contains(&o.x) && o.y <= 1.4 && (1.2..=2.0).contains(&o.z) {
+                continue;
+            }
+            for j in 0..200 {
+                let u = (j as f64 + 0.5) / 200.0;
+                let phi = j as f64 * 2.399_963;
+                let (ct, st) = (1.0 - 2.0 * u, (1.0 - (1.0 - 2.0 * u).powi(2)).sqrt());
+                let d = DVec3::new(st * phi.cos(), ct, st * phi.sin());
+                let h = bvh.closest_hit(o, d, f64::INFINITY, u32::MAX);
+                let h = h.unwrap_or_else(|| panic!("ray {o} {d} escapes"));
+                assert!(
+                    s.faces[h.face as usize].normal.dot(d) < 0.0,
+                    "ray {o} {d} hits a back face"
+                );
+                k += 1;
+            }
+        }
+        assert!(k > 10_000);
+    }
 
     #[test]
     fn random_boxes_by_name() {

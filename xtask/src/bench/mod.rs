@@ -3,6 +3,7 @@
 mod breaking;
 mod compare;
 mod fem;
+mod field;
 mod gauss;
 mod gcr;
 mod isgcs;
@@ -26,6 +27,7 @@ const GROUPS: &[Group] = &[
     ("breaking", breaking::run),
     ("fem", fem::run),
     ("compare", compare::run),
+    ("field", field::run),
 ];
 
 /// Runs every group whose name contains `only` (all when `None`).

@@ -1,0 +1,110 @@
+#!/usr/bin/env python3
+"""Mitsuba 3 radiosity at surface points, for `cargo xtask bench --only field` (issue 16).
+
+Usage: mitsuba_field.py FACES POINTS OUT SPP [SPP ...]
+
+FACES:  one triangle per line, `x0 y0 z0 x1 y1 z1 x2 y2 z2 rho_r rho_g rho_b Ke_r Ke_g Ke_b`
+        (Ke = emitted radiance, E = pi*Ke; winding gives the front side, as in scene-sampler).
+POINTS: one point per line, `x y z nx ny nz` (the surface normal, front side).
+OUT:    for each SPP, OUT.<spp> gets one line `B_r B_g B_b` per point, and the script prints one line
+        `spp=<spp> load=<s> render=<s>` per render to stdout.
+
+One `batch` sensor of `radiancemeter`s, one per point, each 10⁻³ of the scene diagonal along the normal (Mitsuba skips hits closer than ~10⁻⁴ to a ray origin) and looking back at
+the surface (direction -n): it measures the radiance L leaving the point toward +n; for a Lambertian surface
+the exitance is B = pi*L. Integrator `path` (unbounded depth, Russian roulette from depth 5), sampler
+`ldsampler` (low-discrepancy; falls back to `multijitter`), variant `scalar_rgb`, one render call per SPP.
+Exit code 3 when mitsuba is not importable.
+"""
+import sys
+import time
+
+t_start = time.perf_counter()
+try:
+    import mitsuba as mi
+except ImportError as e:  # the bench skips Mitsuba with a note
+    print(f"mitsuba not importable: {e}", file=sys.stderr)
+    sys.exit(3)
+import numpy as np
+
+mi.set_variant("scalar_rgb")
+
+
+def main():
+    faces_path, points_path, out, *spps = sys.argv[1:]
+    spps = [int(s) for s in spps]
+    t0 = time.perf_counter()
+    tri = np.loadtxt(faces_path, ndmin=2)
+    pts = np.loadtxt(points_path, ndmin=2)
+    lo, hi = tri[:, :9].reshape(-1, 3).min(0), tri[:, :9].reshape(-1, 3).max(0)
+    offset = 1e-3 * float(np.linalg.norm(hi - lo))
+    # one mesh per material (rho, Ke)
+    groups = {}
+    for row in tri:
+        groups.setdefault(tuple(row[9:15]), []).append(row[:9])
+    scene = {"type": "scene", "integrator": {"type": "path", "max_depth": -1}}
+    for k, (mat, rows) in enumerate(groups.items()):
+        v = np.asarray(rows, dtype=np.float64).reshape(-1, 3)
+        props = mi.Properties()
+        props["bsdf"] = mi.load_dict(
+            {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(mat[:3])}}
+        )
+        if max(mat[3:]) > 0:
+            props["emitter"] = mi.load_dict(
+                {"type": "area", "radiance": {"type": "rgb", "value": list(mat[3:])}}
+            )
+        mesh = mi.Mesh(
+            f"m{k}",
+            vertex_count=len(v),
+            face_count=len(rows),
+            has_vertex_normals=False,
+            has_vertex_texcoords=False,
+            props=props,
+        )
+        params = mi.traverse(mesh)
+        params["vertex_positions"] = v.ravel().tolist()
+        params["faces"] = list(range(len(v)))
+        params.update()
+        scene[f"mesh{k}"] = mesh
+    n = len(pts)
+    t_scene = time.perf_counter() - t0
+    for spp in spps:
+        t0 = time.perf_counter()
+        sensors = {}
+        for i, p in enumerate(pts):
+            o = p[:3] + offset * p[3:]
+            sensors[f"s{i:07d}"] = {
+                "type": "radiancemeter",
+                "origin": o.tolist(),
+                "direction": (-p[3:]).tolist(),
+                "film": {"type": "hdrfilm", "width": 1, "height": 1, "rfilter": {"type": "box"},
+                         "pixel_format": "rgb"},
+            }
+        sampler = "ldsampler"
+        try:
+            sd = dict(scene)
+            sd["sensor"] = {
+                "type": "batch",
+                "sampler": {"type": sampler, "sample_count": spp},
+                "film": {"type": "hdrfilm", "width": n, "height": 1, "rfilter": {"type": "box"},
+                         "pixel_format": "rgb"},
+                **sensors,
+            }
+            s = mi.load_dict(sd)
+        except Exception:  # ldsampler wants a power of two
+            sampler = "multijitter"
+            sd["sensor"]["sampler"] = {"type": sampler, "sample_count": spp}
+            s = mi.load_dict(sd)
+        t_load = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        img = np.array(mi.render(s, spp=spp))
+        t_render = time.perf_counter() - t0
+        b = np.pi * img.reshape(-1, img.shape[-1])[:n, :3]
+        np.savetxt(f"{out}.{spp}", b, fmt="%.9g")
+        print(
+            f"spp={spp} sampler={sampler} scene={t_scene:.3f} load={t_load:.3f} render={t_render:.3f} "
+            f"import={t0 - t_start:.3f}",
+            flush=True,
+        )
+
+
+main()

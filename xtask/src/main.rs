@@ -27,9 +27,10 @@ enum Command {
         /// Only the figure groups whose name contains this text (e.g. `isgcs`, `gauss`).
         #[arg(long)]
         only: Option<String>,
-        /// Output folder.
-        #[arg(long, default_value = "docs/figures")]
-        out: PathBuf,
+        /// Output folder (default docs/figures; with --quick target/figures-quick, so that a smoke
+        /// run never overwrites the committed figures).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Benchmarks: time against error, scaling curves; writes docs/benchmarks*.md.
     Bench {
@@ -39,9 +40,10 @@ enum Command {
         /// Only the benchmark groups whose name contains this text.
         #[arg(long)]
         only: Option<String>,
-        /// Output folder.
-        #[arg(long, default_value = "docs")]
-        out: PathBuf,
+        /// Output folder (default docs; with --quick target/bench-quick, so that a smoke run never
+        /// overwrites the committed reports).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Internal (run by `bench --only scenes`): peak memory of building `random_boxes(N, 1)` and its BVH,
     /// printed as one JSON line. A separate process per size, so that each peak is that size's own.
@@ -60,14 +62,22 @@ pub struct Ctx {
     pub out: PathBuf,
 }
 
+/// Where a run writes without `--out`: the committed folder, or a scratch one for a smoke run.
+fn default_out(quick: bool, full: &str, smoke: &str) -> PathBuf {
+    PathBuf::from(if quick { smoke } else { full })
+}
+
 fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Figures { quick, only, out } => {
+            let out =
+                out.unwrap_or_else(|| default_out(quick, "docs/figures", "target/figures-quick"));
             std::fs::create_dir_all(&out)?;
             figures::run(&Ctx { quick, out }, only.as_deref())
         }
         Command::Bench { quick, only, out } => {
+            let out = out.unwrap_or_else(|| default_out(quick, "docs", "target/bench-quick"));
             std::fs::create_dir_all(&out)?;
             bench::run(&Ctx { quick, out }, only.as_deref())
         }

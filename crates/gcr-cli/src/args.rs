@@ -41,7 +41,9 @@ pub struct SolveArgs {
     /// Shading network cell budget.
     #[arg(long)]
     pub shading_cells: Option<usize>,
-    /// Training time budget in seconds.
+    /// Time budget of the solve in seconds: training stops early enough for the final FEM step to
+    /// finish within it; the gather at the outputs (probes, mesh, image) comes after, its time
+    /// reported in the metrics (`seconds.gather`).
     #[arg(long)]
     pub time_budget: Option<f64>,
     /// Seed.

@@ -152,7 +152,8 @@ pub struct SolveConfig {
     pub kernel_cells: usize,
     /// Shading network cell budget.
     pub shading_cells: usize,
-    /// Optional wall-time budget for training, in seconds.
+    /// Optional wall-time budget of the solve in seconds, the final FEM step included
+    /// (training stops when the time left is what that step is expected to take).
     pub time_budget: Option<f64>,
     /// Seed of every random choice.
     pub seed: u64,

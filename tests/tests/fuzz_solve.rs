@@ -115,6 +115,9 @@ fn mutated_scenes_that_load_solve_without_a_panic() {
             }
         }
     }
-    assert!(solved > 100, "most mutations still load and solve: {solved}");
+    assert!(
+        solved > 100,
+        "most mutations still load and solve: {solved}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -9,27 +9,16 @@
 
 use crate::error::BaselineError;
 use crate::stats::{
-    Adaptive, AdaptiveEstimate, EmitterTable, Estimate, mis_cosine, mis_light, point_rng, run_fixed,
+    Adaptive, AdaptiveEstimate, Estimate, mis_cosine, mis_light, point_rng, run_fixed,
 };
 use glam::DVec2;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use scene_sampler::{FlatPoint, FlatVisibility, FlatlandScene, cosine_halfplane};
+use scene_sampler::{EmitterTable, FlatPoint, FlatVisibility, FlatlandScene, cosine_halfplane};
 
 mod exact;
 pub use exact::{ExactOptions, ExactSolver, crossed_strings, point_to_segment};
-
-/// The emitting segments of `scene` for next-event estimation (selection ∝ length × mean emission).
-fn emitters(scene: &FlatlandScene) -> EmitterTable {
-    EmitterTable::new(
-        scene
-            .segments
-            .iter()
-            .enumerate()
-            .map(|(i, s)| (i as u32, s.length, s.emission.mean())),
-    )
-}
 
 /// The length density of a cosine-weighted direction (density `cos θ / 2` per radian) from `y` (normal `ny`)
 /// at the point `x` (normal `nx`): `G = cos θx cos θy / (2 r)`, 0 when they do not face each other.
@@ -75,7 +64,10 @@ fn path(
         // ⟨next-event estimation: one shadow ray⟩
         let (u0, u1) = (rng.random::<f64>(), rng.random::<f64>());
         if !lights.is_empty() {
-            let (ef, p_e) = lights.pick(u0);
+            let (ef, p_e) = lights
+                .pick_by_power(u0)
+                .map(|f| (f, lights.power_density(f)))
+                .expect("a table with emitters");
             let e = &scene.segments[ef as usize];
             if ef != at.segment {
                 let x = e.point(u1);
@@ -109,7 +101,7 @@ fn path(
         if !ns.emission.is_zero() {
             let w = mis_cosine(
                 geometry(at.point, at.normal, next.point, next.normal),
-                lights.density(next.segment),
+                lights.power_density(next.segment),
             );
             for b in 0..3 {
                 out[b] += throughput[b] * w * ns.emission.0[b];
@@ -164,7 +156,7 @@ pub fn path_trace_at(
     seed: u64,
 ) -> Result<Vec<Estimate>, BaselineError> {
     check_segments(scene, points)?;
-    let lights = emitters(scene);
+    let lights = EmitterTable::of_flatland(scene);
     Ok(points
         .par_iter()
         .map(|&p| {
@@ -206,7 +198,7 @@ pub fn reference_at(
 ) -> Result<Vec<AdaptiveEstimate>, BaselineError> {
     adaptive.validate()?;
     check_segments(scene, points)?;
-    let lights = emitters(scene);
+    let lights = EmitterTable::of_flatland(scene);
     Ok(points
         .par_iter()
         .map(|&p| {

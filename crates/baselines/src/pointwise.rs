@@ -9,12 +9,12 @@
 //! keeps the old estimator for comparisons.
 
 use crate::error::BaselineError;
-use crate::stats::{EmitterTable, mis_cosine, mis_light, point_rng, run_fixed};
+use crate::stats::{mis_cosine, mis_light, point_rng, run_fixed};
 use glam::DVec3;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use scene_sampler::{Scene, SceneBvh, SurfacePoint, cosine_hemisphere};
+use scene_sampler::{EmitterTable, Scene, SceneBvh, SurfacePoint, cosine_hemisphere};
 use std::f64::consts::PI;
 
 pub use crate::stats::{Adaptive, AdaptiveEstimate, Estimate, relative_error_bound};
@@ -38,17 +38,6 @@ pub fn live_bands(scene: &Scene, face: u32) -> [bool; 3] {
         f.emission.0[b] > 0.0
             || (f.rho.0[b] > 0.0 && scene.faces.iter().any(|g| g.emission.0[b] > 0.0))
     })
-}
-
-/// The emitters of `scene` for next-event estimation (selection ∝ area × mean emission).
-fn emitters(scene: &Scene) -> EmitterTable {
-    EmitterTable::new(
-        scene
-            .faces
-            .iter()
-            .enumerate()
-            .map(|(i, f)| (i as u32, f.area, f.emission.mean())),
-    )
 }
 
 /// The area density of a cosine-weighted direction from `y` (normal `ny`) at the point `x` (normal `nx`):
@@ -104,7 +93,10 @@ fn path(
             rng.random::<f64>(),
         );
         if !lights.is_empty() {
-            let (ef, p_e) = lights.pick(u0);
+            let (ef, p_e) = lights
+                .pick_by_power(u0)
+                .map(|f| (f, lights.power_density(f)))
+                .expect("a table with emitters");
             let e = &scene.faces[ef as usize];
             if ef != at.face {
                 let s = u1.sqrt();
@@ -139,7 +131,7 @@ fn path(
         if !nf.emission.is_zero() {
             let w = mis_cosine(
                 geometry(at.point, at.normal, next.point, next.normal),
-                lights.density(next.face),
+                lights.power_density(next.face),
             );
             for b in 0..3 {
                 out[b] += throughput[b] * w * nf.emission.0[b];
@@ -220,7 +212,7 @@ pub fn radiosity_at(
     paths: usize,
     seed: u64,
 ) -> Vec<Estimate> {
-    let lights = emitters(scene);
+    let lights = EmitterTable::of_scene(scene);
     points
         .par_iter()
         .map(|&p| {
@@ -265,7 +257,7 @@ pub fn reference_at(
 ) -> Result<Vec<AdaptiveEstimate>, BaselineError> {
     adaptive.validate()?;
     check_faces(scene, points)?;
-    let lights = emitters(scene);
+    let lights = EmitterTable::of_scene(scene);
     Ok(points
         .par_iter()
         .map(|&p| {

@@ -196,69 +196,6 @@ pub(crate) fn run_fixed(paths: usize, mut path: impl FnMut() -> [f64; 3]) -> Est
     acc.estimate()
 }
 
-/// The emitters of a scene for next-event estimation: faces (segments) chosen in proportion to their
-/// power (measure × mean emission), then a point uniform on the chosen one.
-#[derive(Clone, Debug, Default)]
-pub(crate) struct EmitterTable {
-    /// Emitting face (segment) indices, ascending.
-    faces: Vec<u32>,
-    /// Cumulative selection probabilities, `cdf[0] = 0`, `cdf[len] = 1`.
-    cdf: Vec<f64>,
-    /// Selection probability over measure: the area (length) density of a point drawn on face `faces[i]`.
-    density: Vec<f64>,
-}
-
-impl EmitterTable {
-    /// From `(index, measure, mean emission)` of every face; faces with zero measure or emission are left out.
-    pub(crate) fn new(faces: impl Iterator<Item = (u32, f64, f64)>) -> Self {
-        let live: Vec<(u32, f64, f64)> = faces
-            .filter(|&(_, m, e)| m > 0.0 && e > 0.0 && (m * e).is_finite())
-            .collect();
-        let total: f64 = live.iter().map(|&(_, m, e)| m * e).sum();
-        if live.is_empty() || total <= 0.0 {
-            return Self::default();
-        }
-        let mut cdf = vec![0.0];
-        let mut acc = 0.0;
-        let mut density = Vec::with_capacity(live.len());
-        for &(_, m, e) in &live {
-            let p = m * e / total;
-            acc += p;
-            cdf.push(acc);
-            density.push(p / m);
-        }
-        *cdf.last_mut().unwrap() = 1.0;
-        Self {
-            faces: live.iter().map(|&(i, _, _)| i).collect(),
-            cdf,
-            density,
-        }
-    }
-
-    /// True when nothing emits.
-    pub(crate) fn is_empty(&self) -> bool {
-        self.faces.is_empty()
-    }
-
-    /// The face chosen by `u ∈ [0,1)` and the area (length) density of a uniform point on it.
-    pub(crate) fn pick(&self, u: f64) -> (u32, f64) {
-        let i = self
-            .cdf
-            .partition_point(|&c| c <= u)
-            .saturating_sub(1)
-            .min(self.faces.len() - 1);
-        (self.faces[i], self.density[i])
-    }
-
-    /// The area (length) density with which emitter sampling draws a point of `face` (0 if it does not emit).
-    pub(crate) fn density(&self, face: u32) -> f64 {
-        match self.faces.binary_search(&face) {
-            Ok(i) => self.density[i],
-            Err(_) => 0.0,
-        }
-    }
-}
-
 /// Power-heuristic MIS weight (one sample per technique) of a point drawn by **emitter sampling**, times its
 /// estimator `G/p_e`: `G·p_e/(p_e² + G²)` per unit emission, written as `1/(p_e/G + G/p_e)` so that it is 0,
 /// not NaN, when `G` overflows (a point at the edge where an emitter meets the receiver).

@@ -70,7 +70,9 @@ pub fn gather(
     if !emitters.is_empty() && samples.direct > 0 {
         for i in 0..samples.direct {
             let u0 = (i as f64 + rng.random::<f64>()) / samples.direct as f64;
-            let ef = emitters.pick_by_power(u0);
+            let Some(ef) = emitters.table().pick_by_power(u0) else {
+                break;
+            };
             if ef == face {
                 continue;
             }
@@ -134,7 +136,7 @@ impl Mis<'_> {
         if self.emitters.is_empty() {
             0.0
         } else {
-            self.n_e * self.emitters.power_density(face)
+            self.n_e * self.emitters.table().power_density(face)
         }
     }
 

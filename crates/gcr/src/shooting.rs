@@ -62,8 +62,8 @@ impl SenderDensity {
     /// `p_x` on face (segment) `face`, per unit area (length).
     pub fn pdf(&self, face: u32) -> f64 {
         let mut p = self.alpha / self.total;
-        if self.emitters.emits(face) {
-            p += (1.0 - self.alpha) / self.emitters.area();
+        if self.emitters.table().emits(face) {
+            p += (1.0 - self.alpha) / self.emitters.table().area();
         }
         p
     }
@@ -73,10 +73,15 @@ impl SenderDensity {
     pub fn shoot(&self, domain: &Domain, rng: &mut impl Rng) -> Option<Shot> {
         let on_emitter = rng.random::<f64>() >= self.alpha;
         let u: [f64; 4] = [rng.random(), rng.random(), rng.random(), rng.random()];
+        // α < 1 only when the scene has emitters, so an emitter is there to pick.
+        let emitter = |u0| {
+            on_emitter
+                .then(|| self.emitters.table().pick_by_area(u0))
+                .flatten()
+        };
         let ends = match domain {
             Domain::ThreeD(k) => {
-                let x = if on_emitter {
-                    let face = self.emitters.pick_by_area(u[0]);
+                let x = if let Some(face) = emitter(u[0]) {
                     let f = &k.scene.faces[face as usize];
                     let [b1, b2] = uniform_triangle([u[1], u[2]]);
                     SurfacePoint {
@@ -92,8 +97,7 @@ impl SenderDensity {
                 Endpoints::ThreeD(x, k.bvh.surface_point(&hit))
             }
             Domain::Flat(k) => {
-                let x = if on_emitter {
-                    let seg = self.emitters.pick_by_area(u[0]);
+                let x = if let Some(seg) = emitter(u[0]) {
                     let s = &k.scene.segments[seg as usize];
                     FlatPoint {
                         point: s.point(u[1]),

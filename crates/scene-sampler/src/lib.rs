@@ -42,7 +42,7 @@ pub mod spectrum;
 
 pub use builtin::{BUILTIN_NAMES, builtin, is_builtin, nearest_builtin, random_boxes};
 pub use bvh::{BuildQuality, FlatHit, FlatVisibility, Hit, SceneBvh};
-pub use distribution::{Discrete, uniform_triangle};
+pub use distribution::{Discrete, EmitterTable, uniform_triangle};
 pub use error::{Result, SceneError};
 pub use flatland::{FlatView, FlatlandScene, Segment};
 pub use kernel::{FlatKernelSample, FlatKernelSampler, KernelSample, KernelSampler, Samples};

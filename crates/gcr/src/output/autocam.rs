@@ -1,18 +1,22 @@
 //! The automatic camera: a view that sees the lit side of the scene, from inside closed scenes
 //! and framing open ones tightly.
 //!
-//! Candidates are scored by a small ray-traced probe image (24 × 24 rays through the BVH):
-//! score = ½ · (share of rays that hit the front of a surface) + ½ · (mean display brightness
-//! of what they hit, from the solved radiosity and the exposure). Candidates:
+//! Candidates are scored by a small ray-traced probe image (24 × 24 rays through the BVH): with
+//! `front` the share of rays that hit the front of a surface, and three qualities each divided
+//! by its best value over the candidates — the mean display brightness of what the rays hit
+//! (from the solved radiosity and the exposure), the mean hit distance (a view across the room
+//! rather than at a wall), and the number of distinct surfaces seen —
+//! score = front² · (½ + ⅙ · (brightness + distance + surfaces)). Candidates:
 //!
 //! * **outside**: 8 azimuths × 2 elevations (15°, 35°) looking down at the bounding box, each
 //!   framing its eight corners tightly (the smallest distance at which they all fit, centred);
-//! * **inside**: the 6 points of a 6³ grid in the bounding box that are enclosed (26 rays in all
-//!   directions hit front faces) and farthest from every surface (the largest open spaces); from
+//! * **inside**: the 6 points of a 6³ grid in the bounding box that are enclosed (128 rays spread
+//!   over the sphere all hit front faces) and farthest from every surface (the largest open
+//!   spaces; none closer than 8 % of the diagonal); from
 //!   each, 8 azimuths × 2 tilts (0°, −20°), the eye backed off toward the wall behind (70 % of the
 //!   free distance) so that the view spans the room.
 //!
-//! A closed room seen from outside shows only back faces (score ≈ 0), so an inside view wins
+//! A closed room seen from outside shows only back faces (score 0), so an inside view wins
 //! there; an open scene has no enclosed point, or its inside views see the background.
 
 use super::raster::PinholeCamera;
@@ -22,6 +26,9 @@ use scene_sampler::{Scene, SceneBvh};
 
 /// Probe image side (rays) for scoring a candidate.
 const PROBE: usize = 24;
+/// The least distance from an inside camera's open point to every surface, as a share of the
+/// scene's diagonal.
+const MIN_CLEARANCE: f64 = 0.08;
 /// Field of view of an inside camera when none is given (degrees).
 const INSIDE_FOV: f64 = 60.0;
 
@@ -66,9 +73,22 @@ pub fn automatic_camera(
             }
         }
     }
-    let scores: Vec<f64> = candidates
+    let stats: Vec<Probe> = candidates
         .par_iter()
-        .map(|(c, _)| probe_score(scene, bvh, brightness, c, aspect))
+        .map(|(c, _)| probe(scene, bvh, brightness, c, aspect))
+        .collect();
+    let best_of = |f: fn(&Probe) -> f64| stats.iter().map(f).fold(1e-300, f64::max);
+    let (b, d, n) = (
+        best_of(|p| p.brightness),
+        best_of(|p| p.distance),
+        best_of(|p| p.surfaces),
+    );
+    let scores: Vec<f64> = stats
+        .iter()
+        .map(|p| {
+            let quality = (p.brightness / b + p.distance / d + p.surfaces / n) / 6.0;
+            p.front * p.front * (0.5 + quality)
+        })
         .collect();
     let mut best = 0;
     for (i, s) in scores.iter().enumerate() {
@@ -161,26 +181,25 @@ fn centre_offset(points: impl Iterator<Item = (f64, f64)> + Clone) -> f64 {
     0.5 * (lo + hi)
 }
 
-/// The 26 directions to the neighbours of a cube cell.
-fn neighbour_directions() -> Vec<DVec3> {
-    let mut dirs = Vec::with_capacity(26);
-    for x in -1..=1 {
-        for y in -1..=1 {
-            for z in -1..=1 {
-                if (x, y, z) != (0, 0, 0) {
-                    dirs.push(DVec3::new(x as f64, y as f64, z as f64).normalize());
-                }
-            }
-        }
-    }
-    dirs
+/// `n` directions spread evenly over the sphere (a Fibonacci lattice).
+fn sphere_directions(n: usize) -> Vec<DVec3> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
+            let r = (1.0 - z * z).sqrt();
+            let phi = golden * i as f64;
+            DVec3::new(r * phi.cos(), z, r * phi.sin())
+        })
+        .collect()
 }
 
-/// Up to 6 points of a 6³ grid over the bounding box that are enclosed (every one of 26 rays
-/// hits the front of a surface) and farthest from the nearest hit, best first.
+/// Up to 6 points of a 6³ grid over the bounding box that are enclosed (every one of 128 rays
+/// spread over the sphere hits the front of a surface), at least [`MIN_CLEARANCE`] of the
+/// diagonal from the nearest hit, farthest first.
 fn open_spaces(scene: &Scene, bvh: &SceneBvh) -> Vec<DVec3> {
     let (lo, hi) = scene.bounds;
-    let dirs = neighbour_directions();
+    let dirs = sphere_directions(128);
     let n = 6;
     let grid: Vec<DVec3> = (0..n * n * n)
         .map(|i| {
@@ -199,7 +218,8 @@ fn open_spaces(scene: &Scene, bvh: &SceneBvh) -> Vec<DVec3> {
                 }
                 clearance = clearance.min(hit.t);
             }
-            Some((clearance, p))
+            // a nook (behind a block in an open room) is no place for a camera
+            (clearance >= MIN_CLEARANCE * scene.diagonal()).then_some((clearance, p))
         })
         .collect();
     enclosed.sort_by(|a, b| b.0.total_cmp(&a.0));
@@ -228,15 +248,28 @@ fn backed_off(
     })
 }
 
-/// The probe score of a camera: ½ · share of rays hitting a front face + ½ · mean brightness.
-fn probe_score(
+/// What a camera's probe image sees.
+struct Probe {
+    /// Share of rays hitting the front of a surface.
+    front: f64,
+    /// Mean display brightness over all rays (0 for misses and back faces).
+    brightness: f64,
+    /// Mean hit distance of the front hits.
+    distance: f64,
+    /// Distinct surfaces hit on their front.
+    surfaces: f64,
+}
+
+/// Traces the probe image of a camera.
+fn probe(
     scene: &Scene,
     bvh: &SceneBvh,
     brightness: &[f64],
     cam: &PinholeCamera,
     aspect: f64,
-) -> f64 {
-    let (mut front, mut light) = (0usize, 0.0);
+) -> Probe {
+    let (mut front, mut light, mut dist) = (0usize, 0.0, 0.0);
+    let mut surfaces = std::collections::HashSet::new();
     for j in 0..PROBE {
         for i in 0..PROBE {
             let (sx, sy) = (
@@ -247,14 +280,22 @@ fn probe_score(
             let Some(hit) = bvh.closest_hit(cam.eye, d, f64::INFINITY, u32::MAX) else {
                 continue;
             };
-            if scene.faces[hit.face as usize].normal.dot(d) < 0.0 {
+            let face = &scene.faces[hit.face as usize];
+            if face.normal.dot(d) < 0.0 {
                 front += 1;
                 light += brightness.get(hit.face as usize).copied().unwrap_or(0.0);
+                dist += hit.t;
+                surfaces.insert(face.surface);
             }
         }
     }
     let n = (PROBE * PROBE) as f64;
-    0.5 * (front as f64 / n) + 0.5 * (light / n)
+    Probe {
+        front: front as f64 / n,
+        brightness: light / n,
+        distance: dist / front.max(1) as f64,
+        surfaces: surfaces.len() as f64,
+    }
 }
 
 #[cfg(test)]

@@ -129,12 +129,14 @@ impl PinholeCamera {
 }
 
 /// Which camera an image is rendered from.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum CameraChoice {
     /// The scene's own camera (a built-in's, a glTF camera node) when it has one, else
-    /// [`CameraChoice::Automatic`].
-    #[default]
-    Scene,
+    /// [`CameraChoice::Automatic`]; `fov` replaces its field of view.
+    Scene {
+        /// Vertical field of view in degrees, if given.
+        fov: Option<f64>,
+    },
     /// Placed from the scene's geometry and the solved radiosity ([`super::autocam`]): from
     /// inside closed scenes, framing open ones tightly. `fov`: the vertical field of view to use
     /// (default 40° outside, 60° inside).
@@ -172,10 +174,16 @@ pub struct ImageSettings {
     pub views: Vec<View>,
 }
 
+impl Default for CameraChoice {
+    fn default() -> Self {
+        Self::Scene { fov: None }
+    }
+}
+
 impl Default for ImageSettings {
     fn default() -> Self {
         Self {
-            camera: CameraChoice::Scene,
+            camera: CameraChoice::default(),
             width: 512,
             height: 512,
             exposure: None,
@@ -196,7 +204,9 @@ impl ImageSettings {
         }
         match self.camera {
             CameraChoice::Given(c) => c.validate()?,
-            CameraChoice::Automatic { fov: Some(f) } if !(f > 0.0 && f < 180.0) => {
+            CameraChoice::Automatic { fov: Some(f) } | CameraChoice::Scene { fov: Some(f) }
+                if !(f > 0.0 && f < 180.0) =>
+            {
                 return Err(CameraError::Fov(f));
             }
             _ => {}

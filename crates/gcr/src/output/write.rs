@@ -331,8 +331,12 @@ fn write_3d(
     for (path, choice, source) in images {
         let (camera, source) = match choice {
             CameraChoice::Given(c) => (c, source),
-            CameraChoice::Scene if scene.camera_given => (PinholeCamera::of_scene(scene), "scene"),
-            CameraChoice::Scene => automatic(domain, &mesh, &exposure, settings, None),
+            CameraChoice::Scene { fov } if scene.camera_given => {
+                let mut c = PinholeCamera::of_scene(scene);
+                c.fov_y_degrees = fov.unwrap_or(c.fov_y_degrees);
+                (c, "scene")
+            }
+            CameraChoice::Scene { fov } => automatic(domain, &mesh, &exposure, settings, fov),
             CameraChoice::Automatic { fov } => automatic(domain, &mesh, &exposure, settings, fov),
         };
         let coverage = write_image(&mesh, &camera, settings, &exposure, path, staged)?;

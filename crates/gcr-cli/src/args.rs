@@ -102,7 +102,7 @@ pub struct SolveArgs {
     pub camera_up: [f64; 3],
     /// Vertical field of view in degrees, in (0, 180) [default: 40 with --camera-eye; else the
     /// scene camera's, or the automatic camera's: 40 outside, 60 inside a closed scene].
-    #[arg(long, value_name = "DEG")]
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     pub fov: Option<f64>,
     /// Place the camera automatically even when the scene has one (from inside closed scenes,
     /// framing open ones tightly).
@@ -114,7 +114,7 @@ pub struct SolveArgs {
     /// Exposure of the tone-mapped outputs (PNG/JPEG, glTF and PLY colours): display value =
     /// clamp(L · exposure), L = B/π [default: automatic, the 95th percentile of the lit
     /// surfaces' luminance maps to 0.8]. The value used is printed and in the metrics.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub exposure: Option<f64>,
     /// One more image of the same solve: `EYE;TARGET[;UP[;FOV]]=PATH`, vectors as X,Y,Z (up
     /// default 0,1,0, FOV default 40), PATH .png, .jpg or .exr; repeatable.

@@ -236,6 +236,48 @@ mod tests {
         }
     }
 
+    /// Mitsuba 3's `perspective` sensor, `to_world = look_at(eye, target, up)`, `fov_axis = y`
+    /// (src/sensors/perspective.cpp, `Transform4f::look_at`): left = normalize(up × dir), and the
+    /// sample position of camera point (x, y, z) is (½ − ½·x/(z·tan(fov_x/2)),
+    /// ½ − ½·a·y/(z·tan(fov_x/2))), tan(fov_x/2) = a·tan(fov_y/2), a = W/H, times (W, H).
+    #[test]
+    fn a_point_lands_on_the_pixel_mitsuba_puts_it_on() {
+        use crate::output::raster::project;
+        // Looking down −z with y up: world +x is image-right, +y image-up. fov_y 90°, 200×100:
+        // (1, 0.5, −2) has x_left = −1, y_up = 0.5, z = 2 → (0.625·200, 0.375·100).
+        let c = cam(DVec3::ZERO, DVec3::NEG_Z, DVec3::Y, 90.0);
+        let p = project(&c, 200, 100, DVec3::new(1.0, 0.5, -2.0)).unwrap();
+        assert!(
+            (p.x - 125.0).abs() < 1e-9 && (p.y - 37.5).abs() < 1e-9,
+            "{p}"
+        );
+        assert!((p.z - 2.0).abs() < 1e-12);
+        let d = c.ray_direction(0.625, 0.375, 2.0);
+        assert!(d.cross(DVec3::new(1.0, 0.5, -2.0).normalize()).length() < 1e-12);
+        // Looking down +z with y up (Mitsuba's camera space itself): +x is image-LEFT.
+        let c = cam(
+            DVec3::new(1.0, 2.0, 3.0),
+            DVec3::new(1.0, 2.0, 13.0),
+            DVec3::Y,
+            40.0,
+        );
+        let p = project(&c, 100, 100, DVec3::new(2.0, 2.0, 13.0)).unwrap();
+        let t = 20f64.to_radians().tan();
+        assert!(
+            (p.x - 100.0 * 0.5 * (1.0 - 1.0 / (10.0 * t))).abs() < 1e-9,
+            "{p}"
+        );
+        assert!(p.x < 50.0 && (p.y - 50.0).abs() < 1e-9);
+        let below = project(&c, 100, 100, DVec3::new(1.0, 1.0, 13.0)).unwrap();
+        assert!(below.y > 50.0 && (below.x - 50.0).abs() < 1e-9, "{below}");
+        // up = +x looking down −z: left = x × (−z) = +y, image-up = +x.
+        let c = cam(DVec3::ZERO, DVec3::NEG_Z, DVec3::X, 60.0);
+        let (left, up, _) = c.frame();
+        assert!((left - DVec3::Y).length() < 1e-12 && (up - DVec3::X).length() < 1e-12);
+        let p = project(&c, 64, 64, DVec3::new(0.3, 0.2, -1.0)).unwrap();
+        assert!(p.x < 32.0 && p.y < 32.0, "{p}");
+    }
+
     #[test]
     fn bad_cameras_are_named_errors() {
         let (o, z, y) = (DVec3::ZERO, DVec3::NEG_Z, DVec3::Y);

@@ -25,7 +25,7 @@ pub enum Command {
     /// List the built-in scenes.
     Scenes,
     /// Solve a scene (a file: .obj, .gltf, .glb, Flatland .json; or a built-in name).
-    Solve(SolveArgs),
+    Solve(Box<SolveArgs>),
     /// The pointwise path-traced reference (`baselines`) at probe points: B per probe with its
     /// standard error on stderr.
     Reference(ReferenceArgs),

@@ -1,7 +1,8 @@
 //! The command line (clap derive): `gcr scenes`, `gcr solve`, `gcr reference`.
 
 use clap::{Args, Parser, Subcommand};
-use gcr::output::OutputPaths;
+use gcr::output::raster::PinholeCamera;
+use gcr::output::{CameraChoice, ImageSettings, OutputPaths, View};
 use gcr::{GatherMode, GatherSamples, NetworkTarget, OutputFit, SolveConfig, SurfaceClusters};
 use std::path::PathBuf;
 
@@ -24,7 +25,7 @@ pub enum Command {
     /// List the built-in scenes.
     Scenes,
     /// Solve a scene (a file: .obj, .gltf, .glb, Flatland .json; or a built-in name).
-    Solve(SolveArgs),
+    Solve(Box<SolveArgs>),
     /// The pointwise path-traced reference (`baselines`) at probe points: B per probe with its
     /// standard error on stderr.
     Reference(ReferenceArgs),
@@ -83,9 +84,45 @@ pub struct SolveArgs {
     /// Cluster criterion θ: a node replaces its elements when a·R² ≤ θ (0: exact).
     #[arg(long, default_value_t = SurfaceClusters::default().theta)]
     pub cluster_theta: f64,
-    /// PNG image from the scene's camera (.png).
+    /// Image: tone-mapped .png, .jpg/.jpeg, or linear radiance L = B/π as .exr (RGB float; 3-D
+    /// scenes). From the --camera-* camera, else the scene's (a built-in's, a glTF camera
+    /// node), else the automatic one (docs/images.md).
     #[arg(long)]
     pub image: Option<PathBuf>,
+    /// Camera position X,Y,Z (with --camera-target). The convention is Mitsuba 3's
+    /// `perspective` sensor with `to_world = look_at(eye, target, up)`, `fov_axis = y`.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, requires = "camera_target",
+          allow_hyphen_values = true)]
+    pub camera_eye: Option<[f64; 3]>,
+    /// The point the camera looks at, X,Y,Z (with --camera-eye).
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, requires = "camera_eye",
+          allow_hyphen_values = true)]
+    pub camera_target: Option<[f64; 3]>,
+    /// The camera's up direction X,Y,Z (need not be orthogonal to the view direction).
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, requires = "camera_eye",
+          allow_hyphen_values = true, default_value = "0,1,0")]
+    pub camera_up: [f64; 3],
+    /// Vertical field of view in degrees, in (0, 180) [default: 40 with --camera-eye; else the
+    /// scene camera's, or the automatic camera's: 40 outside, 60 inside a closed scene].
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    pub fov: Option<f64>,
+    /// Place the camera automatically even when the scene has one (from inside closed scenes,
+    /// framing open ones tightly).
+    #[arg(long, conflicts_with = "camera_eye")]
+    pub auto_camera: bool,
+    /// Image size in pixels, WIDTHxHEIGHT (each 1 to 16384).
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution, default_value = "512x512")]
+    pub resolution: (u32, u32),
+    /// Exposure of the tone-mapped outputs (PNG/JPEG, glTF and PLY colours): display value =
+    /// clamp(L · exposure), L = B/π [default: automatic, the 95th percentile of the lit
+    /// surfaces' luminance maps to 0.8]. The value used is printed and in the metrics.
+    #[arg(long, allow_hyphen_values = true)]
+    pub exposure: Option<f64>,
+    /// One more image of the same solve: `EYE;TARGET[;UP[;FOV]]=PATH`, vectors as X,Y,Z (up
+    /// default 0,1,0, FOV default 40), PATH .png, .jpg or .exr; repeatable.
+    #[arg(long, value_name = "EYE;TARGET[;UP[;FOV]]=PATH", value_parser = parse_view,
+          allow_hyphen_values = true)]
+    pub view: Vec<View>,
     /// Flatland only: PNG of the light flow over the kernel domain (s of the sender to the
     /// right, t of the receiver upwards; fig. 4.1b): the sampled K·s on the left, the kernel
     /// network's Ψ on the right, dark = large; the training rays marked red on the right.
@@ -136,6 +173,28 @@ impl SolveArgs {
         }
     }
 
+    /// The image settings (not yet validated: `ImageSettings::validate`, through
+    /// `OutputPlan::with_images`).
+    pub fn images(&self) -> ImageSettings {
+        let camera = match (self.camera_eye, self.camera_target) {
+            (Some(eye), Some(target)) => CameraChoice::Given(PinholeCamera {
+                eye: eye.into(),
+                target: target.into(),
+                up: self.camera_up.into(),
+                fov_y_degrees: self.fov.unwrap_or(gcr::output::camera::DEFAULT_FOV),
+            }),
+            _ if self.auto_camera => CameraChoice::Automatic { fov: self.fov },
+            _ => CameraChoice::Scene { fov: self.fov },
+        };
+        ImageSettings {
+            camera,
+            width: self.resolution.0,
+            height: self.resolution.1,
+            exposure: self.exposure,
+            views: self.view.clone(),
+        }
+    }
+
     /// The output files.
     pub fn outputs(&self) -> OutputPaths {
         OutputPaths {
@@ -174,4 +233,65 @@ pub struct ReferenceArgs {
     /// Seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+}
+
+/// `X,Y,Z` as three numbers (NaN and infinities parse; the camera check rejects them).
+fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let [x, y, z] = parts[..] else {
+        return Err(format!("`{s}`: expected three numbers X,Y,Z"));
+    };
+    let num = |t: &str| {
+        t.parse::<f64>()
+            .map_err(|_| format!("`{s}`: `{t}` is not a number"))
+    };
+    Ok([num(x)?, num(y)?, num(z)?])
+}
+
+/// `WxH` as two integers.
+fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("`{s}`: expected WIDTHxHEIGHT, e.g. 512x512"))?;
+    let num = |t: &str| {
+        t.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("`{s}`: `{t}` is not a pixel count"))
+    };
+    Ok((num(w)?, num(h)?))
+}
+
+/// `EYE;TARGET[;UP[;FOV]]=PATH`.
+fn parse_view(s: &str) -> Result<View, String> {
+    let (spec, path) = s
+        .split_once('=')
+        .ok_or_else(|| format!("`{s}`: expected EYE;TARGET[;UP[;FOV]]=PATH"))?;
+    if path.is_empty() {
+        return Err(format!("`{s}`: no image path after `=`"));
+    }
+    let parts: Vec<&str> = spec.split(';').collect();
+    if !(2..=4).contains(&parts.len()) {
+        return Err(format!(
+            "`{s}`: expected 2 to 4 `;`-separated parts before `=` (EYE;TARGET[;UP[;FOV]])"
+        ));
+    }
+    let up = parts
+        .get(2)
+        .map_or(Ok([0.0, 1.0, 0.0]), |u| parse_vec3(u))?;
+    let fov = match parts.get(3) {
+        Some(f) => f
+            .trim()
+            .parse::<f64>()
+            .map_err(|_| format!("`{s}`: field of view `{f}` is not a number"))?,
+        None => gcr::output::camera::DEFAULT_FOV,
+    };
+    Ok(View {
+        camera: PinholeCamera {
+            eye: parse_vec3(parts[0])?.into(),
+            target: parse_vec3(parts[1])?.into(),
+            up: up.into(),
+            fov_y_degrees: fov,
+        },
+        path: PathBuf::from(path),
+    })
 }

@@ -38,7 +38,7 @@ fn solve_and_write(
     config: &SolveConfig,
     started: Instant,
 ) -> Result<()> {
-    let plan = OutputPlan::new(domain, args.outputs())
+    let plan = OutputPlan::with_images(domain, args.outputs(), args.images())
         .with_context(|| format!("checking the outputs for `{}`", args.scene))?;
     let mut progress = ProgressLine::new(args.quiet);
     let trained = gcr::solve(domain, config, &mut |p| progress.update(p))?;
@@ -47,6 +47,38 @@ fn solve_and_write(
         eprintln!("warning: {w}");
     }
     let metrics = write_outputs(domain, &trained, config, &plan, &args.scene, started)?;
+    for w in &metrics.warnings[trained.metrics.warnings.len().min(metrics.warnings.len())..] {
+        eprintln!("warning: {w}");
+    }
     progress.done(&metrics);
+    if !args.quiet {
+        print_images(&metrics);
+    }
     Ok(())
+}
+
+/// The exposure and cameras used (also in the metrics), so that a run can be repeated.
+fn print_images(m: &gcr::Metrics) {
+    if let Some(e) = m.exposure {
+        eprintln!(
+            "exposure: {e} ({}; --exposure {e} repeats it)",
+            m.exposure_source
+        );
+    }
+    let v = |p: [f64; 3]| format!("{},{},{}", p[0], p[1], p[2]);
+    for i in &m.images {
+        eprintln!(
+            "image {}: {}x{}, camera {} (--camera-eye {} --camera-target {} --camera-up {} \
+             --fov {}), {:.0} % of the pixels on lit surfaces",
+            i.path,
+            i.width,
+            i.height,
+            i.camera_source,
+            v(i.eye),
+            v(i.target),
+            v(i.up),
+            i.fov_y_deg,
+            100.0 * i.front_share
+        );
+    }
 }

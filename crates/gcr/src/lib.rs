@@ -56,7 +56,7 @@ pub use element::{Bands, MAX_BANDS};
 pub use emitters::Emitters;
 pub use gather::Gathered;
 pub use mesh::ShadedMesh;
-pub use metrics::{Metrics, PhaseTimes, peak_memory_bytes};
+pub use metrics::{ImageRecord, Metrics, PhaseTimes, peak_memory_bytes};
 pub use network::GrowingNetwork;
 pub use pipeline::{GatherError, output_mesh, point_seed, radiosity_at_points};
 pub use retriangulate::RetriangulateLimits;

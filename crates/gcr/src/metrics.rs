@@ -96,6 +96,45 @@ pub struct Metrics {
     pub final_bounces: usize,
     /// What the solve noticed and the user should know (the result is still what was asked).
     pub warnings: Vec<String>,
+    /// Exposure of the tone-mapped outputs (PNG and JPEG images, glTF and PLY vertex colours):
+    /// display value = clamp(L · exposure) with L = B/π, then the sRGB curve for images. `None`
+    /// when the run wrote none of them (EXR images are linear radiance, not exposed).
+    pub exposure: Option<f64>,
+    /// How [`Metrics::exposure`] was set: `given` (`--exposure`) or `auto` (the 95th percentile
+    /// of the lit surfaces' luminance maps to 0.8); empty without an exposure.
+    pub exposure_source: String,
+    /// The 3-D images written, with the cameras they were rendered from.
+    pub images: Vec<ImageRecord>,
+}
+
+/// One 3-D image written by a solve.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct ImageRecord {
+    /// Its file.
+    pub path: String,
+    /// `png`, `jpeg` or `exr`.
+    pub format: String,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Camera eye (Mitsuba `look_at` origin).
+    pub eye: [f64; 3],
+    /// Camera target.
+    pub target: [f64; 3],
+    /// Camera up.
+    pub up: [f64; 3],
+    /// Vertical field of view in degrees.
+    pub fov_y_deg: f64,
+    /// Where the camera came from: `given` (command line), `view` (`--view`), `scene` (a
+    /// built-in's or a glTF camera node), `automatic-inside` or `automatic-outside`.
+    pub camera_source: String,
+    /// Share of the sub-samples that see the front (lit side) of a surface.
+    pub front_share: f64,
+    /// Share that see a back face (drawn black).
+    pub back_share: f64,
+    /// Share that see no surface (black background).
+    pub nothing_share: f64,
 }
 
 /// Peak resident set size of this process (`VmHWM` from `/proc/self/status`), when available.

@@ -410,7 +410,9 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene> {
 /// `emissiveFactor × KHR_materials_emissive_strength` → emitted radiance, E = π·that (ρ ≥ 1, such as the
 /// default material's white, is clamped to [`RHO_MAX`] with a warning naming the material). Textures are
 /// ignored. Triangle strips and fans are loaded as triangles; points and lines are skipped with a warning
-/// naming their mesh, and a file with nothing else is an error saying so.
+/// naming their mesh, and a file with nothing else is an error saying so. The first node with a
+/// perspective camera (in traversal order) becomes [`Scene::camera`] (with
+/// [`Scene::camera_given`]); without one the image output places its automatic camera.
 pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
     let path = path.as_ref();
     let source = path.display().to_string();
@@ -438,6 +440,7 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
     let mut skipped: Vec<String> = Vec::new();
     let mut checked: Vec<(Option<usize>, Spectrum)> = Vec::new();
     let mut surface = 0u32;
+    let mut camera: Option<Camera> = None;
     let mut stack: Vec<(gltf::Node, DMat4, usize)> =
         scene.nodes().map(|n| (n, DMat4::IDENTITY, 0)).collect();
     while let Some((node, parent, depth)) = stack.pop() {
@@ -456,6 +459,9 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
         let world = parent * local;
         for child in node.children() {
             stack.push((child, world, depth + 1));
+        }
+        if camera.is_none() {
+            camera = gltf_camera(&node, world, &source, &mut warnings);
         }
         let Some(mesh) = node.mesh() else { continue };
         let obj = objects.len() as u32;
@@ -554,7 +560,6 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
             ),
         });
     }
-    let camera: Option<Camera> = None;
     let mut scene = Scene::new(&stem(path), &source, faces, objects, camera)?;
     if !skipped.is_empty() {
         warnings.push(format!(
@@ -565,6 +570,50 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
     }
     scene.warnings.extend(warnings);
     Ok(scene)
+}
+
+/// The camera of a glTF node, if it has a perspective one (glTF 2.0 §3.10: the lens looks along the
+/// node's local −Z, local +Y is up, `yfov` is the vertical field of view in radians); the node's
+/// world transform places it. An orthographic camera, or one whose transform collapses its axes,
+/// is skipped with a warning (the image then uses the automatic camera).
+fn gltf_camera(
+    node: &gltf::Node,
+    world: DMat4,
+    source: &str,
+    warnings: &mut Vec<String>,
+) -> Option<Camera> {
+    let cam = node.camera()?;
+    let name = cam
+        .name()
+        .map_or_else(|| format!("camera {}", cam.index()), |n| format!("`{n}`"));
+    let gltf::camera::Projection::Perspective(p) = cam.projection() else {
+        warnings.push(format!(
+            "{source}: {name} is orthographic: not supported, the image uses the automatic camera"
+        ));
+        return None;
+    };
+    let eye = world.transform_point3(DVec3::ZERO);
+    let forward = world.transform_vector3(DVec3::NEG_Z).normalize_or_zero();
+    let up = world.transform_vector3(DVec3::Y).normalize_or_zero();
+    let fov_y_deg = f64::from(p.yfov()).to_degrees();
+    let usable = eye.is_finite()
+        && forward != DVec3::ZERO
+        && forward.cross(up).length() > 1e-6
+        && fov_y_deg > 0.0
+        && fov_y_deg < 180.0;
+    if !usable {
+        warnings.push(format!(
+            "{source}: {name}: degenerate transform or field of view ({fov_y_deg}°): ignored, the \
+             image uses the automatic camera"
+        ));
+        return None;
+    }
+    Some(Camera {
+        eye,
+        target: eye + forward,
+        up,
+        fov_y_deg,
+    })
 }
 
 /// Writes a scene as OBJ text plus MTL text (one material per distinct (ρ, E) pair, `Ke = E/π`), with

@@ -144,6 +144,10 @@ pub struct Scene {
     pub objects: Vec<String>,
     /// Default camera for images.
     pub camera: Camera,
+    /// Whether [`Scene::camera`] came with the scene (a built-in's published camera, a glTF camera
+    /// node); `false` when it is the bounding-box fallback of [`Camera::framing`], which image
+    /// outputs replace by an automatic camera that sees closed scenes from inside.
+    pub camera_given: bool,
     /// Non-fatal problems found on load (dropped degenerate faces, inconsistent windings), one message each.
     pub warnings: Vec<String>,
     /// Axis-aligned bounds `(lo, hi)` of all vertices.
@@ -259,6 +263,7 @@ impl Scene {
             ));
         }
         let grey = kept.iter().all(|f| f.rho.is_grey() && f.emission.is_grey());
+        let camera_given = camera.is_some();
         let camera = camera.unwrap_or_else(|| Camera::framing(lo, hi));
         Ok(Scene {
             name: name.into(),
@@ -267,6 +272,7 @@ impl Scene {
             faces: kept,
             objects,
             camera,
+            camera_given,
             warnings,
             bounds: (lo, hi),
         })

@@ -1,16 +1,21 @@
-//! Writers for a solved scene: PNG image, binary glTF, PLY, and the tone mapping they share;
-//! [`write`] is the output stage of a solve (all files at once, checked before the solve).
+//! Writers for a solved scene: PNG, JPEG and OpenEXR images, binary glTF, PLY, and the tone
+//! mapping they share; [`write`] is the output stage of a solve (all files at once, checked
+//! before the solve); [`camera`] the image settings and [`autocam`] the automatic camera.
 
 use std::path::PathBuf;
 
+pub mod autocam;
+pub mod camera;
 pub mod flatland;
 pub mod glb;
+pub mod hdr;
 pub mod ply;
 pub mod raster;
 pub mod staged;
 pub mod tonemap;
 pub mod write;
 
+pub use camera::{CameraChoice, CameraError, ImageSettings, View};
 pub use write::{OutputPaths, OutputPlan, write_outputs};
 
 /// Why outputs cannot be written (checked before the solve by [`OutputPlan::new`], or met
@@ -38,13 +43,13 @@ pub enum OutputError {
         path: PathBuf,
     },
     /// A target with the wrong extension (the format follows the option, not the name).
-    #[error("{what} output `{}`: expected a .{expected} file", path.display())]
+    #[error("{what} output `{}`: expected a {} file", path.display(), dotted(expected))]
     Extension {
         /// Which output.
         what: &'static str,
         /// The target.
         path: PathBuf,
-        /// The extension the format needs.
+        /// The extensions the format accepts, separated by `|` (`png|jpg|jpeg|exr`).
         expected: &'static str,
     },
     /// A target whose directory does not exist.
@@ -77,6 +82,15 @@ pub enum OutputError {
         /// Their target.
         path: PathBuf,
     },
+    /// A camera, resolution or exposure that cannot make an image.
+    #[error(transparent)]
+    Camera(#[from] CameraError),
+    /// Camera, resolution, exposure, view or EXR options for a Flatland scene.
+    #[error(
+        "{0} needs a 3-D scene (Flatland images show the whole scene, tone-mapped); this is a \
+         Flatland scene"
+    )]
+    ImageNeeds3d(&'static str),
     /// The probe file cannot be read or parsed, or a probe is off the scene's surfaces.
     #[error(transparent)]
     Probes(#[from] scene_sampler::SceneError),
@@ -95,4 +109,13 @@ pub enum OutputError {
     /// The radiosity could not be gathered from the solution.
     #[error(transparent)]
     Gather(#[from] crate::pipeline::GatherError),
+}
+
+/// `png|jpg|exr` as `.png, .jpg or .exr`.
+fn dotted(extensions: &str) -> String {
+    let dots: Vec<String> = extensions.split('|').map(|e| format!(".{e}")).collect();
+    match dots.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+        _ => dots.concat(),
+    }
 }

@@ -91,6 +91,8 @@ pub struct Image {
     pub depth: Vec<f64>,
     /// The camera the image was rendered from.
     pub camera: PinholeCamera,
+    /// What the image's sub-samples saw.
+    pub coverage: Coverage,
 }
 
 impl Image {
@@ -195,6 +197,48 @@ impl Image {
     }
 }
 
+/// What the sub-samples of an image saw, as fractions of all sub-samples (they sum to 1).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Coverage {
+    /// The front (lit) side of a surface.
+    pub front: f64,
+    /// The back side of a surface (drawn black: the camera is inside a solid or behind a wall).
+    pub back: f64,
+    /// No surface (background, black).
+    pub nothing: f64,
+}
+
+impl Coverage {
+    /// A warning when most of the image is black for want of a lit surface (the camera outside a
+    /// closed scene, inside a solid, or looking away from everything); `None` otherwise.
+    pub fn warning(&self, what: &str) -> Option<String> {
+        (self.front < 0.5).then(|| {
+            format!(
+                "{what}: only {:.0} % of the pixels see the front of a surface ({:.0} % see \
+                 nothing, {:.0} % back faces, drawn black): the camera looks away from the scene \
+                 or from behind its walls; set --camera-eye and --camera-target (or \
+                 --auto-camera)",
+                100.0 * self.front,
+                100.0 * self.nothing,
+                100.0 * self.back
+            )
+        })
+    }
+}
+
+/// A linear HDR image: radiance L = B/π per pixel (the box-filtered mean of its sub-samples).
+#[derive(Clone, Debug)]
+pub struct RadianceImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Linear RGB radiance, row-major, top row first; 0 where no front face is seen.
+    pub radiance: Vec<[f32; 3]>,
+    /// What the sub-samples saw.
+    pub coverage: Coverage,
+}
+
 /// Renders `mesh` to an 8-bit sRGB RGB image of `width × height`, row-major, top row first.
 /// Each pixel averages `ss × ss` sub-samples (anti-aliasing). The background is black.
 pub fn render(
@@ -217,68 +261,19 @@ pub fn render_image(
     height: u32,
     ss: u32,
 ) -> Image {
-    let ss = ss.max(1);
-    let (w, h) = ((width * ss) as usize, (height * ss) as usize);
-    let mut depth = vec![f64::INFINITY; w * h];
-    let mut colour = vec![[0.0f64; 3]; w * h];
-
-    let frame = Frame::new(camera);
-    let aspect = w as f64 / h as f64;
-    let near = 1e-4
-        * mesh
-            .bounds()
-            .map_or(1.0, |(lo, hi)| (hi - lo).length().max(1e-12));
-
-    // Radiosity is interpolated first and tone-mapped per sub-sample: the physically meaningful
-    // order (tone mapping per vertex would clip highlights before interpolation).
-    for &[a, b, c] in &mesh.triangles {
-        let idx = [a as usize, b as usize, c as usize];
-        let world = idx.map(|i| mesh.positions[i]);
-        let normal = (world[1] - world[0]).cross(world[2] - world[0]);
-        let front = normal.dot(camera.eye - world[0]) > 0.0;
-        let rad = idx.map(|i| if front { mesh.radiosity[i] } else { [0.0; 3] });
-        let cam: Vec<(DVec3, [f64; 3])> = (0..3)
-            .map(|k| (frame.to_camera(world[k]), rad[k]))
-            .collect();
-        if let Some(poly) = clip_near(&cam, near) {
-            // Fan-triangulate the clipped polygon (3 or 4 vertices).
-            for k in 1..poly.len() - 1 {
-                raster_triangle(
-                    [poly[0], poly[k], poly[k + 1]],
-                    frame.f,
-                    aspect,
-                    w,
-                    h,
-                    &mut depth,
-                    &mut colour,
-                );
-            }
-        }
-    }
-
+    let samples = Samples::rasterize(mesh, camera, width, height, ss);
     let mut out = vec![0u8; (width * height * 3) as usize];
     let mut out_depth = vec![f64::INFINITY; (width * height) as usize];
-    let n = (ss * ss) as f64;
-    for py in 0..height as usize {
-        for px in 0..width as usize {
-            let mut acc = [0.0; 3];
-            let mut near = f64::INFINITY;
-            for sy in 0..ss as usize {
-                for sx in 0..ss as usize {
-                    let i = (py * ss as usize + sy) * w + px * ss as usize + sx;
-                    let lin = exposure.linear(colour[i]);
-                    for ch in 0..3 {
-                        acc[ch] += lin[ch];
-                    }
-                    near = near.min(depth[i]);
-                }
-            }
-            for ch in 0..3 {
-                let v = crate::output::tonemap::srgb_encode(acc[ch] / n);
-                out[(py * width as usize + px) * 3 + ch] = (v * 255.0).round() as u8;
-            }
-            out_depth[py * width as usize + px] = near;
+    for (p, (acc, near)) in samples
+        .reduce(|b| exposure.linear(b))
+        .into_iter()
+        .enumerate()
+    {
+        for ch in 0..3 {
+            let v = crate::output::tonemap::srgb_encode(acc[ch]);
+            out[p * 3 + ch] = (v * 255.0).round() as u8;
         }
+        out_depth[p] = near;
     }
     Image {
         width,
@@ -286,6 +281,133 @@ pub fn render_image(
         pixels: out,
         depth: out_depth,
         camera: *camera,
+        coverage: samples.coverage(),
+    }
+}
+
+/// Renders `mesh` as linear radiance L = B/π per pixel (no exposure, no clipping; the mean of
+/// `ss × ss` sub-samples), for HDR output.
+pub fn render_radiance(
+    mesh: &ShadedMesh,
+    camera: &PinholeCamera,
+    width: u32,
+    height: u32,
+    ss: u32,
+) -> RadianceImage {
+    let samples = Samples::rasterize(mesh, camera, width, height, ss);
+    let inv_pi = 1.0 / std::f64::consts::PI;
+    let radiance = samples
+        .reduce(|b| b.map(|c| if c.is_finite() { c * inv_pi } else { 0.0 }))
+        .into_iter()
+        .map(|(l, _)| l.map(|c| c as f32))
+        .collect();
+    RadianceImage {
+        width,
+        height,
+        radiance,
+        coverage: samples.coverage(),
+    }
+}
+
+/// What a sub-sample saw.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Seen {
+    Nothing,
+    Front,
+    Back,
+}
+
+/// The sub-sample buffers of one rasterization: radiosity B (0 on back faces), depth and what
+/// was seen, at `ss × ss` sub-samples per pixel.
+struct Samples {
+    width: usize,
+    height: usize,
+    ss: usize,
+    colour: Vec<[f64; 3]>,
+    depth: Vec<f64>,
+    seen: Vec<Seen>,
+}
+
+impl Samples {
+    fn rasterize(
+        mesh: &ShadedMesh,
+        camera: &PinholeCamera,
+        width: u32,
+        height: u32,
+        ss: u32,
+    ) -> Self {
+        let ss = ss.max(1);
+        let (w, h) = ((width * ss) as usize, (height * ss) as usize);
+        let mut buf = Self {
+            width: width as usize,
+            height: height as usize,
+            ss: ss as usize,
+            colour: vec![[0.0f64; 3]; w * h],
+            depth: vec![f64::INFINITY; w * h],
+            seen: vec![Seen::Nothing; w * h],
+        };
+        let frame = Frame::new(camera);
+        let aspect = w as f64 / h as f64;
+        let near = 1e-4
+            * mesh
+                .bounds()
+                .map_or(1.0, |(lo, hi)| (hi - lo).length().max(1e-12));
+        // Radiosity is interpolated first and tone-mapped per sub-sample: the physically
+        // meaningful order (tone mapping per vertex would clip highlights before interpolation).
+        for &[a, b, c] in &mesh.triangles {
+            let idx = [a as usize, b as usize, c as usize];
+            let world = idx.map(|i| mesh.positions[i]);
+            let normal = (world[1] - world[0]).cross(world[2] - world[0]);
+            let front = normal.dot(camera.eye - world[0]) > 0.0;
+            let rad = idx.map(|i| if front { mesh.radiosity[i] } else { [0.0; 3] });
+            let seen = if front { Seen::Front } else { Seen::Back };
+            let cam: Vec<(DVec3, [f64; 3])> = (0..3)
+                .map(|k| (frame.to_camera(world[k]), rad[k]))
+                .collect();
+            if let Some(poly) = clip_near(&cam, near) {
+                // Fan-triangulate the clipped polygon (3 or 4 vertices).
+                for k in 1..poly.len() - 1 {
+                    let tri = [poly[0], poly[k], poly[k + 1]];
+                    raster_triangle(tri, frame.f, aspect, w, h, &mut buf, seen);
+                }
+            }
+        }
+        buf
+    }
+
+    /// Per output pixel: the mean of `map(B)` over its sub-samples, and the nearest depth.
+    fn reduce(&self, map: impl Fn([f64; 3]) -> [f64; 3]) -> Vec<([f64; 3], f64)> {
+        let (ss, w) = (self.ss, self.width * self.ss);
+        let n = (ss * ss) as f64;
+        let mut out = Vec::with_capacity(self.width * self.height);
+        for py in 0..self.height {
+            for px in 0..self.width {
+                let mut acc = [0.0; 3];
+                let mut near = f64::INFINITY;
+                for sy in 0..ss {
+                    for sx in 0..ss {
+                        let i = (py * ss + sy) * w + px * ss + sx;
+                        let v = map(self.colour[i]);
+                        for ch in 0..3 {
+                            acc[ch] += v[ch];
+                        }
+                        near = near.min(self.depth[i]);
+                    }
+                }
+                out.push((acc.map(|a| a / n), near));
+            }
+        }
+        out
+    }
+
+    fn coverage(&self) -> Coverage {
+        let n = self.seen.len().max(1) as f64;
+        let count = |s: Seen| self.seen.iter().filter(|&&x| x == s).count() as f64 / n;
+        Coverage {
+            front: count(Seen::Front),
+            back: count(Seen::Back),
+            nothing: count(Seen::Nothing),
+        }
     }
 }
 
@@ -314,8 +436,8 @@ fn raster_triangle(
     aspect: f64,
     w: usize,
     h: usize,
-    depth: &mut [f64],
-    colour: &mut [[f64; 3]],
+    buf: &mut Samples,
+    seen: Seen,
 ) {
     // Screen coordinates (pixels) and 1/z for perspective-correct interpolation.
     let s: [DVec4; 3] = v.map(|(p, _)| {
@@ -365,8 +487,9 @@ fn raster_triangle(
             let inv_z = b[0] * s[0].w + b[1] * s[1].w + b[2] * s[2].w;
             let z = 1.0 / inv_z;
             let i = y * w + x;
-            if z < depth[i] {
-                depth[i] = z;
+            if z < buf.depth[i] {
+                buf.depth[i] = z;
+                buf.seen[i] = seen;
                 let mut c = [0.0; 3];
                 for k in 0..3 {
                     let wk = b[k] * s[k].w * z;
@@ -374,7 +497,7 @@ fn raster_triangle(
                         c[ch] += wk * v[k].1[ch];
                     }
                 }
-                colour[i] = c;
+                buf.colour[i] = c;
             }
         }
     }

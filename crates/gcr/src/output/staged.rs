@@ -46,7 +46,8 @@ fn create_temp(target: &Path) -> std::io::Result<(PathBuf, File)> {
 }
 
 /// Checks that `target` can be written as an output named `what` (for messages): a missing or
-/// regular file with the `extension` (case-insensitive, when given) in an existing, writable
+/// regular file with the `extension` (case-insensitive, when given; `png|exr` accepts either) in
+/// an existing, writable
 /// directory, or an existing special file (then the extension is not checked). Writability is
 /// tested by creating and removing a temporary file beside the target.
 pub fn check_target(
@@ -67,7 +68,10 @@ pub fn check_target(
         let found = target
             .extension()
             .map(|e| e.to_string_lossy().to_lowercase());
-        if found.as_deref() != Some(ext) {
+        if !found
+            .as_deref()
+            .is_some_and(|f| ext.split('|').any(|e| e == f))
+        {
             return Err(OutputError::Extension {
                 what,
                 path,
@@ -263,6 +267,9 @@ mod tests {
         assert!(ok.is_ok(), "{ok:?}");
         let e = check_target(&d.join("i.bmp"), "image", Some("png")).unwrap_err();
         assert!(e.to_string().contains(".png"), "{e}");
+        let e = check_target(&d.join("i.bmp"), "image", Some("png|exr")).unwrap_err();
+        assert!(e.to_string().contains("a .png or .exr file"), "{e}");
+        assert!(check_target(&d.join("i.exr"), "image", Some("png|exr")).is_ok());
         let e = check_target(&d.join("nodir/m.glb"), "mesh", Some("glb")).unwrap_err();
         assert!(
             matches!(&e, OutputError::MissingDirectory { dir, .. } if dir.ends_with("nodir")),

@@ -6,14 +6,16 @@
 //! either every output reaches its target, or none does.
 
 use super::OutputError;
+use super::camera::{CameraChoice, ImageSettings};
 use super::flatland::{light_flow_image, scene_image};
-use super::raster::{PinholeCamera, render};
+use super::raster::{Coverage, PinholeCamera, render_image, render_radiance};
 use super::staged::{StagedFiles, check_target};
-use super::tonemap::Exposure;
+use super::tonemap::{Exposure, luminance};
 use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::emitters::Emitters;
-use crate::metrics::{Metrics, peak_memory_bytes};
+use crate::mesh::ShadedMesh;
+use crate::metrics::{ImageRecord, Metrics, peak_memory_bytes};
 use crate::pipeline::{output_mesh, radiosity_at_points};
 use crate::retriangulate::RetriangulateLimits;
 use crate::solve::Trained;
@@ -22,15 +24,19 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// Side of the 3-D camera image in pixels (square).
+/// Side of the 3-D camera image in pixels by default (square; `ImageSettings::width`, `height`).
 pub const IMAGE_SIZE: u32 = 512;
+/// The extensions an image output accepts (the format follows the extension): tone-mapped PNG
+/// and JPEG, linear OpenEXR (3-D only).
+pub const IMAGE_EXTENSIONS: &str = "png|jpg|jpeg|exr";
 /// Anti-aliasing of the 3-D camera image: sub-samples per pixel side.
 const IMAGE_SUPERSAMPLING: u32 = 2;
 
 /// Where the outputs of a solve go; `None` skips an output.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct OutputPaths {
-    /// PNG image: from the scene's camera (3-D) or of the whole scene (Flatland).
+    /// Image (.png, .jpg, .jpeg; .exr for 3-D scenes): from the camera of
+    /// `ImageSettings::camera` (3-D) or of the whole scene (Flatland, PNG).
     pub image: Option<PathBuf>,
     /// Flatland only: PNG of the light flow over the kernel domain
     /// ([`super::flatland::light_flow_image`]).
@@ -51,7 +57,7 @@ impl OutputPaths {
     /// Every output target with its name (for messages) and required extension.
     fn targets(&self) -> Vec<(&Path, &'static str, Option<&'static str>)> {
         [
-            (&self.image, "image", Some("png")),
+            (&self.image, "image", Some(IMAGE_EXTENSIONS)),
             (&self.kernel_image, "kernel image", Some("png")),
             (&self.mesh, "mesh", Some("glb")),
             (&self.ply, "PLY mesh", Some("ply")),
@@ -69,6 +75,7 @@ impl OutputPaths {
 #[derive(Clone, Debug)]
 pub struct OutputPlan {
     paths: OutputPaths,
+    images: ImageSettings,
     probes: Vec<(DVec3, DVec3, u32)>,
 }
 
@@ -77,8 +84,39 @@ impl OutputPlan {
     /// the domain (mesh and PLY need 3-D, the kernel image Flatland), probes come with a probe
     /// output, each target has its extension (.png, .glb, .ply) and an existing, writable
     /// directory, no two outputs share a target, and the probe file parses and every probe
-    /// snaps onto the scene.
+    /// snaps onto the scene. Images with the default [`ImageSettings`].
     pub fn new(domain: &Domain, paths: OutputPaths) -> Result<Self, OutputError> {
+        Self::with_images(domain, paths, ImageSettings::default())
+    }
+
+    /// [`OutputPlan::new`] with image settings, checked too: cameras, resolution and exposure
+    /// valid ([`ImageSettings::validate`]), the views' targets as the image's, and for a
+    /// Flatland scene none of them (nor an EXR image).
+    pub fn with_images(
+        domain: &Domain,
+        paths: OutputPaths,
+        images: ImageSettings,
+    ) -> Result<Self, OutputError> {
+        images.validate()?;
+        if domain.scene_flat().is_some() {
+            let default = ImageSettings::default();
+            if images.views.len() + usize::from(images.camera != default.camera) > 0 {
+                return Err(OutputError::ImageNeeds3d("a camera or a --view"));
+            }
+            if (images.width, images.height) != (default.width, default.height) {
+                return Err(OutputError::ImageNeeds3d("an image resolution"));
+            }
+            if images.exposure.is_some() {
+                return Err(OutputError::ImageNeeds3d("an exposure"));
+            }
+            if paths
+                .image
+                .as_deref()
+                .is_some_and(|p| format_of(p) == Format::Exr)
+            {
+                return Err(OutputError::ImageNeeds3d("an EXR image"));
+            }
+        }
         if domain.scene_3d().is_none() && (paths.mesh.is_some() || paths.ply.is_some()) {
             return Err(OutputError::MeshNeeds3d);
         }
@@ -88,7 +126,13 @@ impl OutputPlan {
         if paths.probes_in.is_some() != paths.probe_out.is_some() {
             return Err(OutputError::ProbesWithoutOutput);
         }
-        let targets = paths.targets();
+        let mut targets = paths.targets();
+        targets.extend(
+            images
+                .views
+                .iter()
+                .map(|v| (v.path.as_path(), "view image", Some(IMAGE_EXTENSIONS))),
+        );
         for (i, (path, what, ext)) in targets.iter().enumerate() {
             check_target(path, what, *ext)?;
             if let Some((_, first, _)) = targets[..i].iter().find(|t| same_file(t.0, path)) {
@@ -103,7 +147,16 @@ impl OutputPlan {
             Some(path) => read_probes(domain, path)?,
             None => Vec::new(),
         };
-        Ok(Self { paths, probes })
+        Ok(Self {
+            paths,
+            images,
+            probes,
+        })
+    }
+
+    /// The checked image settings.
+    pub fn images(&self) -> &ImageSettings {
+        &self.images
     }
 
     /// The checked paths.
@@ -177,7 +230,7 @@ pub fn write_outputs(
         staged.write_bytes(path, text.as_bytes())?;
     }
     if domain.scene_3d().is_some() {
-        write_3d(domain, trained, config, paths, &mut metrics, &mut staged)?;
+        write_3d(domain, trained, config, plan, &mut metrics, &mut staged)?;
     } else if let Some(flat) = domain.scene_flat() {
         let to = Instant::now();
         if let Some(path) = &paths.image {
@@ -226,20 +279,22 @@ pub fn probe_values(
     )
 }
 
-/// The 3-D outputs: the re-triangulated output mesh (when any of image, mesh, PLY is asked for),
-/// one exposure for all of them (from the non-emitting triangles), and the files.
+/// The 3-D outputs: the re-triangulated output mesh (when any of image, view, mesh, PLY is asked
+/// for), one exposure for all of them (given, or from the non-emitting triangles), and the files.
 fn write_3d(
     domain: &Domain,
     trained: &Trained,
     config: &SolveConfig,
-    paths: &OutputPaths,
+    plan: &OutputPlan,
     metrics: &mut Metrics,
     staged: &mut StagedFiles,
 ) -> Result<(), OutputError> {
     let Some(scene) = domain.scene_3d() else {
         return Ok(());
     };
-    if paths.image.is_none() && paths.mesh.is_none() && paths.ply.is_none() {
+    let (paths, settings) = (plan.paths(), plan.images());
+    let images = image_jobs(paths, settings);
+    if images.is_empty() && paths.mesh.is_none() && paths.ply.is_none() {
         return Ok(());
     }
     let tg = Instant::now();
@@ -249,24 +304,47 @@ fn write_3d(
     metrics.output_triangles = mesh.triangle_count();
     metrics.seconds.gather += tg.elapsed().as_secs_f64();
     let to = Instant::now();
-    let lit = mesh
-        .triangles
-        .iter()
-        .zip(&mesh.face_of_triangle)
-        .filter(|(_, f)| scene.faces[**f as usize].emission.is_zero())
-        .map(|(t, _)| mesh.radiosity[t[0] as usize]);
-    let exposure = Exposure::auto(lit);
-    if let Some(path) = &paths.image {
-        let cam = PinholeCamera {
-            eye: scene.camera.eye,
-            target: scene.camera.target,
-            up: scene.camera.up,
-            fov_y_degrees: scene.camera.fov_y_deg,
+    let exposure = match settings.exposure {
+        Some(scale) => Exposure { scale },
+        None => {
+            let lit = mesh
+                .triangles
+                .iter()
+                .zip(&mesh.face_of_triangle)
+                .filter(|(_, f)| scene.faces[**f as usize].emission.is_zero())
+                .map(|(t, _)| mesh.radiosity[t[0] as usize]);
+            Exposure::auto(lit)
+        }
+    };
+    let tone_mapped = paths.mesh.is_some()
+        || paths.ply.is_some()
+        || images.iter().any(|(p, _, _)| format_of(p) != Format::Exr);
+    if tone_mapped {
+        metrics.exposure = Some(exposure.scale);
+        metrics.exposure_source = if settings.exposure.is_some() {
+            "given"
+        } else {
+            "auto"
+        }
+        .into();
+    }
+    for (path, choice, source) in images {
+        let (camera, source) = match choice {
+            CameraChoice::Given(c) => (c, source),
+            CameraChoice::Scene { fov } if scene.camera_given => {
+                let mut c = PinholeCamera::of_scene(scene);
+                c.fov_y_degrees = fov.unwrap_or(c.fov_y_degrees);
+                (c, "scene")
+            }
+            CameraChoice::Scene { fov } => automatic(domain, &mesh, &exposure, settings, fov),
+            CameraChoice::Automatic { fov } => automatic(domain, &mesh, &exposure, settings, fov),
         };
-        let (w, h) = (IMAGE_SIZE, IMAGE_SIZE);
-        let px = render(&mesh, &cam, &exposure, w, h, IMAGE_SUPERSAMPLING);
-        let img = image::RgbImage::from_raw(w, h, px).expect("render fills w·h RGB pixels");
-        staged.write(path, |w| write_png(&img, w))?;
+        let coverage = write_image(&mesh, &camera, settings, &exposure, path, staged)?;
+        let what = format!("image `{}`", path.display());
+        metrics.warnings.extend(coverage.warning(&what));
+        metrics
+            .images
+            .push(image_record(path, settings, &camera, source, coverage));
     }
     if let Some(path) = &paths.mesh {
         staged.write(path, |w| super::glb::write_glb(&mesh, &exposure, w))?;
@@ -276,6 +354,155 @@ fn write_3d(
     }
     metrics.seconds.output += to.elapsed().as_secs_f64();
     Ok(())
+}
+
+/// The 3-D images to write: the main image with its camera choice, then the views.
+fn image_jobs<'a>(
+    paths: &'a OutputPaths,
+    settings: &'a ImageSettings,
+) -> Vec<(&'a Path, CameraChoice, &'static str)> {
+    let main = paths
+        .image
+        .as_deref()
+        .map(|p| (p, settings.camera, "given"));
+    let views = settings
+        .views
+        .iter()
+        .map(|v| (v.path.as_path(), CameraChoice::Given(v.camera), "view"));
+    main.into_iter().chain(views).collect()
+}
+
+/// The automatic camera ([`super::autocam`]) for the solved mesh, with its source name.
+fn automatic(
+    domain: &Domain,
+    mesh: &ShadedMesh,
+    exposure: &Exposure,
+    settings: &ImageSettings,
+    fov: Option<f64>,
+) -> (PinholeCamera, &'static str) {
+    let Domain::ThreeD(k) = domain else {
+        unreachable!("3-D outputs only for 3-D domains")
+    };
+    let brightness = face_brightness(mesh, exposure, k.scene.faces.len());
+    let aspect = f64::from(settings.width) / f64::from(settings.height);
+    let auto = super::autocam::automatic_camera(k.scene, k.bvh, &brightness, aspect, fov);
+    let source = if auto.inside {
+        "automatic-inside"
+    } else {
+        "automatic-outside"
+    };
+    (auto.camera, source)
+}
+
+/// Per scene face, the mean display luminance (in [0, 1]) of its output triangles.
+fn face_brightness(mesh: &ShadedMesh, exposure: &Exposure, faces: usize) -> Vec<f64> {
+    let mut sum = vec![(0.0, 0usize); faces];
+    for (t, &f) in mesh.triangles.iter().zip(&mesh.face_of_triangle) {
+        let mut b = [0.0; 3];
+        for &v in t {
+            for ch in 0..3 {
+                b[ch] += mesh.radiosity[v as usize][ch] / 3.0;
+            }
+        }
+        if let Some(s) = sum.get_mut(f as usize) {
+            s.0 += luminance(exposure.linear(b));
+            s.1 += 1;
+        }
+    }
+    sum.into_iter()
+        .map(|(s, n)| if n > 0 { s / n as f64 } else { 0.0 })
+        .collect()
+}
+
+/// An image's file format, from its extension (checked by [`OutputPlan::with_images`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Png,
+    Jpeg,
+    Exr,
+}
+
+fn format_of(path: &Path) -> Format {
+    match path.extension().map(|e| e.to_string_lossy().to_lowercase()) {
+        Some(e) if e == "exr" => Format::Exr,
+        Some(e) if e == "jpg" || e == "jpeg" => Format::Jpeg,
+        _ => Format::Png,
+    }
+}
+
+/// Renders and stages one image; returns what its sub-samples saw.
+fn write_image(
+    mesh: &ShadedMesh,
+    camera: &PinholeCamera,
+    settings: &ImageSettings,
+    exposure: &Exposure,
+    path: &Path,
+    staged: &mut StagedFiles,
+) -> Result<Coverage, OutputError> {
+    let (w, h) = (settings.width, settings.height);
+    let format = format_of(path);
+    if format == Format::Exr {
+        let img = render_radiance(mesh, camera, w, h, IMAGE_SUPERSAMPLING);
+        let bytes = super::hdr::encode_exr(&img).map_err(|source| OutputError::Write {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        staged.write_bytes(path, &bytes)?;
+        return Ok(img.coverage);
+    }
+    let img = render_image(mesh, camera, exposure, w, h, IMAGE_SUPERSAMPLING);
+    let coverage = img.coverage;
+    let rgb = image::RgbImage::from_raw(w, h, img.pixels).expect("render fills w·h RGB pixels");
+    if format == Format::Jpeg {
+        staged.write(path, |out| write_jpeg(&rgb, out))?;
+    } else {
+        staged.write(path, |out| write_png(&rgb, out))?;
+    }
+    Ok(coverage)
+}
+
+fn image_record(
+    path: &Path,
+    settings: &ImageSettings,
+    camera: &PinholeCamera,
+    source: &str,
+    coverage: Coverage,
+) -> ImageRecord {
+    ImageRecord {
+        path: path.display().to_string(),
+        format: match format_of(path) {
+            Format::Png => "png",
+            Format::Jpeg => "jpeg",
+            Format::Exr => "exr",
+        }
+        .into(),
+        width: settings.width,
+        height: settings.height,
+        eye: camera.eye.to_array(),
+        target: camera.target.to_array(),
+        up: camera.up.to_array(),
+        fov_y_deg: camera.fov_y_degrees,
+        camera_source: source.into(),
+        front_share: coverage.front,
+        back_share: coverage.back,
+        nothing_share: coverage.nothing,
+    }
+}
+
+/// Encodes `img` as JPEG (quality 92) into `w`.
+pub fn write_jpeg(img: &image::RgbImage, w: &mut dyn Write) -> std::io::Result<()> {
+    use image::ImageEncoder;
+    image::codecs::jpeg::JpegEncoder::new_with_quality(w, 92)
+        .write_image(
+            img.as_raw(),
+            img.width(),
+            img.height(),
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| match e {
+            image::ImageError::IoError(e) => e,
+            other => std::io::Error::other(other),
+        })
 }
 
 /// Encodes `img` as PNG into `w` (the encoder `image::save` uses for .png, same bytes).

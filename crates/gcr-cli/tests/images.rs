@@ -1,0 +1,310 @@
+//! Issue 18 items 1 and 2: cameras (given, the scene's, automatic), resolution, views, linear
+//! EXR images and the exposure, through `gcr solve`; bad camera values are errors before the
+//! solve.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+
+fn gcr(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_gcr"))
+        .args(args)
+        .current_dir(ROOT)
+        .output()
+        .expect("gcr runs")
+}
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("gcr-cli-img-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+fn ok(o: &Output) -> String {
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "failed: {err}");
+    err
+}
+
+fn metrics(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// Share of pixels with any channel above 16 (of 255).
+fn lit_share(path: &Path) -> f64 {
+    let img = image::open(path).unwrap().to_rgb8();
+    let lit = img.pixels().filter(|p| p.0.iter().any(|&c| c > 16)).count();
+    lit as f64 / (img.width() * img.height()) as f64
+}
+
+/// An emitting square (Ke = 2, ρ = 0, so B = E = 2π exactly and L = B/π = 2) at y = 1 facing
+/// down onto a grey floor at y = 0.
+fn lamp_scene(d: &Path) -> PathBuf {
+    std::fs::write(
+        d.join("lamp.mtl"),
+        "newmtl lamp\nKd 0 0 0\nKe 2 2 2\nnewmtl grey\nKd 0.5 0.5 0.5\n",
+    )
+    .unwrap();
+    let obj = "mtllib lamp.mtl\n\
+        v 0 1 0\nv 1 1 0\nv 1 1 1\nv 0 1 1\n\
+        v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\n\
+        o lamp\nusemtl lamp\nf 1 2 3\nf 1 3 4\n\
+        o floor\nusemtl grey\nf 5 8 7\nf 5 7 6\n";
+    let path = d.join("lamp.obj");
+    std::fs::write(&path, obj).unwrap();
+    path
+}
+
+/// The EXR holds linear radiance L = B/π: looking straight up at the lamp (B = E = 2π) its
+/// pixels read 2; the image has the asked-for size, non-square.
+#[test]
+fn an_exr_image_holds_linear_radiance() {
+    let d = dir("exr");
+    let scene = lamp_scene(&d);
+    let exr = d.join("up.exr");
+    let o = gcr(&[
+        "solve",
+        &s(&scene),
+        "--cells",
+        "20",
+        "--quiet",
+        "--image",
+        &s(&exr),
+        "--resolution",
+        "64x48",
+        "--camera-eye",
+        "0.5,0.2,0.5",
+        "--camera-target",
+        "0.5,1,0.5",
+        "--camera-up",
+        "0,0,1",
+        "--fov",
+        "30",
+    ]);
+    ok(&o);
+    let img = exr::prelude::read_first_rgba_layer_from_file(
+        &exr,
+        |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
+        |(w, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| px[pos.y() * *w + pos.x()] = [r, g, b],
+    )
+    .unwrap();
+    let size = img.layer_data.size;
+    assert_eq!((size.width(), size.height()), (64, 48));
+    let (w, px) = &img.layer_data.channel_data.pixels;
+    // The lamp (0.8 units away, 1 wide) covers the whole 30° view: every pixel is L = 2.
+    for &p in [px[24 * w + 32], px[0], px[px.len() - 1]].iter() {
+        for c in p {
+            assert!((c - 2.0).abs() < 1e-4, "L = {c}, expected B/π = 2");
+        }
+    }
+}
+
+/// `--exposure` is used and recorded; without it the automatic value is recorded and printed.
+#[test]
+fn the_exposure_is_recorded_in_the_metrics_and_printed() {
+    let d = dir("exposure");
+    let m = d.join("m.json");
+    let base = ["solve", "cornell-box", "--cells", "20", "--metrics", &s(&m)];
+    let png = s(&d.join("i.png"));
+    let err = ok(&gcr(
+        &[&base[..], &["--image", &png, "--exposure", "2.5"]].concat()
+    ));
+    let j = metrics(&m);
+    assert_eq!(j["exposure"], 2.5, "{j}");
+    assert_eq!(j["exposure_source"], "given");
+    assert!(err.contains("exposure: 2.5 (given"), "{err}");
+    let err = ok(&gcr(&[&base[..], &["--image", &png]].concat()));
+    let j = metrics(&m);
+    let auto = j["exposure"].as_f64().unwrap();
+    assert!(auto > 0.0 && auto.is_finite());
+    assert_eq!(j["exposure_source"], "auto");
+    let printed: f64 = err
+        .split_once("exposure: ")
+        .and_then(|(_, rest)| rest.split_once(" (auto"))
+        .and_then(|(v, _)| v.parse().ok())
+        .unwrap_or_else(|| panic!("no automatic exposure printed: {err}"));
+    assert!(
+        (printed - auto).abs() <= 1e-12 * auto,
+        "{printed} vs {auto}"
+    );
+    // The image's camera is recorded: the built-in's own.
+    assert_eq!(j["images"][0]["camera_source"], "scene");
+    assert_eq!(j["images"][0]["width"], 512);
+    // A brighter exposure makes a brighter image.
+    let sum = |p: &str| {
+        let img = image::open(p).unwrap().to_rgb8();
+        img.pixels().map(|p| p.0[1] as u64).sum::<u64>()
+    };
+    let dim = sum(&png);
+    ok(&gcr(&[
+        &base[..],
+        &["--image", &png, "--exposure", &(4.0 * auto).to_string()],
+    ]
+    .concat()));
+    assert!(sum(&png) > dim);
+}
+
+/// The furnace is a closed box: the automatic camera goes inside and sees lit walls, where the
+/// old camera outside the bounding box saw only back faces (100 % black). The scene file
+/// without a camera gets the automatic camera by default.
+#[test]
+fn a_closed_room_with_the_automatic_camera_is_not_black() {
+    let d = dir("closed");
+    for (scene, extra) in [("cornell-box", None), ("scenes/furnace.obj", None)]
+        .into_iter()
+        .chain([("furnace", Some("--auto-camera"))])
+    {
+        let png = d.join("f.png");
+        let m = d.join("m.json");
+        let (png_arg, m_arg) = (s(&png), s(&m));
+        let mut args = vec!["solve", scene, "--cells", "20", "--quiet"];
+        args.extend(["--image", &png_arg, "--metrics", &m_arg]);
+        args.extend(extra);
+        let err = ok(&gcr(&args));
+        let j = metrics(&m);
+        let source = j["images"][0]["camera_source"]
+            .as_str()
+            .unwrap()
+            .to_string();
+        if scene != "cornell-box" {
+            assert_eq!(source, "automatic-inside", "{scene}: {j}");
+            assert!(j["images"][0]["front_share"].as_f64().unwrap() > 0.99);
+        }
+        assert!(lit_share(&png) > 0.9, "{scene}: {:.2}", lit_share(&png));
+        assert!(!err.contains("warning: image"), "{scene}: {err}");
+    }
+}
+
+/// An open scene file (the Cornell box OBJ, no front wall) is framed tightly from outside.
+#[test]
+fn an_open_room_is_framed_tightly() {
+    let d = dir("open");
+    let (png, m) = (d.join("o.png"), d.join("m.json"));
+    let o = gcr(&[
+        "solve",
+        "scenes/cornell-box.obj",
+        "--cells",
+        "20",
+        "--quiet",
+        "--image",
+        &s(&png),
+        "--metrics",
+        &s(&m),
+    ]);
+    ok(&o);
+    let j = metrics(&m);
+    assert!(j["images"][0]["front_share"].as_f64().unwrap() > 0.6, "{j}");
+    assert!(lit_share(&png) > 0.6);
+}
+
+/// A camera looking away from everything writes its (black) image with a warning, on stderr and
+/// in the metrics; a view of the same solve is written beside it.
+#[test]
+fn a_camera_looking_away_warns_and_views_share_the_solve() {
+    let d = dir("away");
+    let (png, m, view) = (d.join("away.png"), d.join("m.json"), d.join("view.exr"));
+    let view_arg = format!("0.278,0.273,-0.8;0.278,0.273,0;0,1,0;39={}", s(&view));
+    let o = gcr(&[
+        "solve",
+        "cornell-box",
+        "--cells",
+        "20",
+        "--image",
+        &s(&png),
+        "--metrics",
+        &s(&m),
+        "--camera-eye",
+        "0.278,0.273,-0.8",
+        "--camera-target",
+        "0.278,0.273,-2",
+        "--view",
+        &view_arg,
+    ]);
+    let err = ok(&o);
+    assert!(err.contains("warning: image"), "{err}");
+    assert!(err.contains("away.png"), "{err}");
+    assert!(lit_share(&png) < 0.01);
+    let j = metrics(&m);
+    let warnings = j["warnings"].as_array().unwrap();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("away.png"))
+    );
+    assert_eq!(j["images"][1]["camera_source"], "view");
+    assert!(j["images"][1]["front_share"].as_f64().unwrap() > 0.8);
+    assert!(view.is_file());
+}
+
+/// Bad camera values: exit 1 with a clear message before the solve (nothing written), or 2 for
+/// what does not parse; never a panic.
+#[test]
+fn bad_camera_values_are_errors_before_the_solve() {
+    let d = dir("bad");
+    let png = s(&d.join("i.png"));
+    let base = ["solve", "cornell-box", "--cells", "200", "--image", &png];
+    let cases: [(&[&str], i32, &str); 12] = [
+        (
+            &["--camera-eye", "1,1,1", "--camera-target", "1,1,1"],
+            1,
+            "same point",
+        ),
+        (
+            &["--camera-eye", "nan,0,0", "--camera-target", "0,0,1"],
+            1,
+            "not finite",
+        ),
+        (
+            &["--camera-eye", "0,0,0", "--camera-target", "0,1,0"],
+            1,
+            "parallel",
+        ),
+        (
+            &[
+                "--camera-eye",
+                "0,0,0",
+                "--camera-target",
+                "0,0,1",
+                "--fov",
+                "180",
+            ],
+            1,
+            "(0, 180)",
+        ),
+        (&["--fov", "0"], 1, "(0, 180)"),
+        (&["--resolution", "0x10"], 1, "1 to 16384"),
+        (&["--resolution", "20000x10"], 1, "1 to 16384"),
+        (&["--exposure", "-1"], 1, "exposure"),
+        (&["--resolution", "big"], 2, "WIDTHxHEIGHT"),
+        (&["--camera-eye", "0,0,0"], 2, "--camera-target"),
+        (
+            &["--camera-eye", "0,0", "--camera-target", "0,0,1"],
+            2,
+            "three numbers",
+        ),
+        (&["--view", "0,0,0=x.png"], 2, "EYE;TARGET"),
+    ];
+    for (extra, code, needle) in cases {
+        let o = gcr(&[&base[..], extra].concat());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(code), "{extra:?}: {err}");
+        assert!(err.contains(needle), "{extra:?}: {err:?} lacks {needle:?}");
+        assert!(
+            !err.contains("panicked") && !err.contains("FEM"),
+            "{extra:?}: {err}"
+        );
+    }
+    let flat = gcr(&["solve", "flatland-corner", "--image", &png, "--fov", "30"]);
+    assert_eq!(flat.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&flat.stderr).contains("needs a 3-D scene"));
+    let exr = s(&d.join("i.exr"));
+    let flat = gcr(&["solve", "flatland-corner", "--image", &exr]);
+    assert_eq!(flat.status.code(), Some(1));
+    assert!(std::fs::read_dir(&d).unwrap().next().is_none());
+}

@@ -67,22 +67,7 @@ fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
 
 /// Appends a point and prints it.
 fn push(curve: &mut Curve, scene: &str, budget: usize, seconds: f64, error: f64) {
-    println!(
-        "compare: {scene} {} budget={budget} {seconds:.3} s error {error:.4}",
-        curve.name
-    );
-    curve.points.push(Point {
-        budget,
-        seconds,
-        error,
-    });
-}
-
-fn curve(name: &str) -> Curve {
-    Curve {
-        name: name.into(),
-        points: Vec::new(),
-    }
+    curve.record(&format!("compare: {scene}"), budget, seconds, error);
 }
 
 /// GCR on any domain: one solve per budget, then each gather at the probes.
@@ -97,7 +82,7 @@ fn gcr_curves(
     let gathers = [GatherMode::Kernel, GatherMode::Rays];
     let mut curves: Vec<Curve> = gathers
         .iter()
-        .map(|g| curve(&format!("gcr {}", g.name())))
+        .map(|g| Curve::new(&format!("gcr {}", g.name())))
         .collect();
     for &cells in budgets {
         let config = SolveConfig {
@@ -184,7 +169,7 @@ fn flatland(name: &str, b: &Budgets, probes: usize) -> Result<(Vec<Curve>, Strin
         .collect();
     let mut curves = gcr_curves(name, &domain, &probes3, &score, b.gcr)?;
 
-    let mut classical = curve("classical");
+    let mut classical = Curve::new("classical");
     for &frac in b.classical {
         let (v, s) = timed(|| -> Result<Vec<[f64; 3]>> {
             let solver = ExactSolver::new(
@@ -209,7 +194,7 @@ fn flatland(name: &str, b: &Budgets, probes: usize) -> Result<(Vec<Curve>, Strin
     }
     curves.push(classical);
 
-    let mut hr = curve("HR");
+    let mut hr = Curve::new("HR");
     for &links in b.hr {
         let links = links as usize;
         let base = FlatHrConfig {
@@ -238,7 +223,7 @@ fn flatland(name: &str, b: &Budgets, probes: usize) -> Result<(Vec<Curve>, Strin
     }
     curves.push(hr);
 
-    let mut pt = curve("path tracer");
+    let mut pt = Curve::new("path tracer");
     for &paths in b.paths {
         let (v, s) =
             timed(|| baselines::flatland::path_trace_at(&scene, &ks.vis, &points, paths, 11));
@@ -296,7 +281,7 @@ fn three_d(
         points.iter().map(|p| (p.point, p.normal, p.face)).collect();
     let mut curves = gcr_curves(name, &domain, &probes3, &score, b.gcr)?;
 
-    let mut classical = curve("classical");
+    let mut classical = Curve::new("classical");
     for &frac in b.classical {
         let opts = ClassicalOptions {
             element_size: frac * scene.diagonal(),
@@ -328,7 +313,7 @@ fn three_d(
 
     // Progressive refinement on the finest classical mesh that fits, stopped at decreasing
     // fractions of unshot power: its budget axis is the number of shots (form factor columns).
-    let mut progressive = curve("progressive");
+    let mut progressive = Curve::new("progressive");
     if let Some(&frac) =
         b.classical.iter().rev().find(|&&f| {
             Mesh::new(&scene, f * scene.diagonal()).is_ok_and(|m| m.elements.len() <= 3000)
@@ -362,7 +347,7 @@ fn three_d(
         e_max = e_max.max(f.emission.max());
         rho_max = rho_max.max(f.rho.max());
     }
-    let (mut leaf, mut gathered) = (curve("HR leaf"), curve("HR gather"));
+    let (mut leaf, mut gathered) = (Curve::new("HR leaf"), Curve::new("HR gather"));
     // HR links every pair of input polygons before it refines (O(n²) initial links): on the
     // million-triangle scene that is 10¹² links, so it is not run there.
     let hr_budgets = if scene.faces.len() > HR_MAX_FACES {
@@ -409,7 +394,7 @@ fn three_d(
     curves.push(leaf);
     curves.push(gathered);
 
-    let mut pt = curve("path tracer");
+    let mut pt = Curve::new("path tracer");
     for &paths in b.paths {
         let (est, s) =
             timed(|| baselines::pointwise::radiosity_at(&scene, &bvh, &points, paths, 11));
@@ -650,7 +635,7 @@ mod tests {
 
     #[test]
     fn time_to_takes_the_fastest_run_that_reaches_the_target() {
-        let mut c = curve("x");
+        let mut c = Curve::new("x");
         for (budget, seconds, error) in [(1, 0.3, 0.2), (2, 0.2, 0.04), (3, 0.5, 0.01)] {
             c.points.push(Point {
                 budget,

@@ -17,7 +17,7 @@
 //!
 //! `FIELD_SCENES=cornell-box,closed-room` restricts the scenes; `FIELD_N=20000,2000` the point counts.
 
-use super::gcr::{Curve, Point, plot_curves};
+use super::gcr::{Curve, plot_curves};
 use crate::Ctx;
 use anyhow::{Context, Result, bail};
 use baselines::Adaptive;
@@ -220,22 +220,7 @@ fn reference(
 }
 
 fn push(c: &mut Curve, scene: &str, n: usize, budget: usize, seconds: f64, error: f64) {
-    println!(
-        "field: {scene} N={n} {} budget={budget} {seconds:.3} s error {error:.4}",
-        c.name
-    );
-    c.points.push(Point {
-        budget,
-        seconds,
-        error,
-    });
-}
-
-fn curve(name: &str) -> Curve {
-    Curve {
-        name: name.into(),
-        points: Vec::new(),
-    }
+    c.record(&format!("field: {scene} N={n}"), budget, seconds, error);
 }
 
 fn pick(values: &[[f64; 3]], subset: &[usize]) -> Vec<[f64; 3]> {
@@ -297,7 +282,7 @@ fn mitsuba(
             String::from_utf8_lossy(&out.stderr)
         );
     }
-    let mut c = curve("mitsuba 3");
+    let mut c = Curve::new("mitsuba 3");
     for line in String::from_utf8_lossy(&out.stdout).lines() {
         let kv: std::collections::HashMap<&str, &str> = line
             .split_whitespace()
@@ -375,7 +360,7 @@ fn one(name: &str, n: usize, p: &Plan) -> Result<(Vec<Curve>, String)> {
     let mut gcr_curves: Vec<Curve> = p
         .rays
         .iter()
-        .map(|r| curve(&format!("gcr rays {r}")))
+        .map(|r| Curve::new(&format!("gcr rays {r}")))
         .collect();
     for &cells in p.cells {
         let config = SolveConfig {
@@ -412,7 +397,7 @@ fn one(name: &str, n: usize, p: &Plan) -> Result<(Vec<Curve>, String)> {
     }
     curves.extend(gcr_curves);
 
-    let mut pt = curve("path tracer (NEE)");
+    let mut pt = Curve::new("path tracer (NEE)");
     for &paths in p.paths {
         let t = Instant::now();
         let v: Vec<[f64; 3]> = baselines::pointwise::radiosity_at(&scene, &bvh, &points, paths, 11)
@@ -430,7 +415,7 @@ fn one(name: &str, n: usize, p: &Plan) -> Result<(Vec<Curve>, String)> {
     }
     curves.push(pt);
 
-    let mut hr_curve = curve("HR + gather");
+    let mut hr_curve = Curve::new("HR + gather");
     if scene.faces.len() <= 20_000 {
         let (mut e_max, mut rho_max) = (0.0f64, 0.0f64);
         for f in &scene.faces {

@@ -31,6 +31,27 @@ pub struct Curve {
 }
 
 impl Curve {
+    /// A curve without runs yet.
+    pub fn new(name: &str) -> Self {
+        Curve {
+            name: name.into(),
+            points: Vec::new(),
+        }
+    }
+
+    /// Adds a run and prints it as `{label} {name} budget=… s error …`.
+    pub fn record(&mut self, label: &str, budget: usize, seconds: f64, error: f64) {
+        println!(
+            "{label} {} budget={budget} {seconds:.3} s error {error:.4}",
+            self.name
+        );
+        self.points.push(Point {
+            budget,
+            seconds,
+            error,
+        });
+    }
+
     /// Seconds to reach `target` error, interpolated log-log between the first run at or below
     /// it and the run before; `None` when no run reaches it.
     pub fn time_to(&self, target: f64) -> Option<f64> {

@@ -3,7 +3,9 @@
 use clap::{Args, Parser, Subcommand};
 use gcr::output::raster::PinholeCamera;
 use gcr::output::{CameraChoice, ImageSettings, OutputPaths, View};
-use gcr::{GatherMode, GatherSamples, NetworkTarget, OutputFit, SolveConfig, SurfaceClusters};
+use gcr::{
+    GatherMode, GatherSamples, NetworkTarget, OutputFit, PathSettings, SolveConfig, SurfaceClusters,
+};
 use std::path::PathBuf;
 
 /// `gcr`'s arguments.
@@ -50,7 +52,9 @@ pub struct SolveArgs {
     /// Seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Output gather: base, kernel or rays.
+    /// Output gather: base, kernel, rays, or paths (the ray gather plus a path-traced
+    /// correction of the networks' error at the first `--corrections` rays: unbiased, with the
+    /// estimated error in the metrics and the closing line).
     #[arg(long, default_value = "rays")]
     pub gather: GatherMode,
     /// Kernel output layer: `projection` (Galerkin projection of K·s on shot rays) or
@@ -68,6 +72,10 @@ pub struct SolveArgs {
     /// proportional cost.
     #[arg(long, default_value_t = GatherSamples::default().direct)]
     pub gather_rays: usize,
+    /// `--gather paths`: cosine rays per point whose hit gets a path-traced correction (at most
+    /// `--gather-rays`; all of them make the gather a path tracer that ignores the networks).
+    #[arg(long, default_value_t = PathSettings::default().corrections)]
+    pub corrections: usize,
     /// Train the shading network and build its base even when the gather does not read it
     /// (by default they are skipped: same result, less time).
     #[arg(long)]
@@ -162,6 +170,10 @@ impl SolveArgs {
             gather_samples: GatherSamples {
                 direct: self.gather_rays,
                 indirect: self.gather_rays,
+            },
+            paths: PathSettings {
+                corrections: self.corrections,
+                ..PathSettings::default()
             },
             skip_unused_base: !self.keep_base,
             kernel_facing: self.kernel_facing,

@@ -53,8 +53,11 @@ impl ProgressLine {
     pub fn done(&mut self, m: &Metrics) {
         self.solved();
         if !self.quiet {
+            let error = m.relative_std_error.map_or(String::new(), |e| {
+                format!(", estimated error {:.2} % (standard error)", 100.0 * e)
+            });
             eprintln!(
-                "done: {} kernel cells, {} shading cells, {} FEM steps, {:.1} s",
+                "done: {} kernel cells, {} shading cells, {} FEM steps, {:.1} s{error}",
                 m.kernel_cells, m.shading_cells, m.fem_steps, m.seconds.total
             );
         }

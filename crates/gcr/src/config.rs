@@ -13,6 +13,10 @@ pub enum GatherMode {
     /// networks (beyond the dissertation).
     #[default]
     Rays,
+    /// Consistent: paths continued from the output point with the kernel network as a control
+    /// variate at every vertex (MATH.md §9); unbiased whatever the networks' error, with a
+    /// standard error per point (beyond the dissertation).
+    Paths,
 }
 
 impl GatherMode {
@@ -22,6 +26,7 @@ impl GatherMode {
             GatherMode::Base => "base",
             GatherMode::Kernel => "kernel",
             GatherMode::Rays => "rays",
+            GatherMode::Paths => "paths",
         }
     }
 }
@@ -33,8 +38,9 @@ impl std::str::FromStr for GatherMode {
             "base" => Ok(GatherMode::Base),
             "kernel" => Ok(GatherMode::Kernel),
             "rays" => Ok(GatherMode::Rays),
+            "paths" => Ok(GatherMode::Paths),
             other => Err(ConfigError::Invalid(format!(
-                "unknown gather mode `{other}` (expected base, kernel or rays)"
+                "unknown gather mode `{other}` (expected base, kernel, rays or paths)"
             ))),
         }
     }
@@ -184,6 +190,8 @@ pub struct SolveConfig {
     pub gather: GatherMode,
     /// Sample counts of the ray-traced gather.
     pub gather_samples: GatherSamples,
+    /// The `paths` gather's corrections and Russian roulette.
+    pub paths: PathSettings,
     /// Fraction of new samples drawn in critical regions (the rest uniformly), sec. 2.5.
     pub resample_critical_fraction: f64,
     /// How the kernel network's output weights are obtained.
@@ -260,6 +268,7 @@ impl Default for SolveConfig {
             strength_from: StrengthFrom::Kernel,
             gather: GatherMode::Rays,
             gather_samples: GatherSamples::default(),
+            paths: PathSettings::default(),
             resample_critical_fraction: 0.5,
             output_fit: OutputFit::default(),
             network_target: NetworkTarget::default(),
@@ -436,6 +445,25 @@ impl Default for GatherSamples {
         Self {
             direct: 64,
             indirect: 64,
+        }
+    }
+}
+
+/// Settings of the consistent gather (`GatherMode::Paths`) beyond its ray counts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathSettings {
+    /// Cosine rays per point whose hit gets the path-traced correction L̂ − C (the first ones of
+    /// the gather's `indirect` rays).
+    pub corrections: usize,
+    /// Path vertices (the corrected hit is 1) before Russian roulette starts.
+    pub roulette_depth: usize,
+}
+
+impl Default for PathSettings {
+    fn default() -> Self {
+        Self {
+            corrections: 16,
+            roulette_depth: 3,
         }
     }
 }

@@ -44,6 +44,8 @@ pub struct Gathered {
     pub radiosity: Bands,
     /// The part ρ·indirect that came from the networks.
     pub from_networks: Bands,
+    /// The estimate's standard error where the gather measures it (`paths`); 0 otherwise.
+    pub std_error: Bands,
 }
 
 /// Gathers B at the surface point (y, n, face) of `domain`. `b_refl(x, n_x, face_x)` returns the
@@ -124,10 +126,10 @@ pub fn gather(
 
 /// The power heuristic of the two direct-light techniques (module docs), written with ratios so
 /// that g → ∞ at an edge gives the limits 0 and 1/n_c instead of ∞/∞.
-struct Mis<'a> {
-    emitters: &'a Emitters,
-    n_e: f64,
-    n_c: f64,
+pub(crate) struct Mis<'a> {
+    pub(crate) emitters: &'a Emitters,
+    pub(crate) n_e: f64,
+    pub(crate) n_c: f64,
 }
 
 impl Mis<'_> {
@@ -142,7 +144,7 @@ impl Mis<'_> {
 
     /// Weight per unit emission of an emitter point with geometry term `g`, drawn by emitter
     /// sampling: E·G·a/(a² + b²).
-    fn light(&self, g: f64, face: u32) -> f64 {
+    pub(crate) fn light(&self, g: f64, face: u32) -> f64 {
         let (a, b) = (self.a(face), self.n_c * g);
         let r = b / a;
         g / a / (1.0 + r * r)
@@ -150,7 +152,7 @@ impl Mis<'_> {
 
     /// Weight per unit emission of an emitter point hit by a cosine ray: b²/(n_c·(a² + b²)); its
     /// limit 1/n_c where r → 0 at an edge makes g infinite.
-    fn cosine(&self, g: f64, face: u32) -> f64 {
+    pub(crate) fn cosine(&self, g: f64, face: u32) -> f64 {
         if g == f64::INFINITY {
             return 1.0 / self.n_c;
         }
@@ -163,7 +165,7 @@ impl Mis<'_> {
 /// The point-to-point geometry term for cosines `cx`, `cy` and offset `d` = y − x: cos θx cos θy /
 /// (π r²) in 3-D, cos θx cos θy / (2r) in Flatland (the cosines are unnormalised: d's length
 /// divides out).
-fn geometry(domain: &Domain, cx: f64, cy: f64, d: DVec3) -> f64 {
+pub(crate) fn geometry(domain: &Domain, cx: f64, cy: f64, d: DVec3) -> f64 {
     match domain {
         Domain::ThreeD(_) => cx * cy / (PI * d.length_squared().powi(2)),
         Domain::Flat(_) => cx * cy / (2.0 * d.length().powi(3)),
@@ -173,7 +175,7 @@ fn geometry(domain: &Domain, cx: f64, cy: f64, d: DVec3) -> f64 {
 /// G(x, y) for an area-uniform point x on emitter `ef` at `u` ∈ [0,1)² (3-D: barycentrics
 /// (1 − √u1, √u1(1 − u2), √u1·u2); Flatland: arc length u1), when x and the receiver (y, n, face)
 /// face each other and see each other; None otherwise.
-fn emitter_geometry(
+pub(crate) fn emitter_geometry(
     domain: &Domain,
     ef: u32,
     u: [f64; 2],
@@ -218,7 +220,7 @@ fn emitter_geometry(
 
 /// The first surface point (x, n_x, face_x) along a cosine-weighted direction from (y, n, face)
 /// drawn with `u` (3-D: about the hemisphere; Flatland: the half-plane, from u[0]).
-fn trace_cosine(
+pub(crate) fn trace_cosine(
     domain: &Domain,
     y: DVec3,
     n: DVec3,

@@ -38,6 +38,7 @@ mod mesh;
 mod metrics;
 mod network;
 pub mod output;
+mod paths;
 mod pipeline;
 mod projection;
 mod retriangulate;
@@ -49,7 +50,7 @@ mod spatial;
 
 pub use config::{
     BaseDomain, Breaking, ConfigError, GatherMode, GatherSamples, NetworkTarget, OutputFit,
-    SolveConfig, StrengthFrom, SurfaceClusters, Transfer,
+    PathSettings, SolveConfig, StrengthFrom, SurfaceClusters, Transfer,
 };
 pub use domain::{Domain, Ray};
 pub use element::{Bands, MAX_BANDS};
@@ -58,7 +59,9 @@ pub use gather::Gathered;
 pub use mesh::ShadedMesh;
 pub use metrics::{ImageRecord, Metrics, PhaseTimes, peak_memory_bytes};
 pub use network::GrowingNetwork;
-pub use pipeline::{GatherError, output_mesh, point_seed, radiosity_at_points};
+pub use pipeline::{
+    GatherError, MeshGather, output_mesh, point_seed, radiosity_at_points, relative_std_error,
+};
 pub use retriangulate::RetriangulateLimits;
 pub use sample::Sample;
 pub use solve::{Progress, SolveError, Trained, make_networks, solve, train};

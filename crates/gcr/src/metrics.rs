@@ -73,11 +73,16 @@ pub struct Metrics {
     pub output_vertices: usize,
     /// Output mesh triangles.
     pub output_triangles: usize,
-    /// Gather mode used for the output (`base`, `kernel` or `rays`).
+    /// Gather mode used for the output (`base`, `kernel`, `rays` or `paths`).
     pub gather: String,
     /// Share of the output radiosity (area-weighted, all bands) that came from the networks
     /// (indirect light), as opposed to exact emission and, with `rays`, exact direct light.
     pub network_share: f64,
+    /// Estimated relative error of the output, ‖σ‖₂/‖B‖₂ over its points and bands from each
+    /// point's standard error: measured by the `paths` gather (unbiased, so this is its whole
+    /// error), None for the others (their error is mostly the networks' bias, which they cannot
+    /// see). From the mesh when one is written, else from the probes.
+    pub relative_std_error: Option<f64>,
     /// Energy balance of the final projection: the reflected power of the projected kernel,
     /// ∫_S B_refl, over the power the shot samples carry (their Monte-Carlo estimate of the same
     /// integral), before the energy correction rescales it to 1. `None` when not measured

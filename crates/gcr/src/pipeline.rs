@@ -7,6 +7,7 @@ use crate::element::{Bands, MAX_BANDS};
 use crate::emitters::Emitters;
 use crate::gather::{Gathered, gather};
 use crate::mesh::ShadedMesh;
+use crate::paths::PathGather;
 use crate::retriangulate::{RetriangulateLimits, retriangulate};
 use crate::solve::Trained;
 use crate::spatial::BoxGrid;
@@ -37,6 +38,19 @@ pub fn radiosity_at_points(
 ) -> Result<Vec<Gathered>, GatherError> {
     check_base(trained, config)?;
     let frame = domain.frame();
+    if config.gather == GatherMode::Paths {
+        let paths = PathGather::new(
+            domain,
+            emitters,
+            |x, n| trained.reflected_kernel(x, n),
+            config.gather_samples,
+            config.paths,
+        );
+        return Ok(points
+            .par_iter()
+            .map(|&(y, n, face)| paths.gather((y, n, face), point_seed(config.seed, y, frame)))
+            .collect());
+    }
     Ok(points
         .par_iter()
         .map_init(Vec::new, |scratch, &(y, n, face)| {
@@ -103,7 +117,7 @@ fn radiosity_at(
     match config.gather {
         GatherMode::Base => reflected(trained.fem.reflected_from_base(y, n, scratch)),
         GatherMode::Kernel => reflected(trained.reflected_kernel(y, n)),
-        GatherMode::Rays => gather(
+        GatherMode::Rays | GatherMode::Paths => gather(
             domain,
             emitters,
             y,
@@ -173,16 +187,38 @@ impl LocalEdge {
     }
 }
 
+/// What the gather at an output mesh's vertices measured beside B.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MeshGather {
+    /// Area-weighted share of B (all bands) that came from the networks.
+    pub network_share: f64,
+    /// [`relative_std_error`] of the vertices' values (None unless the gather measures it).
+    pub relative_std_error: Option<f64>,
+}
+
+/// The estimated relative error of gathered values, ‖σ‖₂/‖B‖₂ over points and bands from their
+/// standard errors σ; None when the gather measured none (every σ is 0).
+pub fn relative_std_error(gathered: &[Gathered]) -> Option<f64> {
+    let (mut v, mut b) = (0.0, 0.0);
+    for g in gathered {
+        for k in 0..MAX_BANDS {
+            v += g.std_error[k] * g.std_error[k];
+            b += g.radiosity[k] * g.radiosity[k];
+        }
+    }
+    (v > 0.0 && b > 0.0).then(|| (v / b).sqrt())
+}
+
 /// Re-triangulates the scene to the shading network's resolution (sec. 4.3.1) and gathers B at
-/// every vertex ([`radiosity_at_points`]). Returns the mesh and the area-weighted share of B that came from the networks.
+/// every vertex ([`radiosity_at_points`]). Returns the mesh and what the gather measured.
 pub fn output_mesh(
     domain: &Domain,
     trained: &Trained,
     config: &SolveConfig,
     limits: RetriangulateLimits,
-) -> Result<(ShadedMesh, f64), GatherError> {
+) -> Result<(ShadedMesh, MeshGather), GatherError> {
     let Some(scene) = domain.scene_3d() else {
-        return Ok((ShadedMesh::default(), 0.0));
+        return Ok((ShadedMesh::default(), MeshGather::default()));
     };
     let faces: Vec<[DVec3; 3]> = scene.faces.iter().map(|f| f.v).collect();
     let local = LocalEdge::new(trained);
@@ -227,5 +263,9 @@ pub fn output_mesh(
             })
             .collect(),
     };
-    Ok((mesh, if total > 0.0 { net / total } else { 0.0 }))
+    let stats = MeshGather {
+        network_share: if total > 0.0 { net / total } else { 0.0 },
+        relative_std_error: relative_std_error(&gathered),
+    };
+    Ok((mesh, stats))
 }

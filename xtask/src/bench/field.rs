@@ -15,14 +15,17 @@
 //!   `compare`), and Mitsuba 3 through `xtask/py/mitsuba_field.py` (skipped with a note when `mitsuba` is
 //!   not importable). Every time includes building the scene and its BVH (measured once, added).
 //!
-//! `FIELD_SCENES=cornell-box,closed-room` restricts the scenes; `FIELD_N=20000,2000` the point counts.
+//! `FIELD_SCENES=cornell-box,closed-room` restricts the scenes; `FIELD_N=20000,2000` the point counts;
+//! `FIELD_SOLVERS=gcr-paths,pt` the solvers (gcr-rays, gcr-paths, pt, hr, mitsuba); `FIELD_CELLS=300` GCR's cell counts.
 
 use super::gcr::{Curve, plot_curves};
 use crate::Ctx;
 use anyhow::{Context, Result, bail};
 use baselines::Adaptive;
 use baselines::hierarchical::{TriHr, TriHrConfig, budget};
-use gcr::{Domain, Emitters, GatherMode, GatherSamples, SolveConfig, radiosity_at_points};
+use gcr::{
+    Domain, Emitters, GatherMode, GatherSamples, PathSettings, SolveConfig, radiosity_at_points,
+};
 use rayon::prelude::*;
 use scene_sampler::{KernelSampler, Scene, SceneBvh, SurfacePoint, SurfaceSampler};
 use std::fmt::Write;
@@ -39,6 +42,8 @@ struct Plan {
     ref_max_paths: usize,
     cells: &'static [usize],
     rays: &'static [usize],
+    /// Rays per point of GCR's `paths` gather (shadow = cosine rays; a quarter of them corrected).
+    path_rays: &'static [usize],
     paths: &'static [usize],
     hr: &'static [f64],
     spp: &'static [usize],
@@ -61,6 +66,7 @@ fn plan(quick: bool) -> Plan {
             ref_max_paths: 100_000,
             cells: &[100],
             rays: &[64],
+            path_rays: &[8],
             paths: &[16, 64],
             hr: &[4e-3],
             spp: &[16, 64],
@@ -86,11 +92,18 @@ fn plan(quick: bool) -> Plan {
             ref_max_paths: 2_000_000,
             cells: &[100, 300, 1000],
             rays: &[64, 256, 1024],
+            path_rays: &[16, 64, 256, 1024],
             paths: &[4, 16, 64, 256, 1024],
             hr: &[4e-3, 1e-3],
             spp: &[4, 16, 64, 256, 1024],
         }
     }
+}
+
+/// Whether `FIELD_SOLVERS` (a comma list of gcr-rays, gcr-paths, pt, hr, mitsuba; all when unset)
+/// selects `solver`.
+fn selected(solver: &str) -> bool {
+    std::env::var("FIELD_SOLVERS").map_or(true, |v| v.split(',').any(|s| s.trim() == solver))
 }
 
 /// `‖v − r‖₂ / ‖r‖₂` over points and bands.
@@ -362,16 +375,65 @@ fn one(name: &str, n: usize, p: &Plan) -> Result<(Vec<Curve>, String)> {
         .iter()
         .map(|r| Curve::new(&format!("gcr rays {r}")))
         .collect();
-    for &cells in p.cells {
+    let mut path_curves: Vec<Curve> = p
+        .path_rays
+        .iter()
+        .map(|r| Curve::new(&format!("gcr paths {r}")))
+        .collect();
+    let (use_rays, use_paths) = (selected("gcr-rays"), selected("gcr-paths"));
+    let cells_env: Option<Vec<usize>> = std::env::var("FIELD_CELLS")
+        .ok()
+        .map(|v| v.split(',').filter_map(|c| c.trim().parse().ok()).collect());
+    for &cells in cells_env
+        .as_deref()
+        .unwrap_or(p.cells)
+        .iter()
+        .filter(|_| use_rays || use_paths)
+    {
         let config = SolveConfig {
             kernel_cells: cells,
             shading_cells: (cells / 2).max(3),
+            gather: if use_paths {
+                GatherMode::Paths
+            } else {
+                GatherMode::Rays
+            },
             ..SolveConfig::default()
         };
         let t = Instant::now();
         let trained = gcr::solve(&domain, &config, &mut |_| {})?;
         let solve_s = t.elapsed().as_secs_f64();
-        for (c, &rays) in gcr_curves.iter_mut().zip(p.rays) {
+        for (c, &rays) in path_curves
+            .iter_mut()
+            .zip(p.path_rays)
+            .filter(|_| use_paths)
+        {
+            let config = SolveConfig {
+                gather: GatherMode::Paths,
+                gather_samples: GatherSamples {
+                    direct: rays,
+                    indirect: rays,
+                },
+                paths: PathSettings {
+                    corrections: (rays / 4).max(1),
+                    ..PathSettings::default()
+                },
+                ..config
+            };
+            let t = Instant::now();
+            let g = radiosity_at_points(&domain, &trained, &emitters, &config, &at)?;
+            let seconds = setup + solve_s + t.elapsed().as_secs_f64();
+            let v: Vec<[f64; 3]> = g.iter().map(|g| g.radiosity).collect();
+            let sd: Vec<[f64; 3]> = g.iter().map(|g| g.std_error).collect();
+            // The error the per-point standard errors predict, ‖σ‖₂/‖B_ref‖₂ (no bias).
+            let norm = |v: &[[f64; 3]]| v.iter().flatten().map(|x| x * x).sum::<f64>().sqrt();
+            let predicted = norm(&pick(&sd, &subset)) / norm(&r.values).max(1e-300);
+            println!(
+                "field: {name} gcr paths {rays} cells={cells}: predicted error {predicted:.4}"
+            );
+            push(c, name, n, cells, seconds, score(&v));
+        }
+        for (c, &rays) in gcr_curves.iter_mut().zip(p.rays).filter(|_| use_rays) {
             let config = SolveConfig {
                 gather: GatherMode::Rays,
                 gather_samples: GatherSamples {
@@ -395,10 +457,11 @@ fn one(name: &str, n: usize, p: &Plan) -> Result<(Vec<Curve>, String)> {
             );
         }
     }
-    curves.extend(gcr_curves);
+    curves.extend(gcr_curves.into_iter().filter(|_| use_rays));
+    curves.extend(path_curves.into_iter().filter(|_| use_paths));
 
     let mut pt = Curve::new("path tracer (NEE)");
-    for &paths in p.paths {
+    for &paths in p.paths.iter().filter(|_| selected("pt")) {
         let t = Instant::now();
         let v: Vec<[f64; 3]> = baselines::pointwise::radiosity_at(&scene, &bvh, &points, paths, 11)
             .into_iter()
@@ -416,7 +479,7 @@ fn one(name: &str, n: usize, p: &Plan) -> Result<(Vec<Curve>, String)> {
     curves.push(pt);
 
     let mut hr_curve = Curve::new("HR + gather");
-    if scene.faces.len() <= 20_000 {
+    if scene.faces.len() <= 20_000 && selected("hr") {
         let (mut e_max, mut rho_max) = (0.0f64, 0.0f64);
         for f in &scene.faces {
             e_max = e_max.max(f.emission.max());
@@ -455,6 +518,12 @@ fn one(name: &str, n: usize, p: &Plan) -> Result<(Vec<Curve>, String)> {
     curves.push(hr_curve);
 
     let mut note = r.note.clone();
+    if !selected("mitsuba") {
+        return Ok((
+            curves,
+            format!("{note}; scene + BVH {setup:.3} s (in every time)"),
+        ));
+    }
     match mitsuba(&scene, name, &points, &subset, &r.values, p.spp, setup)? {
         Ok(c) => curves.push(c),
         Err(why) => {

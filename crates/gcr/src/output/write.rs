@@ -16,7 +16,7 @@ use crate::domain::Domain;
 use crate::emitters::Emitters;
 use crate::mesh::ShadedMesh;
 use crate::metrics::{ImageRecord, Metrics, peak_memory_bytes};
-use crate::pipeline::{output_mesh, radiosity_at_points};
+use crate::pipeline::{output_mesh, radiosity_at_points, relative_std_error};
 use crate::retriangulate::RetriangulateLimits;
 use crate::solve::Trained;
 use glam::DVec3;
@@ -225,7 +225,8 @@ pub fn write_outputs(
     let emitters = Emitters::new(domain);
     if let Some(path) = &paths.probe_out {
         let tg = Instant::now();
-        let text = probe_values(domain, trained, &emitters, config, plan.probes())?;
+        let (text, error) = probe_values(domain, trained, &emitters, config, plan.probes())?;
+        metrics.relative_std_error = error;
         metrics.seconds.gather += tg.elapsed().as_secs_f64();
         staged.write_bytes(path, text.as_bytes())?;
     }
@@ -262,21 +263,21 @@ pub fn probe_values(
     emitters: &Emitters,
     config: &SolveConfig,
     probes: &[(DVec3, DVec3, u32)],
-) -> Result<String, OutputError> {
+) -> Result<(String, Option<f64>), OutputError> {
     let grey = domain.bands() == 1 && domain.dim() == 2;
-    Ok(
-        radiosity_at_points(domain, trained, emitters, config, probes)?
-            .iter()
-            .map(|g| {
-                let b = g.radiosity;
-                if grey {
-                    format!("{}\n", b[0])
-                } else {
-                    format!("{} {} {}\n", b[0], b[1], b[2])
-                }
-            })
-            .collect(),
-    )
+    let gathered = radiosity_at_points(domain, trained, emitters, config, probes)?;
+    let text = gathered
+        .iter()
+        .map(|g| {
+            let b = g.radiosity;
+            if grey {
+                format!("{}\n", b[0])
+            } else {
+                format!("{} {} {}\n", b[0], b[1], b[2])
+            }
+        })
+        .collect();
+    Ok((text, relative_std_error(&gathered)))
 }
 
 /// The 3-D outputs: the re-triangulated output mesh (when any of image, view, mesh, PLY is asked
@@ -298,8 +299,9 @@ fn write_3d(
         return Ok(());
     }
     let tg = Instant::now();
-    let (mesh, share) = output_mesh(domain, trained, config, RetriangulateLimits::default())?;
-    metrics.network_share = share;
+    let (mesh, stats) = output_mesh(domain, trained, config, RetriangulateLimits::default())?;
+    metrics.network_share = stats.network_share;
+    metrics.relative_std_error = stats.relative_std_error;
     metrics.output_vertices = mesh.vertex_count();
     metrics.output_triangles = mesh.triangle_count();
     metrics.seconds.gather += tg.elapsed().as_secs_f64();

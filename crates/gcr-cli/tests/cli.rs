@@ -230,3 +230,46 @@ fn gather_ray_counts_out_of_range_are_clear_errors() {
         assert!(err.contains(says), "{err}");
     }
 }
+
+/// `--gather paths` reports its estimated error in the metrics and on the closing line; the
+/// ray gather, which cannot see its bias, reports none.
+#[test]
+fn the_paths_gather_reports_its_estimated_error() {
+    for (gather, reported) in [("paths", true), ("rays", false)] {
+        let (out, metrics) = (
+            tmp(&format!("paths-{gather}.txt")),
+            tmp(&format!("paths-{gather}.json")),
+        );
+        let o = gcr(&[
+            "solve",
+            "cornell-box",
+            "--cells",
+            "40",
+            "--gather",
+            gather,
+            "--gather-rays",
+            "32",
+            "--corrections",
+            "8",
+            "--probes",
+            "scenes/cornell-box.probes.txt",
+            "--probe-out",
+            &out,
+            "--metrics",
+            &metrics,
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{err}");
+        assert_eq!(err.contains("estimated error"), reported, "{err}");
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&metrics).unwrap()).unwrap();
+        let e = &m["relative_std_error"];
+        if reported {
+            let e = e.as_f64().expect("an estimate");
+            assert!(e > 0.0 && e < 0.5, "{e}");
+            assert_eq!(m["gather"], "paths");
+        } else {
+            assert!(e.is_null(), "{e}");
+        }
+    }
+}

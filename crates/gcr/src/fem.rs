@@ -699,12 +699,8 @@ pub fn reflected_from_kernel(kernel: &KernelCells, sender: &[f64], y: DVec3, n: 
         if !kernel.accepts_receiver(o, n) {
             continue;
         }
-        let e = kernel.wy[o].distance_squared(y) / (kernel.width[o] * kernel.width[o]);
-        // exp(−40) ≈ 4e-18 of the cell's peak: below any band's rounding.
-        if e > 40.0 {
-            continue;
-        }
-        let g = sender[o] * (-e).exp();
+        let g = sender[o]
+            * (-kernel.wy[o].distance_squared(y) / (kernel.width[o] * kernel.width[o])).exp();
         if g != 0.0 {
             for band in 0..MAX_BANDS {
                 out[band] += kernel.v[o][band] * g;

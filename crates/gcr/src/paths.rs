@@ -310,17 +310,12 @@ mod tests {
     fn the_correction_removes_any_network_error_and_its_error_bar_is_right() {
         let (scene, exact) = furnace();
         let bvh = SceneBvh::new(&scene);
-        let d = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+        let (d, e) = (
+            Domain::ThreeD(KernelSampler::new(&scene, &bvh)),
+            scene.faces[0].emission.0[0],
+        );
         let em = Emitters::new(&d);
-        let e = scene.faces[0].emission.0[0];
-        let samples = GatherSamples {
-            direct: 8,
-            indirect: 32,
-        };
-        let settings = PathSettings {
-            corrections: 8,
-            roulette_depth: 3,
-        };
+        let (samples, settings) = counts(8, 32, 8);
         let points = SurfacePoints::of(&scene, 200);
         for scale in [0.0, 1.0, 3.0] {
             let net = move |_: DVec3, _: DVec3| [scale * (exact - e); MAX_BANDS];
@@ -345,24 +340,18 @@ mod tests {
         }
     }
 
-    /// Where the networks are exact, the correction only adds noise of mean zero, and the
-    /// networks' part is the gather's whole indirect light: with 0 corrections the gather is the
-    /// ray gather.
+    /// With no corrections the gather is the ray gather: its networks' part is ρ·C over the
+    /// cosine rays, which in a closed box all hit a front face.
     #[test]
     fn without_corrections_it_is_the_ray_gather() {
         let (scene, exact) = furnace();
         let bvh = SceneBvh::new(&scene);
-        let d = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+        let (d, e) = (
+            Domain::ThreeD(KernelSampler::new(&scene, &bvh)),
+            scene.faces[0].emission.0[0],
+        );
         let em = Emitters::new(&d);
-        let e = scene.faces[0].emission.0[0];
-        let samples = GatherSamples {
-            direct: 16,
-            indirect: 16,
-        };
-        let settings = PathSettings {
-            corrections: 0,
-            roulette_depth: 3,
-        };
+        let (samples, settings) = counts(16, 16, 0);
         let net = |_: DVec3, _: DVec3| [exact - e; MAX_BANDS];
         let g = PathGather::new(&d, &em, net, samples, settings);
         for (i, &(y, n, f)) in SurfacePoints::of(&scene, 20).0.iter().enumerate() {
@@ -372,6 +361,17 @@ mod tests {
             let rho = scene.faces[0].rho.0[0];
             assert!((r.from_networks[0] - rho * (exact - e)).abs() < 1e-9);
         }
+    }
+
+    /// Shadow rays, cosine rays and corrections per point.
+    fn counts(direct: usize, indirect: usize, corrections: usize) -> (GatherSamples, PathSettings) {
+        (
+            GatherSamples { direct, indirect },
+            PathSettings {
+                corrections,
+                roulette_depth: 3,
+            },
+        )
     }
 
     /// Area-uniform points of a scene with their normals and faces (an R2 set).

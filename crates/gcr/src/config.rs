@@ -453,7 +453,9 @@ impl Default for GatherSamples {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PathSettings {
     /// Cosine rays per point whose hit gets the path-traced correction L̂ − C (the first ones of
-    /// the gather's `indirect` rays).
+    /// the gather's `indirect` rays). Default: all of them (`usize::MAX`), which makes the
+    /// networks' C cancel, so that it is not evaluated: on cornell-box every fraction that reads the
+    /// networks measured less accurate per second (docs/estimator-plan.md).
     pub corrections: usize,
     /// Path vertices (the corrected hit is 1) before Russian roulette starts.
     pub roulette_depth: usize,
@@ -462,7 +464,7 @@ pub struct PathSettings {
 impl Default for PathSettings {
     fn default() -> Self {
         Self {
-            corrections: 16,
+            corrections: usize::MAX,
             roulette_depth: 3,
         }
     }

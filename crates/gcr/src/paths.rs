@@ -105,21 +105,26 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         };
         // ⟨Direct light: stratified shadow rays, MIS with the cosine rays⟩
         let mut direct = Moments::default();
+        let qmc = |i: usize, dim: u32| {
+            f64::from(sobol_burley::sample(i as u32, dim, seed as u32)).min(1.0 - f64::EPSILON)
+        };
         for i in 0..n_e {
-            let u0 = (i as f64 + rng.random::<f64>()) / n_e as f64;
-            direct.add(self.next_event(&z, &mis, u0, &mut rng));
+            direct.add(self.next_event(&z, &mis, (qmc(i, 0), [qmc(i, 1), qmc(i, 2)])));
         }
         // ⟨Cosine rays: the networks' C at each hit, the correction L̂ − C at the first ones⟩
         let (mut networks, mut correction) = (Moments::default(), Moments::default());
         let corrected = self.settings.corrections.min(n_c);
         for i in 0..n_c {
-            let (c, d, hit) = self.cosine_ray(&z, &mis, true, &mut rng);
+            // With every ray corrected C cancels exactly: not evaluated.
+            let networks_read = corrected < n_c;
+            let (c, d, hit) = self.cosine_ray(&z, &mis, networks_read, [qmc(i, 3), qmc(i, 4)]);
             networks.add(c);
             direct.add(d);
             if i < corrected {
                 let mut t = [0.0; MAX_BANDS];
                 if let Some(x) = hit {
-                    let l = self.reflected(&x, 1, &mut rng);
+                    let first = std::array::from_fn(|d| qmc(i, 5 + d as u32));
+                    let l = self.reflected(&x, 1, Some(first), &mut rng);
                     for k in 0..MAX_BANDS {
                         t[k] = l[k] - c[k];
                     }
@@ -144,7 +149,13 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
     /// L̂(x): the reflected radiosity at a path vertex by path tracing: one shadow ray and one
     /// cosine ray, MIS-combined for the direct light, continued with Russian roulette beyond
     /// `PathSettings::roulette_depth` (continuation probability max_k ρ_k(x), at most 0.95).
-    fn reflected(&self, x: &Vertex, depth: usize, rng: &mut ChaCha8Rng) -> Bands {
+    fn reflected(
+        &self,
+        x: &Vertex,
+        depth: usize,
+        first: Option<[f64; 5]>,
+        rng: &mut ChaCha8Rng,
+    ) -> Bands {
         let rho = self.domain.reflectance(x.face);
         let top = rho.iter().fold(0.0f64, |m, r| m.max(*r));
         if top == 0.0 {
@@ -163,12 +174,12 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             n_e: 1.0,
             n_c: q,
         };
-        let u0 = rng.random::<f64>();
-        let mut light = self.next_event(x, &mis, u0, rng);
+        let u = first.unwrap_or_else(|| std::array::from_fn(|_| rng.random()));
+        let mut light = self.next_event(x, &mis, (u[0], [u[1], u[2]]));
         if q > 0.0 && (q >= 1.0 || rng.random::<f64>() < q) {
-            let (_, d, hit) = self.cosine_ray(x, &mis, false, rng);
+            let (_, d, hit) = self.cosine_ray(x, &mis, false, [u[3], u[4]]);
             let l = match hit {
-                Some(next) => self.reflected(&next, depth + 1, rng),
+                Some(next) => self.reflected(&next, depth + 1, None, rng),
                 None => [0.0; MAX_BANDS],
             };
             for k in 0..MAX_BANDS {
@@ -184,8 +195,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
 
     /// One shadow ray from z to an emitter point drawn by power from `u0` (and two more numbers):
     /// its direct light per unit ρ, MIS-weighted ([`Mis::light`]).
-    fn next_event(&self, z: &Vertex, mis: &Mis, u0: f64, rng: &mut ChaCha8Rng) -> Bands {
-        let u = [rng.random::<f64>(), rng.random::<f64>()];
+    fn next_event(&self, z: &Vertex, mis: &Mis, (u0, u): (f64, [f64; 2])) -> Bands {
         let mut out = [0.0; MAX_BANDS];
         let Some(ef) = self.emitters.table().pick_by_power(u0) else {
             return out;
@@ -210,9 +220,8 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         z: &Vertex,
         mis: &Mis,
         networks: bool,
-        rng: &mut ChaCha8Rng,
+        u: [f64; 2],
     ) -> (Bands, Bands, Option<Vertex>) {
-        let u = [rng.random::<f64>(), rng.random::<f64>()];
         let none = ([0.0; MAX_BANDS], [0.0; MAX_BANDS], None);
         let Some((p, n, face)) = trace_cosine(self.domain, z.p, z.n, z.face, u) else {
             return none;

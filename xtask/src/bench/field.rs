@@ -16,7 +16,8 @@
 //!   not importable). Every time includes building the scene and its BVH (measured once, added).
 //!
 //! `FIELD_SCENES=cornell-box,closed-room` restricts the scenes; `FIELD_N=20000,2000` the point counts;
-//! `FIELD_SOLVERS=gcr-paths,pt` the solvers (gcr-rays, gcr-paths, pt, hr, mitsuba); `FIELD_CELLS=300` GCR's cell counts.
+//! `FIELD_SOLVERS=gcr-paths,pt` the solvers (gcr-rays, gcr-paths, pt, hr, mitsuba); `FIELD_CELLS=300` GCR's cell counts;
+//! `FIELD_CORRECTED=0.25` the fraction of the `paths` gather's rays that get a path-traced correction.
 
 use super::gcr::{Curve, plot_curves};
 use crate::Ctx;
@@ -42,7 +43,8 @@ struct Plan {
     ref_max_paths: usize,
     cells: &'static [usize],
     rays: &'static [usize],
-    /// Rays per point of GCR's `paths` gather (shadow = cosine rays; a quarter of them corrected).
+    /// Rays per point of GCR's `paths` gather (shadow = cosine rays; `FIELD_CORRECTED` of them,
+    /// default a quarter, corrected).
     path_rays: &'static [usize],
     paths: &'static [usize],
     hr: &'static [f64],
@@ -381,6 +383,10 @@ fn one(name: &str, n: usize, p: &Plan) -> Result<(Vec<Curve>, String)> {
         .map(|r| Curve::new(&format!("gcr paths {r}")))
         .collect();
     let (use_rays, use_paths) = (selected("gcr-rays"), selected("gcr-paths"));
+    let corrected: f64 = std::env::var("FIELD_CORRECTED")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0.25);
     let cells_env: Option<Vec<usize>> = std::env::var("FIELD_CELLS")
         .ok()
         .map(|v| v.split(',').filter_map(|c| c.trim().parse().ok()).collect());
@@ -415,7 +421,7 @@ fn one(name: &str, n: usize, p: &Plan) -> Result<(Vec<Curve>, String)> {
                     indirect: rays,
                 },
                 paths: PathSettings {
-                    corrections: (rays / 4).max(1),
+                    corrections: ((rays as f64 * corrected).round() as usize).max(1),
                     ..PathSettings::default()
                 },
                 ..config

@@ -372,6 +372,30 @@ mod tests {
         }
     }
 
+    /// The default corrects every ray: the networks' value cancels and is never read (a network
+    /// that panics when asked), and the gather is still exact in the furnace.
+    #[test]
+    fn with_every_ray_corrected_the_networks_are_not_read() {
+        let (scene, exact) = furnace();
+        let bvh = SceneBvh::new(&scene);
+        let d = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+        let em = Emitters::new(&d);
+        let (samples, _) = counts(8, 16, 0);
+        let net = |_: DVec3, _: DVec3| -> Bands { panic!("the networks were read") };
+        let g = PathGather::new(&d, &em, net, samples, PathSettings::default());
+        let (mut sum, mut var) = (0.0, 0.0);
+        let points = SurfacePoints::of(&scene, 100);
+        for (i, &(y, n, f)) in points.0.iter().enumerate() {
+            let r = g.gather((y, n, f), i as u64);
+            assert_eq!(r.from_networks, [0.0; MAX_BANDS]);
+            sum += r.radiosity[0];
+            var += r.std_error[0].powi(2);
+        }
+        let n = points.0.len() as f64;
+        let (mean, se) = (sum / n, var.sqrt() / n);
+        assert!((mean - exact).abs() < 4.0 * se, "{mean} vs {exact} (±{se})");
+    }
+
     /// Shadow rays, cosine rays and corrections per point.
     fn counts(direct: usize, indirect: usize, corrections: usize) -> (GatherSamples, PathSettings) {
         (

@@ -1,6 +1,7 @@
 //! The consistent gather (`--gather paths`, beyond the dissertation): the ray gather
-//! ([`crate::gather`]) plus an unbiased correction of the networks' error by a few continued
-//! paths, so that the estimate converges to B(y) whatever the networks' error.
+//! ([`crate::gather`]) plus an unbiased correction of the networks' error by continued paths, so
+//! that the estimate converges to B(y) whatever the networks' error, with a standard error per
+//! point.
 //!
 //! The networks' reflected radiosity C(x) (the kernel collection, fig. 4.13c) is a control variate
 //! for the reflected radiosity L(x) = B(x) − E(x) seen from y:
@@ -13,27 +14,20 @@
 //! `direct` shadow rays and `indirect` cosine rays, each of the latter costing one ray and one
 //! evaluation of C. The third — the networks' error, which the ray gather never corrects — is
 //! estimated at the hits of the first `corrections` of those rays by a path continued from there
-//! (L̂, below) minus C at the same hit. Its variance is that of the residual L − C over the
-//! hemisphere plus the path's own noise, so a few paths suffice where the networks are good,
-//! while the hemisphere's variation of C, the large part, is averaged by the many cheap rays.
+//! (L̂: path tracing with one shadow ray and one cosine ray per vertex, MIS as in the ray gather,
+//! Russian roulette from `PathSettings::roulette_depth` with continuation probability max ρ)
+//! minus C at the same hit. When every ray is corrected (the default) C cancels exactly and is
+//! not evaluated: the gather is then a path tracer split at its first vertex.
 //!
-//! L̂ at a path vertex x is, with one shadow ray (MIS with the cosine ray, as in the ray gather)
-//! and one cosine ray to x′,
+//! The first vertex's shadow rays, cosine rays and the first vertex of each correction take
+//! Owen-scrambled Sobol points (`sobol_burley`; a path's later vertices random numbers), in
+//! `REPLICATES` (2) independently scrambled replicates whose spread gives the standard error.
 //!
-//! ```text
-//! L̂(x) = ρ(x)·[ D̂(x) + C(x′) + (χ/q)·(L̂(x′) − C(x′)) ]
-//! ```
-//!
-//! where χ is 1 with probability q (Russian roulette on the correction: a path that stops keeps the
-//! networks' value C(x′), so stopping costs variance, not bias). q = 1 up to
-//! `PathSettings::roulette_depth`, which makes the first vertices plain path tracing; beyond it
-//! q = `PathSettings::continuation`.
-//!
-//! MATH.md §9 proposes the kernel Ψ(x, y) itself as the control variate of the integrand K·B (its
-//! integral is the collection in closed form). Measured here, it is worse than none: a sum of a few
-//! hundred 6-D Gaussians does not follow K's 1/r² and cosines pointwise, and Ψ/p is large where the
-//! cosine density p is small (docs/estimator-plan.md). Using C at the hits keeps the network's good
-//! part — its smooth B_refl — and lets the rays supply G and V exactly.
+//! Measured (docs/estimator-plan.md): fewer corrections, which read the networks, were less
+//! accurate per second on cornell-box, and MATH.md §9's kernel Ψ(x, y) as the pointwise control
+//! variate of K·B (its integral is the collection in closed form) was worse than none — a sum of a
+//! few hundred 6-D Gaussians does not follow K's 1/r² and cosines pointwise, and Ψ/p is large where
+//! the cosine density p is small.
 
 use crate::config::{GatherSamples, PathSettings};
 use crate::domain::Domain;
@@ -46,6 +40,12 @@ use rand_chacha::ChaCha8Rng;
 
 /// Path vertices beyond the output point after which the paths stop.
 const MAX_DEPTH: usize = 64;
+/// Independently scrambled Sobol replicates per point: the spread of their estimates gives the
+/// standard error (randomized QMC: the sample variance of the rays themselves ignores the QMC
+/// points' correlation and overstated the error 4× on two-blockers). Two: one degree of freedom
+/// per point (a noisy error bar at one point, an unbiased variance, so an accurate ‖σ‖ over many),
+/// and little of the QMC gain lost (8 replicates cost 1.3–2× in variance, measured).
+const REPLICATES: usize = 2;
 
 /// Everything the consistent gather needs, built once per set of output points.
 pub struct PathGather<'a, C> {
@@ -103,45 +103,65 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             n_e: n_e as f64,
             n_c: n_c as f64,
         };
-        // ⟨Direct light: stratified shadow rays, MIS with the cosine rays⟩
-        let mut direct = Moments::default();
+        // ⟨Ray i belongs to replicate i mod R: each replicate is its own Owen scrambling⟩
+        let replicates = REPLICATES.min(n_e.max(n_c)).max(1);
         let qmc = |i: usize, dim: u32| {
-            f64::from(sobol_burley::sample(i as u32, dim, seed as u32)).min(1.0 - f64::EPSILON)
+            let (r, j) = (i % replicates, i / replicates);
+            let scramble = (seed ^ (r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) as u32;
+            f64::from(sobol_burley::sample(j as u32, dim, scramble)).min(1.0 - f64::EPSILON)
         };
+        // Per replicate, its share of ρ·(D̂ + mean C + mean correction).
+        let mut share = [[0.0; MAX_BANDS]; REPLICATES];
+        let mut from_networks = [0.0; MAX_BANDS];
+        let mut add = |i: usize, t: Bands, scale: f64| {
+            for k in 0..MAX_BANDS {
+                share[i % replicates][k] += rho[k] * t[k] * scale;
+            }
+        };
+        // ⟨Direct light: shadow rays, MIS with the cosine rays⟩
         for i in 0..n_e {
-            direct.add(self.next_event(&z, &mis, (qmc(i, 0), [qmc(i, 1), qmc(i, 2)])));
+            add(
+                i,
+                self.next_event(&z, &mis, (qmc(i, 0), [qmc(i, 1), qmc(i, 2)])),
+                1.0,
+            );
         }
         // ⟨Cosine rays: the networks' C at each hit, the correction L̂ − C at the first ones⟩
-        let (mut networks, mut correction) = (Moments::default(), Moments::default());
         let corrected = self.settings.corrections.min(n_c);
+        // With every ray corrected C cancels exactly: not evaluated.
+        let networks_read = corrected < n_c;
         for i in 0..n_c {
-            // With every ray corrected C cancels exactly: not evaluated.
-            let networks_read = corrected < n_c;
             let (c, d, hit) = self.cosine_ray(&z, &mis, networks_read, [qmc(i, 3), qmc(i, 4)]);
-            networks.add(c);
-            direct.add(d);
+            add(i, d, 1.0);
+            add(i, c, 1.0 / n_c as f64);
+            for k in 0..MAX_BANDS {
+                from_networks[k] += rho[k] * c[k] / n_c as f64;
+            }
             if i < corrected {
-                let mut t = [0.0; MAX_BANDS];
                 if let Some(x) = hit {
                     let first = std::array::from_fn(|d| qmc(i, 5 + d as u32));
                     let l = self.reflected(&x, 1, Some(first), &mut rng);
-                    for k in 0..MAX_BANDS {
-                        t[k] = l[k] - c[k];
-                    }
+                    let t: Bands = std::array::from_fn(|k| l[k] - c[k]);
+                    add(i, t, 1.0 / corrected as f64);
                 }
-                correction.add(t);
             }
         }
-        // ⟨B = E + ρ·(D̂ + mean C + mean correction), with its standard error⟩
+        // ⟨B = E + the replicates' shares; the standard error from their spread⟩
+        let r = replicates as f64;
         for k in 0..MAX_BANDS {
-            out.from_networks[k] = rho[k] * networks.mean(k);
-            out.radiosity[k] =
-                e[k] + rho[k] * (direct.sum[k] + networks.mean(k) + correction.mean(k));
-            out.std_error[k] = rho[k]
-                * (direct.variance_of_sum(k)
-                    + networks.variance_of_mean(k)
-                    + correction.variance_of_mean(k))
-                .sqrt();
+            let total: f64 = share[..replicates].iter().map(|s| s[k]).sum();
+            let mean = total / r;
+            let spread: f64 = share[..replicates]
+                .iter()
+                .map(|s| (s[k] - mean).powi(2))
+                .sum();
+            out.from_networks[k] = from_networks[k];
+            out.radiosity[k] = e[k] + total;
+            out.std_error[k] = if replicates > 1 {
+                (r / (r - 1.0) * spread).sqrt()
+            } else {
+                0.0
+            };
         }
         out
     }
@@ -249,48 +269,6 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
     }
 }
 
-/// Running sums of the terms of one part of an estimate and of their squares.
-#[derive(Default)]
-struct Moments {
-    sum: Bands,
-    squares: Bands,
-    n: usize,
-}
-
-impl Moments {
-    fn add(&mut self, t: Bands) {
-        for k in 0..MAX_BANDS {
-            self.sum[k] += t[k];
-            self.squares[k] += t[k] * t[k];
-        }
-        self.n += 1;
-    }
-
-    fn mean(&self, k: usize) -> f64 {
-        if self.n == 0 {
-            0.0
-        } else {
-            self.sum[k] / self.n as f64
-        }
-    }
-
-    /// Variance of the mean of the terms (sample variance / n).
-    fn variance_of_mean(&self, k: usize) -> f64 {
-        if self.n < 2 {
-            return 0.0;
-        }
-        let n = self.n as f64;
-        let m = self.sum[k] / n;
-        ((self.squares[k] / n - m * m) * n / (n - 1.0)).max(0.0) / n
-    }
-
-    /// Variance of the sum of the terms.
-    fn variance_of_sum(&self, k: usize) -> f64 {
-        let n = self.n as f64;
-        self.variance_of_mean(k) * n * n
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -313,8 +291,8 @@ mod tests {
     /// Whatever the networks say, the paths gather converges to the exact B: in the furnace (a
     /// closed box where every wall emits E and reflects ρ, B = E/(1 − ρ) everywhere) with a
     /// network that is 0, exact, or 3× too bright, the mean over 200 points is within 4 of its
-    /// standard errors of the exact value, and the standard errors predict the spread: the mean
-    /// squared z-score is about 1.
+    /// standard errors of the exact value, and the standard errors predict the spread: the sum of
+    /// squared errors is about the sum of the variances.
     #[test]
     fn the_correction_removes_any_network_error_and_its_error_bar_is_right() {
         let (scene, exact) = furnace();
@@ -329,14 +307,17 @@ mod tests {
         for scale in [0.0, 1.0, 3.0] {
             let net = move |_: DVec3, _: DVec3| [scale * (exact - e); MAX_BANDS];
             let g = PathGather::new(&d, &em, net, samples, settings);
-            let (mut sum, mut var, mut z2) = (0.0, 0.0, 0.0);
+            let (mut sum, mut var, mut sq) = (0.0, 0.0, 0.0);
             for (i, &(y, n, f)) in points.0.iter().enumerate() {
                 let r = g.gather((y, n, f), i as u64);
                 let (b, s) = (r.radiosity[0], r.std_error[0]);
-                assert!(b.is_finite() && s > 0.0, "scale {scale}: B {b}, σ {s}");
+                assert!(
+                    b.is_finite() && s.is_finite(),
+                    "scale {scale}: B {b}, σ {s}"
+                );
                 sum += b;
                 var += s * s;
-                z2 += ((b - exact) / s).powi(2);
+                sq += (b - exact).powi(2);
             }
             let n = points.0.len() as f64;
             let (mean, se) = (sum / n, var.sqrt() / n);
@@ -344,8 +325,12 @@ mod tests {
                 (mean - exact).abs() < 4.0 * se,
                 "scale {scale}: mean {mean} vs {exact} (standard error {se})"
             );
-            let z2 = z2 / n;
-            assert!((0.5..2.0).contains(&z2), "scale {scale}: mean z² {z2}");
+            // The squared errors against the variances the standard errors claim.
+            let ratio = sq / var;
+            assert!(
+                (0.5..2.0).contains(&ratio),
+                "scale {scale}: Σ error² / Σ σ² = {ratio}"
+            );
         }
     }
 

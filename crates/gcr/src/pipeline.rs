@@ -197,10 +197,15 @@ pub struct MeshGather {
 }
 
 /// The estimated relative error of gathered values, ‖σ‖₂/‖B‖₂ over points and bands from their
-/// standard errors σ; None when the gather measured none (every σ is 0).
+/// standard errors σ, over the points the gather estimated (σ ≠ 0: points that do not reflect have
+/// B = E exactly, and a bright emitter among them would make the ratio look small); None when the
+/// gather measured none (every σ is 0).
 pub fn relative_std_error(gathered: &[Gathered]) -> Option<f64> {
     let (mut v, mut b) = (0.0, 0.0);
-    for g in gathered {
+    for g in gathered
+        .iter()
+        .filter(|g| g.std_error.iter().any(|s| *s != 0.0))
+    {
         for k in 0..MAX_BANDS {
             v += g.std_error[k] * g.std_error[k];
             b += g.radiosity[k] * g.radiosity[k];

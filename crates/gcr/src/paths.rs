@@ -274,7 +274,8 @@ mod tests {
     use super::*;
     use scene_sampler::{AnyScene, KernelSampler, SceneBvh, builtin};
 
-    fn furnace() -> (scene_sampler::Scene, f64) {
+    /// The furnace as a domain (leaked: tests only), its emitters, the exact B = E/(1 − ρ) and E.
+    fn furnace() -> (Domain<'static>, Emitters, f64, f64) {
         let AnyScene::ThreeD(scene) = builtin("furnace").unwrap() else {
             panic!()
         };
@@ -285,7 +286,11 @@ mod tests {
                 .iter()
                 .all(|f| f.rho.0[0] == rho && f.emission.0[0] == e)
         );
-        (scene, e / (1.0 - rho))
+        let scene: &'static scene_sampler::Scene = Box::leak(Box::new(scene));
+        let bvh: &'static SceneBvh = Box::leak(Box::new(SceneBvh::new(scene)));
+        let d = Domain::ThreeD(KernelSampler::new(scene, bvh));
+        let em = Emitters::new(&d);
+        (d, em, e / (1.0 - rho), e)
     }
 
     /// Whatever the networks say, the paths gather converges to the exact B: in the furnace (a
@@ -295,15 +300,9 @@ mod tests {
     /// squared errors is about the sum of the variances.
     #[test]
     fn the_correction_removes_any_network_error_and_its_error_bar_is_right() {
-        let (scene, exact) = furnace();
-        let bvh = SceneBvh::new(&scene);
-        let (d, e) = (
-            Domain::ThreeD(KernelSampler::new(&scene, &bvh)),
-            scene.faces[0].emission.0[0],
-        );
-        let em = Emitters::new(&d);
+        let (d, em, exact, e) = furnace();
         let (samples, settings) = counts(8, 32, 8);
-        let points = SurfacePoints::of(&scene, 200);
+        let points = SurfacePoints::of(d.scene_3d().unwrap(), 200);
         for scale in [0.0, 1.0, 3.0] {
             let net = move |_: DVec3, _: DVec3| [scale * (exact - e); MAX_BANDS];
             let g = PathGather::new(&d, &em, net, samples, settings);
@@ -338,21 +337,19 @@ mod tests {
     /// cosine rays, which in a closed box all hit a front face.
     #[test]
     fn without_corrections_it_is_the_ray_gather() {
-        let (scene, exact) = furnace();
-        let bvh = SceneBvh::new(&scene);
-        let (d, e) = (
-            Domain::ThreeD(KernelSampler::new(&scene, &bvh)),
-            scene.faces[0].emission.0[0],
-        );
-        let em = Emitters::new(&d);
+        let (d, em, exact, e) = furnace();
         let (samples, settings) = counts(16, 16, 0);
         let net = |_: DVec3, _: DVec3| [exact - e; MAX_BANDS];
         let g = PathGather::new(&d, &em, net, samples, settings);
-        for (i, &(y, n, f)) in SurfacePoints::of(&scene, 20).0.iter().enumerate() {
+        for (i, &(y, n, f)) in SurfacePoints::of(d.scene_3d().unwrap(), 20)
+            .0
+            .iter()
+            .enumerate()
+        {
             let r = g.gather((y, n, f), i as u64);
             // With B_refl exact at every hit the indirect light is ρ·(B − E)·(fraction of
             // cosine rays that hit a front face) = ρ(B − E) in a closed box.
-            let rho = scene.faces[0].rho.0[0];
+            let rho = d.scene_3d().unwrap().faces[0].rho.0[0];
             assert!((r.from_networks[0] - rho * (exact - e)).abs() < 1e-9);
         }
     }
@@ -361,15 +358,12 @@ mod tests {
     /// that panics when asked), and the gather is still exact in the furnace.
     #[test]
     fn with_every_ray_corrected_the_networks_are_not_read() {
-        let (scene, exact) = furnace();
-        let bvh = SceneBvh::new(&scene);
-        let d = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
-        let em = Emitters::new(&d);
+        let (d, em, exact, _) = furnace();
         let (samples, _) = counts(8, 16, 0);
         let net = |_: DVec3, _: DVec3| -> Bands { panic!("the networks were read") };
         let g = PathGather::new(&d, &em, net, samples, PathSettings::default());
         let (mut sum, mut var) = (0.0, 0.0);
-        let points = SurfacePoints::of(&scene, 100);
+        let points = SurfacePoints::of(d.scene_3d().unwrap(), 100);
         for (i, &(y, n, f)) in points.0.iter().enumerate() {
             let r = g.gather((y, n, f), i as u64);
             assert_eq!(r.from_networks, [0.0; MAX_BANDS]);

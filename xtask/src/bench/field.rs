@@ -108,6 +108,14 @@ fn selected(solver: &str) -> bool {
     std::env::var("FIELD_SOLVERS").map_or(true, |v| v.split(',').any(|s| s.trim() == solver))
 }
 
+/// The fraction of the `paths` gather's rays corrected by paths: `FIELD_CORRECTED`, default 0.25.
+fn corrected_fraction() -> f64 {
+    std::env::var("FIELD_CORRECTED")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0.25)
+}
+
 /// `‖v − r‖₂ / ‖r‖₂` over points and bands.
 fn rel_l2(v: &[[f64; 3]], r: &[[f64; 3]]) -> f64 {
     let (mut n, mut d) = (0.0, 0.0);
@@ -383,10 +391,7 @@ fn one(name: &str, n: usize, p: &Plan) -> Result<(Vec<Curve>, String)> {
         .map(|r| Curve::new(&format!("gcr paths {r}")))
         .collect();
     let (use_rays, use_paths) = (selected("gcr-rays"), selected("gcr-paths"));
-    let corrected: f64 = std::env::var("FIELD_CORRECTED")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(0.25);
+    let corrected = corrected_fraction();
     let cells_env: Option<Vec<usize>> = std::env::var("FIELD_CELLS")
         .ok()
         .map(|v| v.split(',').filter_map(|c| c.trim().parse().ok()).collect());
@@ -638,8 +643,10 @@ pub fn run(ctx: &Ctx) -> Result<()> {
          do not emit; the error is the relative L2 `‖B̃ − B_ref‖₂/‖B_ref‖₂` over a fixed subset of {subset} of them and the \
          three bands, against the NEE path tracer run adaptively to {refe:.1} % relative standard error per band and point. \
          Times: from the built-in scene (its construction and BVH, measured once and added to every solver) to the N values. \
-         GCR: budget = kernel cells (shading cells = half), curve per gather ray count (direct = indirect = rays), ray \
-         gather, one solve per cell count; path tracer: paths per point; HR + gather: links (ε = c·max E·max ρ, \
+         GCR: budget = kernel cells (shading cells = half), one solve per cell count (its time in every curve), curve \
+         per gather ray count (direct = indirect = rays): `gcr rays R` the ray gather, `gcr paths R` the consistent \
+         gather with {corrected_pct:.0} % of its rays corrected by paths (`FIELD_CORRECTED`; at 100 % the networks \
+         are not read); path tracer: paths per point; HR + gather: links (ε = c·max E·max ρ, \
          16 gather rays per leaf; not run above 20 000 input triangles); Mitsuba 3 (`scalar_rgb`, `path` integrator \
          unbounded depth, `ldsampler`, one `batch` sensor of radiancemeters, one render per spp): budget = spp, time = its \
          meshes + sensors + render as the script measures them (not the interpreter start and import).\n\n\
@@ -650,6 +657,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         total = start.elapsed().as_secs_f64(),
         subset = p.subset,
         refe = 100.0 * p.ref_error,
+        corrected_pct = 100.0 * corrected_fraction(),
     );
     std::fs::write(ctx.out.join("benchmarks-field.md"), out)?;
     Ok(())

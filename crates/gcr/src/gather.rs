@@ -79,10 +79,9 @@ pub fn gather(
                 continue;
             }
             let u = [rng.random::<f64>(), rng.random::<f64>()];
-            if let Some(g) = emitter_geometry(domain, ef, u, y, n, face) {
-                let (w, e) = (mis.light(g, ef), domain.emission(ef));
+            if let Some(d) = shadow_ray(domain, &mis, ef, u, (y, n, face)) {
                 for b in 0..MAX_BANDS {
-                    direct[b] += w * e[b];
+                    direct[b] += d[b];
                 }
             }
         }
@@ -91,27 +90,13 @@ pub fn gather(
     // emitter are the direct light's second technique⟩
     for _ in 0..samples.indirect {
         let u = [rng.random::<f64>(), rng.random::<f64>()];
-        let Some((x, nx, fx)) = trace_cosine(domain, y, n, face, u) else {
+        let Some(hit) = cosine_ray(domain, &mis, (y, n, face), u) else {
             continue;
         };
-        // Only the front side of a face radiates.
-        let d = y - x;
-        let cx = nx.dot(d);
-        if cx <= 0.0 {
-            continue;
-        }
-        let b = b_refl(x, nx, fx);
+        let b = b_refl(hit.x, hit.nx, hit.face);
         for band in 0..MAX_BANDS {
             indirect[band] += b[band].max(0.0) / mis.n_c;
-        }
-        let e = domain.emission(fx);
-        if e.iter().any(|v| *v != 0.0) {
-            let w = mis.cosine(geometry(domain, cx, -n.dot(d), d), fx);
-            if w > 0.0 {
-                for band in 0..MAX_BANDS {
-                    direct[band] += w * e[band];
-                }
-            }
+            direct[band] += hit.direct[band];
         }
     }
     // ⟨B = E + ρ·(direct + indirect)⟩
@@ -122,6 +107,59 @@ pub fn gather(
         out.radiosity[b] = e[b] + rho[b] * (direct[b] + indirect[b]);
     }
     out
+}
+
+/// The direct light per unit ρ that one shadow ray to the point `u` of emitter `ef` brings to the
+/// receiver (y, n, face), weighted by [`Mis::light`]; None when they do not see each other.
+pub(crate) fn shadow_ray(
+    domain: &Domain,
+    mis: &Mis,
+    ef: u32,
+    u: [f64; 2],
+    (y, n, face): (DVec3, DVec3, u32),
+) -> Option<Bands> {
+    let g = emitter_geometry(domain, ef, u, y, n, face)?;
+    let (w, e) = (mis.light(g, ef), domain.emission(ef));
+    Some(e.map(|e| w * e))
+}
+
+/// The front of the surface a cosine ray hit, and the direct light per unit ρ it carries when it
+/// is an emitter (weighted by [`Mis::cosine`]).
+pub(crate) struct CosineHit {
+    pub(crate) x: DVec3,
+    pub(crate) nx: DVec3,
+    pub(crate) face: u32,
+    pub(crate) direct: Bands,
+}
+
+/// One cosine-weighted ray from the receiver (y, n, face) drawn with `u`; None when it leaves the
+/// scene or hits the back of a face (only the front side radiates).
+pub(crate) fn cosine_ray(
+    domain: &Domain,
+    mis: &Mis,
+    (y, n, face): (DVec3, DVec3, u32),
+    u: [f64; 2],
+) -> Option<CosineHit> {
+    let (x, nx, fx) = trace_cosine(domain, y, n, face, u)?;
+    let d = y - x;
+    let cx = nx.dot(d);
+    if cx <= 0.0 {
+        return None;
+    }
+    let e = domain.emission(fx);
+    let mut direct = [0.0; MAX_BANDS];
+    if e.iter().any(|v| *v != 0.0) {
+        let w = mis.cosine(geometry(domain, cx, -n.dot(d), d), fx);
+        if w > 0.0 {
+            direct = e.map(|e| w * e);
+        }
+    }
+    Some(CosineHit {
+        x,
+        nx,
+        face: fx,
+        direct,
+    })
 }
 
 /// The power heuristic of the two direct-light techniques (module docs), written with ratios so
@@ -165,7 +203,7 @@ impl Mis<'_> {
 /// The point-to-point geometry term for cosines `cx`, `cy` and offset `d` = y − x: cos θx cos θy /
 /// (π r²) in 3-D, cos θx cos θy / (2r) in Flatland (the cosines are unnormalised: d's length
 /// divides out).
-pub(crate) fn geometry(domain: &Domain, cx: f64, cy: f64, d: DVec3) -> f64 {
+fn geometry(domain: &Domain, cx: f64, cy: f64, d: DVec3) -> f64 {
     match domain {
         Domain::ThreeD(_) => cx * cy / (PI * d.length_squared().powi(2)),
         Domain::Flat(_) => cx * cy / (2.0 * d.length().powi(3)),
@@ -175,7 +213,7 @@ pub(crate) fn geometry(domain: &Domain, cx: f64, cy: f64, d: DVec3) -> f64 {
 /// G(x, y) for an area-uniform point x on emitter `ef` at `u` ∈ [0,1)² (3-D: barycentrics
 /// (1 − √u1, √u1(1 − u2), √u1·u2); Flatland: arc length u1), when x and the receiver (y, n, face)
 /// face each other and see each other; None otherwise.
-pub(crate) fn emitter_geometry(
+fn emitter_geometry(
     domain: &Domain,
     ef: u32,
     u: [f64; 2],
@@ -220,7 +258,7 @@ pub(crate) fn emitter_geometry(
 
 /// The first surface point (x, n_x, face_x) along a cosine-weighted direction from (y, n, face)
 /// drawn with `u` (3-D: about the hemisphere; Flatland: the half-plane, from u[0]).
-pub(crate) fn trace_cosine(
+fn trace_cosine(
     domain: &Domain,
     y: DVec3,
     n: DVec3,

@@ -33,7 +33,7 @@ use crate::config::{GatherSamples, PathSettings};
 use crate::domain::Domain;
 use crate::element::{Bands, MAX_BANDS};
 use crate::emitters::Emitters;
-use crate::gather::{Gathered, Mis, emitter_geometry, geometry, trace_cosine};
+use crate::gather::{Gathered, Mis, cosine_ray, shadow_ray};
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -213,28 +213,19 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         out
     }
 
-    /// One shadow ray from z to an emitter point drawn by power from `u0` (and two more numbers):
-    /// its direct light per unit ρ, MIS-weighted ([`Mis::light`]).
+    /// One shadow ray from z to an emitter point drawn by power from `u0` and on it from `u`: its
+    /// direct light per unit ρ, MIS-weighted ([`shadow_ray`]).
     fn next_event(&self, z: &Vertex, mis: &Mis, (u0, u): (f64, [f64; 2])) -> Bands {
-        let mut out = [0.0; MAX_BANDS];
-        let Some(ef) = self.emitters.table().pick_by_power(u0) else {
-            return out;
-        };
-        if ef == z.face {
-            return out;
-        }
-        if let Some(g) = emitter_geometry(self.domain, ef, u, z.p, z.n, z.face) {
-            let (w, e) = (mis.light(g, ef), self.domain.emission(ef));
-            for k in 0..MAX_BANDS {
-                out[k] = w * e[k];
+        match self.emitters.table().pick_by_power(u0) {
+            Some(ef) if ef != z.face => {
+                shadow_ray(self.domain, mis, ef, u, (z.p, z.n, z.face)).unwrap_or_default()
             }
+            _ => [0.0; MAX_BANDS],
         }
-        out
     }
 
-    /// One cosine-weighted ray from z: (the networks' C at its hit, the direct light the hit
-    /// carries when it is on an emitter (MIS-weighted, [`Mis::cosine`], per one of `mis.n_c`
-    /// rays), the hit when its front faces z). C is 0 unless `networks`.
+    /// One cosine-weighted ray from z ([`cosine_ray`]): (the networks' C at its hit, 0 unless
+    /// `networks`; the direct light the hit carries, per one of `mis.n_c` rays; the hit).
     fn cosine_ray(
         &self,
         z: &Vertex,
@@ -242,30 +233,20 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         networks: bool,
         u: [f64; 2],
     ) -> (Bands, Bands, Option<Vertex>) {
-        let none = ([0.0; MAX_BANDS], [0.0; MAX_BANDS], None);
-        let Some((p, n, face)) = trace_cosine(self.domain, z.p, z.n, z.face, u) else {
-            return none;
+        let Some(hit) = cosine_ray(self.domain, mis, (z.p, z.n, z.face), u) else {
+            return ([0.0; MAX_BANDS], [0.0; MAX_BANDS], None);
         };
-        // Only the front side of a face radiates.
-        let d = z.p - p;
-        let cx = n.dot(d);
-        if cx <= 0.0 {
-            return none;
-        }
         let c = if networks {
-            (self.networks)(p, n).map(|v| v.max(0.0))
+            (self.networks)(hit.x, hit.nx).map(|v| v.max(0.0))
         } else {
             [0.0; MAX_BANDS]
         };
-        let mut direct = [0.0; MAX_BANDS];
-        let e = self.domain.emission(face);
-        if e.iter().any(|v| *v != 0.0) {
-            let w = mis.cosine(geometry(self.domain, cx, -z.n.dot(d), d), face);
-            for k in 0..MAX_BANDS {
-                direct[k] = w * e[k];
-            }
-        }
-        (c, direct, Some(Vertex { p, n, face }))
+        let x = Vertex {
+            p: hit.x,
+            n: hit.nx,
+            face: hit.face,
+        };
+        (c, hit.direct, Some(x))
     }
 }
 

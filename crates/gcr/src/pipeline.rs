@@ -38,27 +38,19 @@ pub fn radiosity_at_points(
 ) -> Result<Vec<Gathered>, GatherError> {
     check_base(trained, config)?;
     let frame = domain.frame();
-    if config.gather == GatherMode::Paths {
-        let paths = PathGather::new(
-            domain,
-            emitters,
-            |x, n| trained.reflected_kernel(x, n),
-            config.gather_samples,
-            config.paths,
-        );
-        return Ok(points
-            .par_iter()
-            .map(|&(y, n, face)| paths.gather((y, n, face), point_seed(config.seed, y, frame)))
-            .collect());
-    }
+    let paths = PathGather::new(
+        domain,
+        emitters,
+        |x, n| trained.reflected_kernel(x, n),
+        config.gather_samples,
+        config.paths,
+    );
     Ok(points
         .par_iter()
         .map_init(Vec::new, |scratch, &(y, n, face)| {
             let seed = point_seed(config.seed, y, frame);
             radiosity_at(
-                domain,
-                trained,
-                emitters,
+                (domain, trained, emitters, &paths),
                 config,
                 (y, n, face),
                 seed,
@@ -97,9 +89,12 @@ pub fn point_seed(seed: u64, y: DVec3, (origin, diagonal): (DVec3, f64)) -> u64 
 
 /// Radiosity at surface point (y, n, face) by the configured gather ([`check_base`] first).
 fn radiosity_at(
-    domain: &Domain,
-    trained: &Trained,
-    emitters: &Emitters,
+    (domain, trained, emitters, paths): (
+        &Domain,
+        &Trained,
+        &Emitters,
+        &PathGather<impl Fn(DVec3, DVec3) -> Bands>,
+    ),
     config: &SolveConfig,
     (y, n, face): (DVec3, DVec3, u32),
     seed: u64,
@@ -117,7 +112,7 @@ fn radiosity_at(
     match config.gather {
         GatherMode::Base => reflected(trained.fem.reflected_from_base(y, n, scratch)),
         GatherMode::Kernel => reflected(trained.reflected_kernel(y, n)),
-        GatherMode::Rays | GatherMode::Paths => gather(
+        GatherMode::Rays => gather(
             domain,
             emitters,
             y,
@@ -127,6 +122,7 @@ fn radiosity_at(
             seed,
             &|x, nx, _| trained.reflected_kernel(x, nx),
         ),
+        GatherMode::Paths => paths.gather((y, n, face), seed),
     }
 }
 

@@ -493,24 +493,20 @@ fn image_record(
 
 /// Encodes `img` as JPEG (quality 92) into `w`.
 pub fn write_jpeg(img: &image::RgbImage, w: &mut dyn Write) -> std::io::Result<()> {
-    use image::ImageEncoder;
-    image::codecs::jpeg::JpegEncoder::new_with_quality(w, 92)
-        .write_image(
-            img.as_raw(),
-            img.width(),
-            img.height(),
-            image::ExtendedColorType::Rgb8,
-        )
-        .map_err(|e| match e {
-            image::ImageError::IoError(e) => e,
-            other => std::io::Error::other(other),
-        })
+    encode(
+        image::codecs::jpeg::JpegEncoder::new_with_quality(w, 92),
+        img,
+    )
 }
 
 /// Encodes `img` as PNG into `w` (the encoder `image::save` uses for .png, same bytes).
 pub fn write_png(img: &image::RgbImage, w: &mut dyn Write) -> std::io::Result<()> {
-    use image::ImageEncoder;
-    image::codecs::png::PngEncoder::new(w)
+    encode(image::codecs::png::PngEncoder::new(w), img)
+}
+
+/// `img` through `encoder`, its errors as I/O errors.
+fn encode(encoder: impl image::ImageEncoder, img: &image::RgbImage) -> std::io::Result<()> {
+    encoder
         .write_image(
             img.as_raw(),
             img.width(),

@@ -10,6 +10,7 @@
 use crate::error::BaselineError;
 use crate::stats::{
     Adaptive, AdaptiveEstimate, Estimate, mis_cosine, mis_light, point_rng, run_fixed,
+    survives_roulette,
 };
 use glam::DVec2;
 use rand::Rng;
@@ -51,15 +52,8 @@ fn path(
         for (t, r) in throughput.iter_mut().zip(s.rho.0) {
             *t *= r;
         }
-        let q = throughput.iter().cloned().fold(0.0, f64::max).min(0.95);
-        if q <= 0.0 {
+        if !survives_roulette(&mut throughput, depth, rng) {
             break;
-        }
-        if depth >= 3 {
-            if rng.random::<f64>() >= q {
-                break;
-            }
-            throughput.iter_mut().for_each(|t| *t /= q);
         }
         // ⟨next-event estimation: one shadow ray⟩
         let (u0, u1) = (rng.random::<f64>(), rng.random::<f64>());

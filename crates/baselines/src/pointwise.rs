@@ -9,7 +9,7 @@
 //! keeps the old estimator for comparisons.
 
 use crate::error::BaselineError;
-use crate::stats::{mis_cosine, mis_light, point_rng, run_fixed};
+use crate::stats::{mis_cosine, mis_light, point_rng, run_fixed, survives_roulette};
 use glam::DVec3;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -76,15 +76,8 @@ fn path(
         for (t, r) in throughput.iter_mut().zip(f.rho.0) {
             *t *= r;
         }
-        let q = throughput.iter().cloned().fold(0.0, f64::max).min(0.95);
-        if q <= 0.0 {
+        if !survives_roulette(&mut throughput, depth, rng) {
             break;
-        }
-        if depth >= 3 {
-            if rng.random::<f64>() >= q {
-                break;
-            }
-            throughput.iter_mut().for_each(|t| *t /= q);
         }
         // ⟨next-event estimation: one shadow ray⟩
         let (u0, u1, u2) = (
@@ -159,16 +152,8 @@ fn path_cosine_only(
             out[b] += throughput[b] * f.emission.0[b];
             throughput[b] *= f.rho.0[b];
         }
-        // Russian roulette after three bounces, survival ∝ the largest throughput.
-        let q = throughput.iter().cloned().fold(0.0, f64::max).min(0.95);
-        if q <= 0.0 {
+        if !survives_roulette(&mut throughput, depth, rng) {
             break;
-        }
-        if depth >= 3 {
-            if rng.random::<f64>() >= q {
-                break;
-            }
-            throughput.iter_mut().for_each(|t| *t /= q);
         }
         let dir = cosine_hemisphere(at.normal, [rng.random(), rng.random()]);
         let Some(hit) = bvh.trace_from(&at, dir) else {

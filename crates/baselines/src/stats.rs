@@ -220,6 +220,27 @@ pub(crate) fn mis_cosine(g: f64, p_e: f64) -> f64 {
     1.0 / (1.0 + r * r)
 }
 
+/// Russian roulette of the path tracers after three bounces: survival ∝ the largest throughput (at
+/// most 0.95), the survivors' throughput divided by it. False when the path ends (also when nothing
+/// is reflected any more).
+pub(crate) fn survives_roulette(
+    throughput: &mut [f64; 3],
+    depth: usize,
+    rng: &mut impl rand::Rng,
+) -> bool {
+    let q = throughput.iter().cloned().fold(0.0, f64::max).min(0.95);
+    if q <= 0.0 {
+        return false;
+    }
+    if depth >= 3 {
+        if rng.random::<f64>() >= q {
+            return false;
+        }
+        throughput.iter_mut().for_each(|t| *t /= q);
+    }
+    true
+}
+
 /// The per-point random stream of the path tracers, keyed by the seed and the point's own coordinates
 /// (`words`: the f64 bits of position and normal), so that it depends neither on the thread count nor on
 /// where the point stands in its list (a probe's value does not change when lines of its file are added,

@@ -8,6 +8,32 @@ use gcr::{
 };
 use std::path::PathBuf;
 
+/// The paths gather's first round with a target error: enough points for a first estimate of
+/// the error, few enough that an easy target is not overshot.
+const PILOT_RAYS: usize = 16;
+
+/// `--quality`: a target error for the paths gather.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Quality {
+    /// 5 %: a first look.
+    Draft,
+    /// 2 %: the default.
+    Good,
+    /// 1 %: for comparisons against a reference.
+    Final,
+}
+
+impl Quality {
+    /// The estimated relative error the paths gather stops at.
+    pub fn target_error(self) -> f64 {
+        match self {
+            Quality::Draft => 0.05,
+            Quality::Good => 0.02,
+            Quality::Final => 0.01,
+        }
+    }
+}
+
 /// `gcr`'s arguments.
 #[derive(Parser)]
 #[command(
@@ -52,11 +78,22 @@ pub struct SolveArgs {
     /// Seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Output gather: base, kernel, rays, or paths (the ray gather plus a path-traced
-    /// correction of the networks' error at the first `--corrections` rays: unbiased, with the
-    /// estimated error in the metrics and the closing line).
-    #[arg(long, default_value = "rays")]
+    /// Output gather: paths (the default: the ray gather plus a path-traced correction of the
+    /// networks' error at the first `--corrections` rays, unbiased, run until `--quality` or
+    /// `--target-error` is met, with the estimated error in the metrics and the closing line),
+    /// or the dissertation's base, kernel and rays (approximate, no error estimate).
+    #[arg(long, default_value = "paths")]
     pub gather: GatherMode,
+    /// `--gather paths`: the estimated relative error (standard error, relative L2 over the
+    /// output points) to stop at: draft 5 %, good 2 %, final 1 % [default: good, unless
+    /// --gather-rays fixes the rays].
+    #[arg(long, conflicts_with = "target_error")]
+    pub quality: Option<Quality>,
+    /// `--gather paths`: stop when the estimated relative error of the output is at most this
+    /// (a fraction, e.g. 0.02 for 2 %); rounds of rays are added until it is, up to 65536 per
+    /// point.
+    #[arg(long, value_name = "E")]
+    pub target_error: Option<f64>,
     /// Kernel output layer: `projection` (Galerkin projection of K·s on shot rays) or
     /// `delta-rule` (the dissertation's eq. 2.8).
     #[arg(long, default_value = "projection")]
@@ -67,11 +104,12 @@ pub struct SolveArgs {
     /// singular) or `sample-weight` (each shot ray's importance weight ρ·s/p_x).
     #[arg(long, default_value = "clamped-kernel")]
     pub network_target: NetworkTarget,
-    /// Ray gather: shadow rays and cosine rays per point (each). More rays lower the gather's
-    /// own noise (two-blockers, 200 points: 6.2 % at 64, 4.4 % at 256, 3.9 % at 4096) at a
-    /// proportional cost.
-    #[arg(long, default_value_t = GatherSamples::default().direct)]
-    pub gather_rays: usize,
+    /// Shadow rays and cosine rays per point (each). The ray gather: 64 by default (more lower
+    /// its own noise: two-blockers, 200 points: 6.2 % at 64, 4.4 % at 256, 3.9 % at 4096). The
+    /// paths gather: alone, a fixed count (no target); with --quality or --target-error, the
+    /// first round's (default 16).
+    #[arg(long)]
+    pub gather_rays: Option<usize>,
     /// `--gather paths`: cosine rays per point whose hit gets a path-traced correction of the
     /// networks' value (default: all of them, so that the networks' value cancels and the gather is
     /// a path tracer with Sobol points at its first vertex; fewer read the networks, which measured
@@ -82,6 +120,10 @@ pub struct SolveArgs {
     /// (by default they are skipped: same result, less time).
     #[arg(long)]
     pub keep_base: bool,
+    /// Train the networks even when nothing reads them (the default paths gather writing only
+    /// probes skips them: same values, less time; the metrics then say `stopped_by: "unused"`).
+    #[arg(long)]
+    pub keep_networks: bool,
     /// Facing masks on the projected kernel's Gaussians: each lives only on surfaces facing
     /// like the samples it was fitted to, so light does not blur across edges (sharper kernel
     /// gather on cluttered scenes, mass lost along edges of smooth fields).
@@ -161,6 +203,21 @@ pub struct SolveArgs {
 impl SolveArgs {
     /// The solver settings (not yet validated: `SolveConfig::validate`).
     pub fn config(&self) -> SolveConfig {
+        // The paths gather runs to a target unless --gather-rays alone fixes its rays.
+        let target_error = self
+            .target_error
+            .or(match (self.quality, self.gather_rays) {
+                (Some(q), _) => Some(q.target_error()),
+                (None, None) if self.gather == GatherMode::Paths => {
+                    Some(Quality::Good.target_error())
+                }
+                (None, _) => None,
+            });
+        let rays = self.gather_rays.unwrap_or(if target_error.is_some() {
+            PILOT_RAYS
+        } else {
+            GatherSamples::default().direct
+        });
         SolveConfig {
             kernel_cells: self.cells,
             shading_cells: self.shading_cells.unwrap_or((self.cells / 2).max(3)),
@@ -170,13 +227,14 @@ impl SolveArgs {
             output_fit: self.output_fit,
             network_target: self.network_target,
             gather_samples: GatherSamples {
-                direct: self.gather_rays,
-                indirect: self.gather_rays,
+                direct: rays,
+                indirect: rays,
             },
             paths: PathSettings {
                 corrections: self
                     .corrections
                     .unwrap_or(PathSettings::default().corrections),
+                target_error,
                 ..PathSettings::default()
             },
             skip_unused_base: !self.keep_base,

@@ -56,10 +56,23 @@ impl ProgressLine {
             let error = m.relative_std_error.map_or(String::new(), |e| {
                 format!(", estimated error {:.2} % (standard error)", 100.0 * e)
             });
-            eprintln!(
-                "done: {} kernel cells, {} shading cells, {} FEM steps, {:.1} s{error}",
-                m.kernel_cells, m.shading_cells, m.fem_steps, m.seconds.total
-            );
+            let rays = if m.gather_rays > 0 {
+                format!(", {} rays per point", m.gather_rays)
+            } else {
+                String::new()
+            };
+            if m.stopped_by == "unused" {
+                eprintln!(
+                    "done: {} gather{rays} (no networks: nothing reads them), {:.1} s{error}",
+                    m.gather, m.seconds.total
+                );
+            } else {
+                eprintln!(
+                    "done: {} kernel cells, {} shading cells, {} FEM steps, {} gather{rays}, \
+                     {:.1} s{error}",
+                    m.kernel_cells, m.shading_cells, m.fem_steps, m.gather, m.seconds.total
+                );
+            }
         }
     }
 }

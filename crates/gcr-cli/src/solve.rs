@@ -41,7 +41,13 @@ fn solve_and_write(
     let plan = OutputPlan::with_images(domain, args.outputs(), args.images())
         .with_context(|| format!("checking the outputs for `{}`", args.scene))?;
     let mut progress = ProgressLine::new(args.quiet);
-    let trained = gcr::solve(domain, config, &mut |p| progress.update(p))?;
+    // ⟨Train the networks only when something reads them⟩
+    let trained = if config.reads_networks() || plan.needs_networks() || args.keep_networks {
+        gcr::solve(domain, config, &mut |p| progress.update(p))?
+    } else {
+        config.validate()?;
+        gcr::Trained::without_networks(domain, config)
+    };
     progress.solved();
     for w in &trained.metrics.warnings {
         eprintln!("warning: {w}");

@@ -223,12 +223,86 @@ fn generated_scene_names_out_of_range_and_bad_cluster_theta_are_clear_errors() {
 
 #[test]
 fn gather_ray_counts_out_of_range_are_clear_errors() {
-    for (rays, says) in [("0", "at least 1 cosine ray"), ("2000000", "above 1000000")] {
-        let out = gcr(&["solve", "cornell-box", "--quiet", "--gather-rays", rays]);
+    for (gather, rays, says) in [
+        ("rays", "0", "at least 1 cosine ray"),
+        ("paths", "0", "at least 1 ray per point"),
+        ("rays", "2000000", "above 1000000"),
+    ] {
+        let out = gcr(&[
+            "solve",
+            "cornell-box",
+            "--quiet",
+            "--gather",
+            gather,
+            "--gather-rays",
+            rays,
+        ]);
         assert!(!out.status.success(), "--gather-rays {rays} accepted");
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(says), "{err}");
     }
+}
+
+/// A target error needs the paths gather and a fraction in (0, 1); each is refused with a
+/// message naming it, before anything is solved.
+#[test]
+fn target_errors_out_of_range_or_without_paths_are_clear_errors() {
+    for (args, says) in [
+        (vec!["--target-error", "0"], "target error 0"),
+        (vec!["--target-error", "2"], "target error 2"),
+        (
+            vec!["--gather", "rays", "--quality", "good"],
+            "paths gather",
+        ),
+        (
+            vec!["--gather", "kernel", "--target-error", "0.1"],
+            "paths gather",
+        ),
+    ] {
+        let mut all = vec!["solve", "cornell-box", "--quiet"];
+        all.extend(&args);
+        let out = gcr(&all);
+        assert!(!out.status.success(), "{args:?} accepted");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
+}
+
+/// The default gather runs to the default quality's 2 % (its estimate, over the probes, below
+/// that), skips the networks when only probes are written (same values as with them), and the
+/// metrics record the target and the rays it took; a tighter target takes more rays.
+#[test]
+fn the_default_gather_runs_to_its_target_and_skips_unread_networks() {
+    let run = |name: &str, extra: &[&str]| {
+        let (out, metrics) = (tmp(&format!("{name}.txt")), tmp(&format!("{name}.json")));
+        let mut args = vec!["solve", "cornell-box", "--quiet"];
+        args.extend(["--probes", "scenes/cornell-box.probes.txt"]);
+        args.extend(["--probe-out", &out, "--metrics", &metrics]);
+        args.extend(extra);
+        let o = gcr(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&metrics).unwrap()).unwrap();
+        (std::fs::read_to_string(&out).unwrap(), m)
+    };
+    let (values, m) = run("default-target", &[]);
+    assert_eq!(m["gather"], "paths");
+    assert_eq!(m["target_error"], 0.02);
+    assert_eq!(m["stopped_by"], "unused", "networks trained for probes");
+    let e = m["relative_std_error"].as_f64().unwrap();
+    assert!(e > 0.0 && e <= 0.02, "estimated error {e}");
+    let (with, mk) = run(
+        "default-target-networks",
+        &["--keep-networks", "--cells", "30"],
+    );
+    assert_eq!(
+        values, with,
+        "the networks changed values they do not enter"
+    );
+    assert_ne!(mk["stopped_by"], "unused");
+    let (_, fine) = run("final-target", &["--quality", "final"]);
+    assert!(fine["relative_std_error"].as_f64().unwrap() <= 0.01);
+    assert!(fine["gather_rays"].as_u64() > m["gather_rays"].as_u64());
 }
 
 /// `--gather paths` reports its estimated error in the metrics and on the closing line; the

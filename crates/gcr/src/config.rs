@@ -285,6 +285,13 @@ impl Default for SolveConfig {
 }
 
 impl SolveConfig {
+    /// Whether the output gather reads the networks: every gather but `paths` with every ray
+    /// corrected (its default), whose networks' value cancels. Output meshes read the networks
+    /// anyway (their resolution is the shading network's).
+    pub fn reads_networks(&self) -> bool {
+        self.gather != GatherMode::Paths || self.paths.corrections != usize::MAX
+    }
+
     /// Whether anything reads the shading network's base: the base gather, or strengths taken
     /// from the base; always when [`SolveConfig::skip_unused_base`] is off.
     pub fn needs_base(&self) -> bool {
@@ -365,6 +372,30 @@ impl SolveConfig {
         }
         if self.gather_samples.direct + self.gather_samples.indirect > 1_000_000 {
             return bad("gather samples per point above 1000000".into());
+        }
+        if let Some(t) = self.paths.target_error {
+            if self.gather != GatherMode::Paths {
+                return bad(format!(
+                    "a target error needs the paths gather (the {} gather estimates no error)",
+                    self.gather.name()
+                ));
+            }
+            if !(t > 0.0 && t < 1.0) {
+                return bad(format!(
+                    "target error {t} (expected a relative error in (0, 1), e.g. 0.02 for 2 %)"
+                ));
+            }
+            if !(1..=1_000_000).contains(&self.paths.max_rays) {
+                return bad(format!(
+                    "at most {} rays per point (expected 1 to 1000000)",
+                    self.paths.max_rays
+                ));
+            }
+        }
+        if self.gather == GatherMode::Paths
+            && self.gather_samples.direct.max(self.gather_samples.indirect) == 0
+        {
+            return bad("the paths gather needs at least 1 ray per point".into());
         }
         if self.gather == GatherMode::Rays && self.gather_samples.indirect == 0 {
             // Without cosine rays there is no indirect light, and no direct light either when
@@ -459,6 +490,13 @@ pub struct PathSettings {
     pub corrections: usize,
     /// Path vertices (the corrected hit is 1) before Russian roulette starts.
     pub roulette_depth: usize,
+    /// Stop when the output's estimated relative error is at most this (`--target-error`,
+    /// `--quality`): the gather's `GatherSamples` are then a pilot round, and further rounds add
+    /// the rays its standard errors say are missing ([`crate::radiosity_at_points`]). `None`: one
+    /// round with the gather's rays.
+    pub target_error: Option<f64>,
+    /// With a target error, the most shadow and cosine rays (each) per point over all rounds.
+    pub max_rays: usize,
 }
 
 impl Default for PathSettings {
@@ -466,6 +504,8 @@ impl Default for PathSettings {
         Self {
             corrections: usize::MAX,
             roulette_depth: 3,
+            target_error: None,
+            max_rays: 1 << 16,
         }
     }
 }

@@ -46,6 +46,9 @@ pub struct Gathered {
     pub from_networks: Bands,
     /// The estimate's standard error where the gather measures it (`paths`); 0 otherwise.
     pub std_error: Bands,
+    /// Shadow rays and cosine rays (each: the larger count) per point behind the value (`rays`,
+    /// `paths`); 0 for the gathers that cast none.
+    pub rays: usize,
 }
 
 /// Gathers B at the surface point (y, n, face) of `domain`. `b_refl(x, n_x, face_x)` returns the
@@ -101,7 +104,10 @@ pub fn gather(
     }
     // ⟨B = E + ρ·(direct + indirect)⟩
     let (rho, e) = (domain.reflectance(face), domain.emission(face));
-    let mut out = Gathered::default();
+    let mut out = Gathered {
+        rays: samples.direct.max(samples.indirect),
+        ..Gathered::default()
+    };
     for b in 0..MAX_BANDS {
         out.from_networks[b] = rho[b] * indirect[b];
         out.radiosity[b] = e[b] + rho[b] * (direct[b] + indirect[b]);

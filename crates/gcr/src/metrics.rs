@@ -86,6 +86,12 @@ pub struct Metrics {
     /// per cent (docs/estimator-plan.md), over a handful it is rough (cornell-box's 18 reflecting
     /// probes: 2.3 % estimated, 3.6 % measured).
     pub relative_std_error: Option<f64>,
+    /// The error the paths gather was asked to stop at (`--target-error`, `--quality`), None
+    /// without one.
+    pub target_error: Option<f64>,
+    /// Shadow and cosine rays (each) per point of the output gather: the most any point got
+    /// (with a target error, the rounds' sum); 0 for the base and kernel gathers.
+    pub gather_rays: usize,
     /// Energy balance of the final projection: the reflected power of the projected kernel,
     /// ∫_S B_refl, over the power the shot samples carry (their Monte-Carlo estimate of the same
     /// integral), before the energy correction rescales it to 1. `None` when not measured
@@ -95,7 +101,8 @@ pub struct Metrics {
     pub seconds: PhaseTimes,
     /// Peak resident memory of the process in bytes (Linux: VmHWM), if known.
     pub peak_memory_bytes: Option<u64>,
-    /// The reason the training stopped (`cells`, `time`, `error`, `steps`).
+    /// The reason the training stopped (`cells`, `time`, `error`, `steps`), or `unused` when the
+    /// networks were not trained because nothing read them (`Trained::without_networks`).
     pub stopped_by: String,
     /// Direct solves of the linearized bounce (the final propagation's fixed point, found by LU
     /// instead of ~1/(1 − ρ) bounces; `SolveConfig::direct_solve_cells`).
@@ -113,6 +120,17 @@ pub struct Metrics {
     pub exposure_source: String,
     /// The 3-D images written, with the cameras they were rendered from.
     pub images: Vec<ImageRecord>,
+}
+
+impl Metrics {
+    /// Records what the output gather measured (the last output set wins: the mesh after the
+    /// probes) and the target it ran to.
+    pub fn record_gather(&mut self, stats: &crate::GatherStats, config: &crate::SolveConfig) {
+        self.network_share = stats.network_share;
+        self.relative_std_error = stats.relative_std_error;
+        self.gather_rays = stats.rays;
+        self.target_error = config.paths.target_error;
+    }
 }
 
 /// One 3-D image written by a solve.

@@ -45,7 +45,7 @@ const MAX_DEPTH: usize = 64;
 /// points' correlation and overstated the error 4× on two-blockers). Two: one degree of freedom
 /// per point (a noisy error bar at one point, an unbiased variance, so an accurate ‖σ‖ over many),
 /// and little of the QMC gain lost (8 replicates cost 1.3–2× in variance, measured).
-const REPLICATES: usize = 2;
+pub(crate) const REPLICATES: usize = 2;
 
 /// Everything the consistent gather needs, built once per set of output points.
 pub struct PathGather<'a, C> {
@@ -63,6 +63,75 @@ struct Vertex {
     p: DVec3,
     n: DVec3,
     face: u32,
+}
+
+/// The paths gather's estimate at one point, per replicate, from one or more rounds of rays
+/// ([`PathGather::estimate`]); [`PointEstimate::gathered`] turns it into B and its standard error.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PointEstimate {
+    /// E at the point.
+    emission: Bands,
+    /// Per replicate, its estimate of the reflected part ρ·(D + ∫L), divided by the number of
+    /// replicates (their sum is the estimate); rounds combined by their ray counts.
+    share: [Bands; REPLICATES],
+    /// The part of the sum that came from the networks.
+    from_networks: Bands,
+    /// Replicates used.
+    replicates: usize,
+    /// Shadow and cosine rays per point so far (the larger count of a round, summed over rounds).
+    rays: usize,
+    /// Whether the point reflects (else B = E exactly and the shares are 0).
+    reflects: bool,
+}
+
+impl PointEstimate {
+    /// Combines two independent rounds at the same point (their Sobol points disjoint), weighted
+    /// by their ray counts: each replicate's combined estimate is still unbiased and independent
+    /// of the others', so their spread still gives the standard error.
+    pub fn merge(&mut self, other: &PointEstimate) {
+        let total = (self.rays + other.rays) as f64;
+        let (w, v) = (self.rays as f64 / total, other.rays as f64 / total);
+        for (a, b) in self.share.iter_mut().zip(&other.share) {
+            for k in 0..MAX_BANDS {
+                a[k] = w * a[k] + v * b[k];
+            }
+        }
+        for k in 0..MAX_BANDS {
+            self.from_networks[k] = w * self.from_networks[k] + v * other.from_networks[k];
+        }
+        self.rays += other.rays;
+        self.replicates = self.replicates.min(other.replicates);
+    }
+
+    /// B = E + the replicates' shares, with the standard error from their spread.
+    pub fn gathered(&self) -> Gathered {
+        let mut out = Gathered {
+            radiosity: self.emission,
+            rays: self.rays,
+            ..Gathered::default()
+        };
+        if !self.reflects {
+            return out;
+        }
+        let (e, share, replicates) = (self.emission, &self.share, self.replicates);
+        let r = replicates as f64;
+        for k in 0..MAX_BANDS {
+            let total: f64 = share[..replicates].iter().map(|s| s[k]).sum();
+            let mean = total / r;
+            let spread: f64 = share[..replicates]
+                .iter()
+                .map(|s| (s[k] - mean).powi(2))
+                .sum();
+            out.from_networks[k] = self.from_networks[k];
+            out.radiosity[k] = e[k] + total;
+            out.std_error[k] = if replicates > 1 {
+                (r / (r - 1.0) * spread).sqrt()
+            } else {
+                0.0
+            };
+        }
+        out
+    }
 }
 
 impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
@@ -85,28 +154,48 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
     }
 
     /// B at the surface point (y, n, face), deterministic for a given `seed`, with its standard
-    /// error.
-    pub fn gather(&self, (y, n, face): (DVec3, DVec3, u32), seed: u64) -> Gathered {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    /// error: one round of [`PathGather::estimate`] with the gather's ray counts.
+    pub fn gather(&self, point: (DVec3, DVec3, u32), seed: u64) -> Gathered {
+        self.estimate(point, seed, 0, self.samples).gathered()
+    }
+
+    /// One round of the gather at (y, n, face) with `samples` rays, its Sobol points taken from
+    /// index `first` of each replicate's sequence on (a later round continues where the earlier
+    /// ones stopped, [`PointEstimate::merge`] combines them). Deterministic for a given `seed`.
+    pub fn estimate(
+        &self,
+        (y, n, face): (DVec3, DVec3, u32),
+        seed: u64,
+        first: usize,
+        samples: GatherSamples,
+    ) -> PointEstimate {
+        // ⟨The paths' own random numbers: one stream per point and round⟩
+        let mut rng = ChaCha8Rng::seed_from_u64(if first == 0 {
+            seed
+        } else {
+            seed ^ (first as u64).wrapping_mul(0xD1B5_4A32_D192_ED03)
+        });
         let z = Vertex { p: y, n, face };
         let (rho, e) = (self.domain.reflectance(face), self.domain.emission(face));
-        let mut out = Gathered {
-            radiosity: e,
-            ..Gathered::default()
+        let (n_e, n_c) = (samples.direct, samples.indirect);
+        let replicates = REPLICATES.min(n_e.max(n_c)).max(1);
+        let mut out = PointEstimate {
+            emission: e,
+            replicates,
+            rays: n_e.max(n_c),
+            ..PointEstimate::default()
         };
         if rho.iter().all(|r| *r == 0.0) {
             return out;
         }
-        let (n_e, n_c) = (self.samples.direct, self.samples.indirect);
         let mis = Mis {
             emitters: self.emitters,
             n_e: n_e as f64,
             n_c: n_c as f64,
         };
         // ⟨Ray i belongs to replicate i mod R: each replicate is its own Owen scrambling⟩
-        let replicates = REPLICATES.min(n_e.max(n_c)).max(1);
         let qmc = |i: usize, dim: u32| {
-            let (r, j) = (i % replicates, i / replicates);
+            let (r, j) = (i % replicates, first + i / replicates);
             let scramble = (seed ^ (r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) as u32;
             f64::from(sobol_burley::sample(j as u32, dim, scramble)).min(1.0 - f64::EPSILON)
         };
@@ -146,23 +235,9 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
                 }
             }
         }
-        // ⟨B = E + the replicates' shares; the standard error from their spread⟩
-        let r = replicates as f64;
-        for k in 0..MAX_BANDS {
-            let total: f64 = share[..replicates].iter().map(|s| s[k]).sum();
-            let mean = total / r;
-            let spread: f64 = share[..replicates]
-                .iter()
-                .map(|s| (s[k] - mean).powi(2))
-                .sum();
-            out.from_networks[k] = from_networks[k];
-            out.radiosity[k] = e[k] + total;
-            out.std_error[k] = if replicates > 1 {
-                (r / (r - 1.0) * spread).sqrt()
-            } else {
-                0.0
-            };
-        }
+        out.share = share;
+        out.from_networks = from_networks;
+        out.reflects = true;
         out
     }
 
@@ -362,7 +437,7 @@ mod tests {
             GatherSamples { direct, indirect },
             PathSettings {
                 corrections,
-                roulette_depth: 3,
+                ..PathSettings::default()
             },
         )
     }

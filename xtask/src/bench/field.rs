@@ -10,13 +10,15 @@
 //! * **Reference**: [`baselines::pointwise::reference_at`] (next-event estimation) at the subset, every band
 //!   of every point to the target relative standard error (or its path cap; the report counts those), cached
 //!   in `$CARGO_TARGET_DIR/field-refs/<scene>-<hash>.txt` (default `target/`) so that reruns skip it.
-//! * **Solvers**: GCR (kernel cells × gather rays, ray gather; one solve per cell count, timed once and added
-//!   to each gather), our path tracer (fixed paths per point), HR + final gather (16 rays per leaf, as in
+//! * **Solvers**: GCR's default (`gcr default`: the paths gather run to each of the target errors 10, 5, 2,
+//!   1 %, no networks: what `gcr solve` does for points), GCR's gathers from a solve (kernel cells × gather
+//!   rays, ray and paths gathers; one solve per cell count, timed once and added to each gather), our path tracer (fixed paths per point), HR + final gather (16 rays per leaf, as in
 //!   `compare`), and Mitsuba 3 through `xtask/py/mitsuba_field.py` (skipped with a note when `mitsuba` is
 //!   not importable). Every time includes building the scene and its BVH (measured once, added).
 //!
 //! `FIELD_SCENES=cornell-box,closed-room` restricts the scenes; `FIELD_N=20000,2000` the point counts;
-//! `FIELD_SOLVERS=gcr-paths,pt` the solvers (gcr-rays, gcr-paths, pt, hr, mitsuba); `FIELD_CELLS=300` GCR's cell counts;
+//! `FIELD_SOLVERS=gcr-default,pt` the solvers (gcr-default, gcr-rays, gcr-paths, pt, hr, mitsuba);
+//! `FIELD_CELLS=300` GCR's cell counts;
 //! `FIELD_CORRECTED=0.25` the fraction of the `paths` gather's rays that get a path-traced correction.
 
 use super::gcr::{Curve, plot_curves};
@@ -49,6 +51,8 @@ struct Plan {
     paths: &'static [usize],
     hr: &'static [f64],
     spp: &'static [usize],
+    /// Target errors of GCR's default (the paths gather run to a target).
+    targets: &'static [f64],
 }
 
 fn plan(quick: bool) -> Plan {
@@ -72,6 +76,7 @@ fn plan(quick: bool) -> Plan {
             paths: &[16, 64],
             hr: &[4e-3],
             spp: &[16, 64],
+            targets: &[0.1],
         }
     } else {
         Plan {
@@ -98,11 +103,13 @@ fn plan(quick: bool) -> Plan {
             paths: &[4, 16, 64, 256, 1024],
             hr: &[4e-3, 1e-3],
             spp: &[4, 16, 64, 256, 1024],
+            targets: &[0.1, 0.05, 0.02, 0.01],
         }
     }
 }
 
-/// Whether `FIELD_SOLVERS` (a comma list of gcr-rays, gcr-paths, pt, hr, mitsuba; all when unset)
+/// Whether `FIELD_SOLVERS` (a comma list of gcr-default, gcr-rays, gcr-paths, pt, hr, mitsuba; all
+/// when unset)
 /// selects `solver`.
 fn selected(solver: &str) -> bool {
     std::env::var("FIELD_SOLVERS").map_or(true, |v| v.split(',').any(|s| s.trim() == solver))
@@ -470,6 +477,39 @@ fn one(name: &str, n: usize, p: &Plan) -> Result<(Vec<Curve>, String)> {
     }
     curves.extend(gcr_curves.into_iter().filter(|_| use_rays));
     curves.extend(path_curves.into_iter().filter(|_| use_paths));
+
+    // GCR as `gcr solve` runs by default: the paths gather to a target error from a 16-ray pilot,
+    // with every ray corrected, so no network is trained (nothing reads them at points)
+    let mut default = Curve::new("gcr default");
+    for &target in p.targets.iter().filter(|_| selected("gcr-default")) {
+        let config = SolveConfig {
+            gather: GatherMode::Paths,
+            gather_samples: GatherSamples {
+                direct: 16,
+                indirect: 16,
+            },
+            paths: PathSettings {
+                target_error: Some(target),
+                ..PathSettings::default()
+            },
+            ..SolveConfig::default()
+        };
+        let t = Instant::now();
+        let trained = gcr::Trained::without_networks(&domain, &config);
+        let g = radiosity_at_points(&domain, &trained, &emitters, &config, &at)?;
+        let seconds = setup + t.elapsed().as_secs_f64();
+        let v: Vec<[f64; 3]> = g.iter().map(|g| g.radiosity).collect();
+        let rays = g.iter().map(|g| g.rays).max().unwrap_or(0);
+        println!(
+            "field: {name} gcr default target {:.1} %: {rays} rays per point, estimated {:.2} %",
+            100.0 * target,
+            100.0 * gcr::relative_std_error(&g).unwrap_or(0.0)
+        );
+        push(&mut default, name, n, rays, seconds, score(&v));
+    }
+    if selected("gcr-default") {
+        curves.push(default);
+    }
 
     let mut pt = Curve::new("path tracer (NEE)");
     for &paths in p.paths.iter().filter(|_| selected("pt")) {

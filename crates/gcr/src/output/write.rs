@@ -16,7 +16,7 @@ use crate::domain::Domain;
 use crate::emitters::Emitters;
 use crate::mesh::ShadedMesh;
 use crate::metrics::{ImageRecord, Metrics, peak_memory_bytes};
-use crate::pipeline::{output_mesh, radiosity_at_points, relative_std_error};
+use crate::pipeline::{GatherStats, output_mesh, radiosity_at_points};
 use crate::retriangulate::RetriangulateLimits;
 use crate::solve::Trained;
 use glam::DVec3;
@@ -80,6 +80,18 @@ pub struct OutputPlan {
 }
 
 impl OutputPlan {
+    /// Whether an output reads the networks whatever the gather: the output mesh (images, views,
+    /// glTF, PLY, the Flatland image) is re-triangulated to the shading network's resolution, and
+    /// the kernel image draws the kernel network. Probes and metrics do not.
+    pub fn needs_networks(&self) -> bool {
+        let p = &self.paths;
+        p.image.is_some()
+            || p.kernel_image.is_some()
+            || p.mesh.is_some()
+            || p.ply.is_some()
+            || !self.images.views.is_empty()
+    }
+
     /// Checks every output of `paths` for `domain` before anything is solved: the outputs fit
     /// the domain (mesh and PLY need 3-D, the kernel image Flatland), probes come with a probe
     /// output, each target has its extension (.png, .glb, .ply) and an existing, writable
@@ -225,8 +237,8 @@ pub fn write_outputs(
     let emitters = Emitters::new(domain);
     if let Some(path) = &paths.probe_out {
         let tg = Instant::now();
-        let (text, error) = probe_values(domain, trained, &emitters, config, plan.probes())?;
-        metrics.relative_std_error = error;
+        let (text, stats) = probe_values(domain, trained, &emitters, config, plan.probes())?;
+        metrics.record_gather(&stats, config);
         metrics.seconds.gather += tg.elapsed().as_secs_f64();
         staged.write_bytes(path, text.as_bytes())?;
     }
@@ -263,7 +275,7 @@ pub fn probe_values(
     emitters: &Emitters,
     config: &SolveConfig,
     probes: &[(DVec3, DVec3, u32)],
-) -> Result<(String, Option<f64>), OutputError> {
+) -> Result<(String, GatherStats), OutputError> {
     let grey = domain.bands() == 1 && domain.dim() == 2;
     let gathered = radiosity_at_points(domain, trained, emitters, config, probes)?;
     let text = gathered
@@ -277,7 +289,7 @@ pub fn probe_values(
             }
         })
         .collect();
-    Ok((text, relative_std_error(&gathered)))
+    Ok((text, GatherStats::of(&gathered)))
 }
 
 /// The 3-D outputs: the re-triangulated output mesh (when any of image, view, mesh, PLY is asked
@@ -300,8 +312,7 @@ fn write_3d(
     }
     let tg = Instant::now();
     let (mesh, stats) = output_mesh(domain, trained, config, RetriangulateLimits::default())?;
-    metrics.network_share = stats.network_share;
-    metrics.relative_std_error = stats.relative_std_error;
+    metrics.record_gather(&stats, config);
     metrics.output_vertices = mesh.vertex_count();
     metrics.output_triangles = mesh.triangle_count();
     metrics.seconds.gather += tg.elapsed().as_secs_f64();

@@ -101,6 +101,36 @@ pub struct Trained {
 }
 
 impl Trained {
+    /// A solution without networks, for a gather that reads none
+    /// ([`SolveConfig::reads_networks`]: the paths gather with every ray corrected) and outputs
+    /// that need no output mesh (probes): the kernel and the base are empty (B_refl from them is
+    /// 0), no sample was shot, and the metrics say `stopped_by: "unused"`.
+    pub fn without_networks(domain: &Domain, config: &SolveConfig) -> Self {
+        let fem_settings = FemSettings {
+            surface_dim: domain.surface_dim(),
+            ..FemSettings::default()
+        };
+        let empty = SceneSurface::new(Vec::new(), Vec::new(), 1.0);
+        let base = Base::new(Default::default(), fem_settings, Arc::new(empty));
+        Self {
+            kernel: KernelCells::default(),
+            sender: Vec::new(),
+            fem: FemSolution {
+                base,
+                gamma: Vec::new(),
+                rejected: 0,
+            },
+            samples: Vec::new(),
+            metrics: Metrics {
+                bands: domain.bands(),
+                seed: config.seed,
+                threads: rayon::current_num_threads(),
+                stopped_by: "unused".into(),
+                ..Default::default()
+            },
+        }
+    }
+
     /// B_refl at a point by the kernel collection (fig. 4.13c).
     pub fn reflected_kernel(&self, y: DVec3, n: DVec3) -> Bands {
         reflected_from_kernel(&self.kernel, &self.sender, y, n)

@@ -36,7 +36,7 @@ fn geometry(y: DVec2, ny: DVec2, x: DVec2, nx: DVec2) -> f64 {
 /// with next-event estimation and MIS as in 3-D (`crate::pointwise`): at every vertex a shadow ray to a point
 /// drawn on the emitting segments (segment ∝ power, point uniform) and the cosine continuation, the two
 /// weighted by the power heuristic; Russian roulette after three bounces (survival ∝ the largest
-/// throughput, at most 0.95).
+/// throughput, so no weight exceeds 1).
 fn path(
     scene: &FlatlandScene,
     vis: &FlatVisibility,

@@ -59,7 +59,7 @@ fn geometry(y: DVec3, ny: DVec3, x: DVec3, nx: DVec3) -> f64 {
 /// `E(x)·G·p_e/(p_e² + G²)` for the shadow ray, `E(x)·G²/(G² + p_e²)` for the continuation, with G the area
 /// density of the cosine direction (module docs of `gcr::gather`, written with ratios so that G → ∞ at an
 /// edge gives the limits 0 and 1). Russian roulette after three bounces, survival ∝ the largest
-/// throughput (at most 0.95). Unbiased: the weights sum to 1 for every emitter point both techniques can
+/// throughput (so no weight exceeds 1). Unbiased: the weights sum to 1 for every emitter point both techniques can
 /// produce, and the continuation alone (weight 1) covers the emitters with zero sampling density.
 fn path(
     scene: &Scene,

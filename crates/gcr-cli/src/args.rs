@@ -2,7 +2,7 @@
 
 use clap::{Args, Parser, Subcommand};
 use gcr::output::raster::PinholeCamera;
-use gcr::output::{CameraChoice, ImageSettings, OutputPaths, View};
+use gcr::output::{CameraChoice, ImageMode, ImageSettings, OutputPaths, View};
 use gcr::{
     GatherMode, GatherSamples, NetworkTarget, OutputFit, PathSettings, SolveConfig, SurfaceClusters,
 };
@@ -165,6 +165,14 @@ pub struct SolveArgs {
     /// Image size in pixels, WIDTHxHEIGHT (each 1 to 16384).
     #[arg(long, value_name = "WxH", value_parser = parse_resolution, default_value = "512x512")]
     pub resolution: (u32, u32),
+    /// How 3-D images get B: `mesh` rasterizes the output mesh (B at its vertices,
+    /// interpolated: fast, the bake's accuracy), `pixel` gathers B at every pixel's visible point
+    /// with the output gather (to its target error over the pixels; no mesh needed).
+    #[arg(long, default_value = "mesh")]
+    pub image_mode: ImageMode,
+    /// `--image-mode pixel`: sub-samples per pixel (box filter; 1 is the pixel centre), 1 to 4096.
+    #[arg(long, default_value_t = 1)]
+    pub pixel_samples: u32,
     /// Exposure of the tone-mapped outputs (PNG/JPEG, glTF and PLY colours): display value =
     /// clamp(L · exposure), L = B/π [default: automatic, the 95th percentile of the lit
     /// surfaces' luminance maps to 0.8]. The value used is printed and in the metrics.
@@ -266,6 +274,8 @@ impl SolveArgs {
             height: self.resolution.1,
             exposure: self.exposure,
             views: self.view.clone(),
+            mode: self.image_mode,
+            pixel_samples: self.pixel_samples,
         }
     }
 

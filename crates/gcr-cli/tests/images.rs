@@ -105,6 +105,87 @@ fn an_exr_image_holds_linear_radiance() {
     }
 }
 
+/// Reads an EXR's RGB pixels (row-major) and its width.
+fn read_exr(path: &Path) -> (usize, Vec<[f32; 3]>) {
+    let img = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
+        |(w, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| px[pos.y() * *w + pos.x()] = [r, g, b],
+    )
+    .unwrap();
+    img.layer_data.channel_data.pixels
+}
+
+/// `--image-mode pixel` gathers per pixel without the networks (`stopped_by: unused`, a given
+/// camera) and agrees with the mesh raster of the same view: the lamp's pixels at L = 2 (all but
+/// its outline, where the two filters' sub-samples differ),
+/// the floor's mean within 5 % (the mesh's interpolation, the two filters at the floor's edge and
+/// both estimators' noise), with the pixel gather's estimated error in the metrics.
+#[test]
+fn a_pixel_image_agrees_with_the_mesh_raster_and_needs_no_networks() {
+    let d = dir("pixel");
+    let scene = lamp_scene(&d);
+    let view = [
+        "--resolution",
+        "40x30",
+        "--camera-eye",
+        "0.5,0.6,-1.2",
+        "--camera-target",
+        "0.5,0.3,0.5",
+        "--fov",
+        "50",
+    ];
+    let mut images = Vec::new();
+    let scene = s(&scene);
+    for mode in ["mesh", "pixel"] {
+        let (exr, m) = (
+            d.join(format!("{mode}.exr")),
+            d.join(format!("{mode}.json")),
+        );
+        // 16 sub-samples per pixel: box-filtered edges, as the raster's supersampling.
+        let mut args = vec!["solve", &scene, "--quiet", "--image-mode", mode];
+        args.extend(["--pixel-samples", if mode == "pixel" { "16" } else { "1" }]);
+        let (exr_s, m_s) = (s(&exr), s(&m));
+        args.extend(["--image", &exr_s, "--metrics", &m_s]);
+        args.extend(view);
+        ok(&gcr(&args));
+        let m = metrics(&m);
+        if mode == "pixel" {
+            assert_eq!(m["stopped_by"], "unused");
+            assert!(m["relative_std_error"].as_f64().unwrap() <= 0.02);
+        }
+        images.push(read_exr(&exr));
+    }
+    let (w, mesh) = &images[0];
+    let (_, pixel) = &images[1];
+    assert_eq!(mesh.len(), pixel.len());
+    // Lamp pixels: L = 2 exactly in both (away from its outline, which the raster's
+    // supersampling blends); floor pixels (0 < L < 1.9 in both) compared on average.
+    let (mut floor_mesh, mut floor_pixel, mut n, mut lamp, mut exact) = (0.0, 0.0, 0, 0, 0);
+    for (a, b) in mesh.iter().zip(pixel) {
+        if a[0] == 2.0 {
+            assert!(b[0] <= 2.0 + 1e-5, "lamp pixel: mesh {a:?}, pixel {b:?}");
+            lamp += 1;
+            exact += usize::from((b[0] - 2.0).abs() < 1e-5);
+        } else if a[0] > 0.0 && a[0] < 1.9 && b[0] > 0.0 && b[0] < 1.9 {
+            floor_mesh += f64::from(a[0]);
+            floor_pixel += f64::from(b[0]);
+            n += 1;
+        }
+    }
+    assert!(
+        n > 100 && lamp > 20,
+        "{n} floor pixels, {lamp} lamp pixels of {}",
+        w * 30
+    );
+    assert!(
+        exact * 5 >= lamp * 4,
+        "{exact} of {lamp} lamp pixels at L = 2"
+    );
+    let ratio = floor_pixel / floor_mesh;
+    assert!((ratio - 1.0).abs() < 0.05, "floor: pixel / mesh = {ratio}");
+}
+
 /// `--exposure` is used and recorded; without it the automatic value is recorded and printed.
 #[test]
 fn the_exposure_is_recorded_in_the_metrics_and_printed() {

@@ -55,7 +55,13 @@ pub enum CameraError {
     /// The exposure is not a positive finite number.
     #[error("exposure {0} is not a positive finite number")]
     Exposure(f64),
+    /// Pixel sub-samples out of range.
+    #[error("{0} samples per pixel: expected 1 to {MAX_PIXEL_SAMPLES}")]
+    PixelSamples(u32),
 }
+
+/// The most sub-samples per pixel of [`ImageMode::Pixel`].
+pub const MAX_PIXEL_SAMPLES: u32 = 4096;
 
 fn v(p: DVec3) -> String {
     format!("{},{},{}", p.x, p.y, p.z)
@@ -172,6 +178,32 @@ pub struct ImageSettings {
     pub exposure: Option<f64>,
     /// Further images from other cameras (same solve, same resolution and exposure).
     pub views: Vec<View>,
+    /// How the images are made: rasterizing the output mesh, or gathering B per pixel.
+    pub mode: ImageMode,
+    /// [`ImageMode::Pixel`]: sub-samples per pixel (box filter; 1 is the pixel centre).
+    pub pixel_samples: u32,
+}
+
+/// How a 3-D image gets its radiosity.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ImageMode {
+    /// Rasterize the output mesh with B at its vertices, interpolated (fast; the bake's accuracy).
+    #[default]
+    Mesh,
+    /// B by the output gather at each pixel sub-sample's visible point ([`super::pixel`]): the
+    /// gather's accuracy everywhere, one gather per sub-sample.
+    Pixel,
+}
+
+impl std::str::FromStr for ImageMode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "mesh" => Ok(Self::Mesh),
+            "pixel" => Ok(Self::Pixel),
+            _ => Err(format!("unknown image mode `{s}` (expected mesh or pixel)")),
+        }
+    }
 }
 
 impl Default for CameraChoice {
@@ -188,6 +220,8 @@ impl Default for ImageSettings {
             height: 512,
             exposure: None,
             views: Vec::new(),
+            mode: ImageMode::Mesh,
+            pixel_samples: 1,
         }
     }
 }
@@ -218,6 +252,9 @@ impl ImageSettings {
             if !(e.is_finite() && e > 0.0) {
                 return Err(CameraError::Exposure(e));
             }
+        }
+        if !(1..=MAX_PIXEL_SAMPLES).contains(&self.pixel_samples) {
+            return Err(CameraError::PixelSamples(self.pixel_samples));
         }
         Ok(())
     }

@@ -9,13 +9,14 @@ pub mod camera;
 pub mod flatland;
 pub mod glb;
 pub mod hdr;
+pub mod pixel;
 pub mod ply;
 pub mod raster;
 pub mod staged;
 pub mod tonemap;
 pub mod write;
 
-pub use camera::{CameraChoice, CameraError, ImageSettings, View};
+pub use camera::{CameraChoice, CameraError, ImageMode, ImageSettings, View};
 pub use write::{OutputPaths, OutputPlan, write_outputs};
 
 /// Why outputs cannot be written (checked before the solve by [`OutputPlan::new`], or met

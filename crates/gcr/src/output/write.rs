@@ -6,7 +6,7 @@
 //! either every output reaches its target, or none does.
 
 use super::OutputError;
-use super::camera::{CameraChoice, ImageSettings};
+use super::camera::{CameraChoice, ImageMode, ImageSettings};
 use super::flatland::{light_flow_image, scene_image};
 use super::raster::{Coverage, PinholeCamera, render_image, render_radiance};
 use super::staged::{StagedFiles, check_target};
@@ -77,6 +77,10 @@ pub struct OutputPlan {
     paths: OutputPaths,
     images: ImageSettings,
     probes: Vec<(DVec3, DVec3, u32)>,
+    /// The scene brings its own camera (a built-in's or a glTF camera node).
+    scene_camera: bool,
+    /// The scene is a Flatland scene.
+    flatland: bool,
 }
 
 impl OutputPlan {
@@ -84,12 +88,23 @@ impl OutputPlan {
     /// glTF, PLY, the Flatland image) is re-triangulated to the shading network's resolution, and
     /// the kernel image draws the kernel network. Probes and metrics do not.
     pub fn needs_networks(&self) -> bool {
+        self.needs_mesh() || self.paths.kernel_image.is_some()
+    }
+
+    /// Whether the outputs need the output mesh: glTF, PLY, images in mesh mode, and pixel
+    /// images from the automatic camera (placed from the mesh's brightness); a Flatland image.
+    fn needs_mesh(&self) -> bool {
         let p = &self.paths;
-        p.image.is_some()
-            || p.kernel_image.is_some()
-            || p.mesh.is_some()
+        let images = p.image.is_some() || !self.images.views.is_empty();
+        let automatic = p.image.is_some()
+            && match self.images.camera {
+                CameraChoice::Given(_) => false,
+                CameraChoice::Automatic { .. } => true,
+                CameraChoice::Scene { .. } => !self.scene_camera,
+            };
+        p.mesh.is_some()
             || p.ply.is_some()
-            || !self.images.views.is_empty()
+            || (images && (self.images.mode == ImageMode::Mesh || automatic || self.flatland))
     }
 
     /// Checks every output of `paths` for `domain` before anything is solved: the outputs fit
@@ -120,6 +135,9 @@ impl OutputPlan {
             }
             if images.exposure.is_some() {
                 return Err(OutputError::ImageNeeds3d("an exposure"));
+            }
+            if images.mode != default.mode || images.pixel_samples != default.pixel_samples {
+                return Err(OutputError::ImageNeeds3d("a per-pixel image"));
             }
             if paths
                 .image
@@ -163,6 +181,8 @@ impl OutputPlan {
             paths,
             images,
             probes,
+            scene_camera: domain.scene_3d().is_some_and(|s| s.camera_given),
+            flatland: domain.scene_flat().is_some(),
         })
     }
 
@@ -292,8 +312,10 @@ pub fn probe_values(
     Ok((text, GatherStats::of(&gathered)))
 }
 
-/// The 3-D outputs: the re-triangulated output mesh (when any of image, view, mesh, PLY is asked
-/// for), one exposure for all of them (given, or from the non-emitting triangles), and the files.
+/// The 3-D outputs: the re-triangulated output mesh (when glTF, PLY, a mesh-mode image or the
+/// automatic camera asks for it), per-pixel images ([`super::pixel`]), one exposure for all of
+/// them (given, else from the mesh's non-emitting triangles, else from the first pixel image's
+/// lit hits), and the files.
 fn write_3d(
     domain: &Domain,
     trained: &Trained,
@@ -307,31 +329,75 @@ fn write_3d(
     };
     let (paths, settings) = (plan.paths(), plan.images());
     let images = image_jobs(paths, settings);
-    if images.is_empty() && paths.mesh.is_none() && paths.ply.is_none() {
-        return Ok(());
-    }
+    let pixel = settings.mode == ImageMode::Pixel;
+    // ⟨The output mesh, when an output needs it⟩
     let tg = Instant::now();
-    let (mesh, stats) = output_mesh(domain, trained, config, RetriangulateLimits::default())?;
-    metrics.record_gather(&stats, config);
-    metrics.output_vertices = mesh.vertex_count();
-    metrics.output_triangles = mesh.triangle_count();
+    let mesh = if plan.needs_mesh() {
+        let (mesh, stats) = output_mesh(domain, trained, config, RetriangulateLimits::default())?;
+        metrics.record_gather(&stats, config);
+        metrics.output_vertices = mesh.vertex_count();
+        metrics.output_triangles = mesh.triangle_count();
+        Some(mesh)
+    } else {
+        None
+    };
+    metrics.seconds.gather += tg.elapsed().as_secs_f64();
+    // ⟨Each image's camera (the automatic one from the mesh's brightness, before any exposure
+    // is known: its own)⟩
+    let exposure_of_mesh = |mesh: &ShadedMesh| {
+        let lit = mesh
+            .triangles
+            .iter()
+            .zip(&mesh.face_of_triangle)
+            .filter(|(_, f)| scene.faces[**f as usize].emission.is_zero())
+            .map(|(t, _)| mesh.radiosity[t[0] as usize]);
+        Exposure::auto(lit)
+    };
+    let mesh_exposure = mesh.as_ref().map(|m| match settings.exposure {
+        Some(scale) => Exposure { scale },
+        None => exposure_of_mesh(m),
+    });
+    let mut jobs = Vec::new();
+    for (path, choice, source) in images {
+        let camera = match choice {
+            CameraChoice::Given(c) => (c, source),
+            CameraChoice::Scene { fov } if scene.camera_given => {
+                let mut c = PinholeCamera::of_scene(scene);
+                c.fov_y_degrees = fov.unwrap_or(c.fov_y_degrees);
+                (c, "scene")
+            }
+            CameraChoice::Scene { fov } | CameraChoice::Automatic { fov } => {
+                let (mesh, exposure) = mesh
+                    .as_ref()
+                    .zip(mesh_exposure.as_ref())
+                    .expect("the automatic camera's outputs build the mesh (needs_mesh)");
+                automatic(domain, mesh, exposure, settings, fov)
+            }
+        };
+        jobs.push((path, camera));
+    }
+    // ⟨Per-pixel images: B gathered at every sub-sample's visible point⟩
+    let tg = Instant::now();
+    let mut rendered = Vec::new();
+    if pixel {
+        for (_, (camera, _)) in &jobs {
+            let size = (settings.width, settings.height, settings.pixel_samples);
+            let img = super::pixel::render_pixels(domain, trained, config, camera, size)?;
+            metrics.record_gather(&img.stats, config);
+            rendered.push(img);
+        }
+    }
     metrics.seconds.gather += tg.elapsed().as_secs_f64();
     let to = Instant::now();
-    let exposure = match settings.exposure {
-        Some(scale) => Exposure { scale },
-        None => {
-            let lit = mesh
-                .triangles
-                .iter()
-                .zip(&mesh.face_of_triangle)
-                .filter(|(_, f)| scene.faces[**f as usize].emission.is_zero())
-                .map(|(t, _)| mesh.radiosity[t[0] as usize]);
-            Exposure::auto(lit)
-        }
+    let exposure = match (settings.exposure, &mesh_exposure, rendered.first()) {
+        (Some(scale), _, _) => Exposure { scale },
+        (None, Some(e), _) => *e,
+        (None, None, Some(img)) => Exposure::auto(img.lit()),
+        (None, None, None) => Exposure { scale: 1.0 },
     };
     let tone_mapped = paths.mesh.is_some()
         || paths.ply.is_some()
-        || images.iter().any(|(p, _, _)| format_of(p) != Format::Exr);
+        || jobs.iter().any(|(p, _)| format_of(p) != Format::Exr);
     if tone_mapped {
         metrics.exposure = Some(exposure.scale);
         metrics.exposure_source = if settings.exposure.is_some() {
@@ -341,32 +407,58 @@ fn write_3d(
         }
         .into();
     }
-    for (path, choice, source) in images {
-        let (camera, source) = match choice {
-            CameraChoice::Given(c) => (c, source),
-            CameraChoice::Scene { fov } if scene.camera_given => {
-                let mut c = PinholeCamera::of_scene(scene);
-                c.fov_y_degrees = fov.unwrap_or(c.fov_y_degrees);
-                (c, "scene")
+    // ⟨The images, then the meshes⟩
+    for (i, (path, (camera, source))) in jobs.iter().enumerate() {
+        let coverage = match rendered.get(i) {
+            Some(img) => write_pixel_image(img, &exposure, path, staged)?,
+            None => {
+                let mesh = mesh.as_ref().expect("mesh-mode images build the mesh");
+                write_image(mesh, camera, settings, &exposure, path, staged)?
             }
-            CameraChoice::Scene { fov } => automatic(domain, &mesh, &exposure, settings, fov),
-            CameraChoice::Automatic { fov } => automatic(domain, &mesh, &exposure, settings, fov),
         };
-        let coverage = write_image(&mesh, &camera, settings, &exposure, path, staged)?;
         let what = format!("image `{}`", path.display());
         metrics.warnings.extend(coverage.warning(&what));
         metrics
             .images
-            .push(image_record(path, settings, &camera, source, coverage));
+            .push(image_record(path, settings, camera, source, coverage));
     }
-    if let Some(path) = &paths.mesh {
-        staged.write(path, |w| super::glb::write_glb(&mesh, &exposure, w))?;
-    }
-    if let Some(path) = &paths.ply {
-        staged.write(path, |w| super::ply::write_ply(&mesh, &exposure, w))?;
+    if let Some(mesh) = &mesh {
+        if let Some(path) = &paths.mesh {
+            staged.write(path, |w| super::glb::write_glb(mesh, &exposure, w))?;
+        }
+        if let Some(path) = &paths.ply {
+            staged.write(path, |w| super::ply::write_ply(mesh, &exposure, w))?;
+        }
     }
     metrics.seconds.output += to.elapsed().as_secs_f64();
     Ok(())
+}
+
+/// Writes a per-pixel image: linear radiance for .exr, tone-mapped for PNG and JPEG.
+fn write_pixel_image(
+    img: &super::pixel::PixelImage,
+    exposure: &Exposure,
+    path: &Path,
+    staged: &mut StagedFiles,
+) -> Result<Coverage, OutputError> {
+    let format = format_of(path);
+    let radiance = img.radiance();
+    if format == Format::Exr {
+        let bytes = super::hdr::encode_exr(&radiance).map_err(|source| OutputError::Write {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        staged.write_bytes(path, &bytes)?;
+        return Ok(radiance.coverage);
+    }
+    let rgb = image::RgbImage::from_raw(radiance.width, radiance.height, img.tone_mapped(exposure))
+        .expect("a pixel image has w·h RGB pixels");
+    if format == Format::Jpeg {
+        staged.write(path, |out| write_jpeg(&rgb, out))?;
+    } else {
+        staged.write(path, |out| write_png(&rgb, out))?;
+    }
+    Ok(radiance.coverage)
 }
 
 /// The 3-D images to write: the main image with its camera choice, then the views.

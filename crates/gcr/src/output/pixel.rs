@@ -1,0 +1,254 @@
+//! Per-pixel images (`--image-mode pixel`, beyond the dissertation): B at each pixel's visible
+//! point by the output gather itself, instead of rasterizing the output mesh.
+//!
+//! A pinhole ray through each of a pixel's sub-samples (the camera of [`super::raster`]: pixel
+//! (i, j) of W × H has its centre at ((i + ½)/W, (j + ½)/H), Mitsuba's `perspective` framing)
+//! finds the first surface; at every front-facing hit [`radiosity_at_points`] gathers B — with the
+//! default paths gather to its target error over all the hits, with its standard errors — and a
+//! pixel is the mean of L = B/π over its sub-samples (back faces and the background are black).
+//! With one sub-sample it is the pixel centre; with N the first N points of the R2 sequence
+//! (`frac(½ + k·(α₁, α₂))`, α the plastic number's reciprocals) over the pixel, a box filter.
+//!
+//! No mesh is needed: the image has the gather's accuracy at every pixel, not the bake's at its
+//! vertices, and costs one gather per sub-sample.
+
+use super::raster::{Coverage, PinholeCamera, RadianceImage};
+use super::tonemap::{Exposure, srgb_encode};
+use crate::Trained;
+use crate::config::SolveConfig;
+use crate::domain::Domain;
+use crate::emitters::Emitters;
+use crate::pipeline::{GatherError, GatherStats, radiosity_at_points};
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// R2 sequence steps (1/φ₂ and 1/φ₂², φ₂ the plastic number): the sub-sample offsets.
+const R2: [f64; 2] = [0.754_877_666_246_692_7, 0.569_840_290_998_053_3];
+
+/// What one sub-sample's ray saw.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Seen {
+    /// Nothing (background, black).
+    Nothing,
+    /// The back of a face (black).
+    Back,
+    /// The front of a face: B there (its index among the gathered points).
+    Front(usize),
+}
+
+/// A per-pixel image before it is encoded: B at each sub-sample's visible point.
+#[derive(Clone, Debug)]
+pub struct PixelImage {
+    width: u32,
+    height: u32,
+    spp: u32,
+    seen: Vec<Seen>,
+    /// B at the front hits, in the order of [`Seen::Front`].
+    radiosity: Vec<[f64; 3]>,
+    /// Whether each front hit emits (left out of the automatic exposure, like the emitters of a
+    /// mesh).
+    emits: Vec<bool>,
+    /// What the gather measured at the hits.
+    pub stats: GatherStats,
+}
+
+/// Renders `camera`'s view of `domain` (3-D) at `width × height` with `spp` sub-samples per
+/// pixel, B gathered by `config`'s gather (module docs).
+pub fn render_pixels(
+    domain: &Domain,
+    trained: &Trained,
+    config: &SolveConfig,
+    camera: &PinholeCamera,
+    (width, height, spp): (u32, u32, u32),
+) -> Result<PixelImage, GatherError> {
+    let Domain::ThreeD(k) = domain else {
+        return Ok(PixelImage::empty(width, height, spp));
+    };
+    let (scene, bvh) = (k.scene, k.bvh);
+    let spp = spp.max(1);
+    let aspect = f64::from(width) / f64::from(height);
+    // ⟨Primary rays: the first surface behind each sub-sample⟩
+    let n = (width * height * spp) as usize;
+    let hits: Vec<Option<(DVec3, DVec3, u32, bool)>> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let s = (i % spp as usize) as f64;
+            let p = i / spp as usize;
+            let (px, py) = ((p % width as usize) as f64, (p / width as usize) as f64);
+            let (ox, oy) = if spp == 1 {
+                (0.5, 0.5)
+            } else {
+                ((0.5 + s * R2[0]).fract(), (0.5 + s * R2[1]).fract())
+            };
+            let dir = camera.ray_direction(
+                (px + ox) / f64::from(width),
+                (py + oy) / f64::from(height),
+                aspect,
+            );
+            let hit = bvh.closest_hit(camera.eye, dir, f64::INFINITY, u32::MAX)?;
+            let normal = scene.faces[hit.face as usize].normal;
+            Some((hit.point, normal, hit.face, normal.dot(dir) < 0.0))
+        })
+        .collect();
+    // ⟨B at every front hit, by the output gather (to its target over all of them)⟩
+    let mut seen = Vec::with_capacity(n);
+    let mut points = Vec::new();
+    let mut emits = Vec::new();
+    for h in &hits {
+        seen.push(match *h {
+            None => Seen::Nothing,
+            Some((_, _, _, false)) => Seen::Back,
+            Some((x, nx, face, true)) => {
+                points.push((x, nx, face));
+                emits.push(!scene.faces[face as usize].emission.is_zero());
+                Seen::Front(points.len() - 1)
+            }
+        });
+    }
+    let gathered = radiosity_at_points(domain, trained, &Emitters::new(domain), config, &points)?;
+    Ok(PixelImage {
+        width,
+        height,
+        spp,
+        seen,
+        radiosity: gathered.iter().map(|g| g.radiosity).collect(),
+        emits,
+        stats: GatherStats::of(&gathered),
+    })
+}
+
+impl PixelImage {
+    fn empty(width: u32, height: u32, spp: u32) -> Self {
+        Self {
+            width,
+            height,
+            spp: spp.max(1),
+            seen: vec![Seen::Nothing; (width * height * spp.max(1)) as usize],
+            radiosity: Vec::new(),
+            emits: Vec::new(),
+            stats: GatherStats::default(),
+        }
+    }
+
+    /// B at the front hits that do not emit: the input of an automatic exposure.
+    pub fn lit(&self) -> impl Iterator<Item = [f64; 3]> + '_ {
+        self.radiosity
+            .iter()
+            .zip(&self.emits)
+            .filter(|(_, e)| !**e)
+            .map(|(b, _)| *b)
+    }
+
+    /// What the sub-samples saw, as fractions.
+    pub fn coverage(&self) -> Coverage {
+        let n = self.seen.len().max(1) as f64;
+        let count = |f: fn(&Seen) -> bool| self.seen.iter().filter(|s| f(s)).count() as f64 / n;
+        Coverage {
+            front: count(|s| matches!(s, Seen::Front(_))),
+            back: count(|s| matches!(s, Seen::Back)),
+            nothing: count(|s| matches!(s, Seen::Nothing)),
+        }
+    }
+
+    /// Per pixel, the mean of `map(B)` over its sub-samples (0 where they see no front face).
+    fn reduce(&self, map: impl Fn([f64; 3]) -> [f64; 3]) -> Vec<[f64; 3]> {
+        self.seen
+            .chunks(self.spp as usize)
+            .map(|subs| {
+                let mut acc = [0.0; 3];
+                for s in subs {
+                    if let Seen::Front(i) = s {
+                        let v = map(self.radiosity[*i]);
+                        for c in 0..3 {
+                            acc[c] += v[c];
+                        }
+                    }
+                }
+                acc.map(|a| a / subs.len() as f64)
+            })
+            .collect()
+    }
+
+    /// Linear radiance L = B/π per pixel.
+    pub fn radiance(&self) -> RadianceImage {
+        let inv_pi = 1.0 / std::f64::consts::PI;
+        RadianceImage {
+            width: self.width,
+            height: self.height,
+            radiance: self
+                .reduce(|b| b.map(|c| if c.is_finite() { c * inv_pi } else { 0.0 }))
+                .into_iter()
+                .map(|l| l.map(|c| c as f32))
+                .collect(),
+            coverage: self.coverage(),
+        }
+    }
+
+    /// 8-bit sRGB RGB pixels, row-major, top row first: each sub-sample exposed and clipped
+    /// ([`Exposure::linear`]), averaged, encoded (the raster's order).
+    pub fn tone_mapped(&self, exposure: &Exposure) -> Vec<u8> {
+        self.reduce(|b| exposure.linear(b))
+            .into_iter()
+            .flat_map(|v| v.map(|c| (srgb_encode(c) * 255.0).round() as u8))
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::{GatherMode, GatherSamples};
+    use crate::output::raster::project;
+    use scene_sampler::{AnyScene, KernelSampler, SceneBvh, builtin};
+
+    /// In the furnace (B = 2 everywhere, every face emits 1 and reflects 0.5) seen from inside,
+    /// every pixel sees a front face and its radiance is B/π up to the gather's noise; a 3-D point
+    /// on the far wall lands on the pixel the camera's projection puts it on (no mirroring: the
+    /// image's left is the camera's left).
+    #[test]
+    fn the_furnace_from_inside_is_uniform_and_pixels_are_where_the_camera_puts_them() {
+        let AnyScene::ThreeD(scene) = builtin("furnace").unwrap() else {
+            panic!()
+        };
+        let bvh = SceneBvh::new(&scene);
+        let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+        let config = SolveConfig {
+            gather: GatherMode::Paths,
+            gather_samples: GatherSamples {
+                direct: 16,
+                indirect: 16,
+            },
+            ..SolveConfig::default()
+        };
+        let trained = Trained::without_networks(&domain, &config);
+        let camera = PinholeCamera {
+            eye: DVec3::new(0.5, 0.5, 0.1),
+            target: DVec3::new(0.5, 0.5, 1.0),
+            up: DVec3::Y,
+            fov_y_degrees: 60.0,
+        };
+        let img = render_pixels(&domain, &trained, &config, &camera, (32, 24, 2)).unwrap();
+        assert_eq!(img.coverage().front, 1.0);
+        let l = img.radiance();
+        assert_eq!(l.radiance.len(), 32 * 24);
+        let mean: f64 =
+            l.radiance.iter().map(|p| f64::from(p[0])).sum::<f64>() / l.radiance.len() as f64;
+        let exact = 2.0 / std::f64::consts::PI;
+        assert!(
+            (mean / exact - 1.0).abs() < 0.02,
+            "mean L {mean} vs {exact}"
+        );
+        // A point on the far wall (z = 1) to the camera's left and up: its pixel and the ray
+        // through that pixel's centre hit the same place.
+        let p = DVec3::new(0.7, 0.6, 1.0);
+        let s = project(&camera, 32, 24, p).expect("in view");
+        let (i, j) = (s.x.floor(), s.y.floor());
+        let dir = camera.ray_direction((i + 0.5) / 32.0, (j + 0.5) / 24.0, 32.0 / 24.0);
+        let hit = bvh
+            .closest_hit(camera.eye, dir, f64::INFINITY, u32::MAX)
+            .unwrap();
+        assert!((hit.point - p).length() < 0.05, "{:?} vs {p:?}", hit.point);
+        // +x is the camera's left when it looks along +z with y up (Mitsuba's look_at).
+        assert!(i < 16.0, "x = 0.7 drawn in column {i} of 32");
+    }
+}

@@ -257,6 +257,24 @@ fn pick(values: &[[f64; 3]], subset: &[usize]) -> Vec<[f64; 3]> {
     subset.iter().map(|&i| values[i]).collect()
 }
 
+/// The scene's triangles for the Mitsuba scripts (`xtask/py/mitsuba_field.py` documents the format):
+/// corners, ρ, and the emitted radiance Ke = E/π.
+pub(super) fn mitsuba_faces(scene: &Scene) -> Result<String> {
+    let mut faces = String::new();
+    for f in &scene.faces {
+        for v in f.v {
+            write!(faces, "{} {} {} ", v.x, v.y, v.z)?;
+        }
+        let (r, e) = (f.rho.0, f.emission.0.map(|x| x / std::f64::consts::PI));
+        writeln!(
+            faces,
+            "{} {} {} {} {} {}",
+            r[0], r[1], r[2], e[0], e[1], e[2]
+        )?;
+    }
+    Ok(faces)
+}
+
 /// Mitsuba 3 through `xtask/py/mitsuba_field.py`: one curve, or the reason it was skipped.
 fn mitsuba(
     scene: &Scene,
@@ -273,18 +291,7 @@ fn mitsuba(
         points.len()
     ));
     std::fs::create_dir_all(&dir)?;
-    let mut faces = String::new();
-    for f in &scene.faces {
-        for v in f.v {
-            write!(faces, "{} {} {} ", v.x, v.y, v.z)?;
-        }
-        let (r, e) = (f.rho.0, f.emission.0.map(|x| x / std::f64::consts::PI));
-        writeln!(
-            faces,
-            "{} {} {} {} {} {}",
-            r[0], r[1], r[2], e[0], e[1], e[2]
-        )?;
-    }
+    let faces = mitsuba_faces(scene)?;
     let mut pts = String::new();
     for p in points {
         writeln!(

@@ -6,6 +6,7 @@ mod fem;
 mod field;
 mod gauss;
 mod gcr;
+mod images;
 mod isgcs;
 mod isgcs_peers;
 mod scenes;
@@ -28,6 +29,7 @@ const GROUPS: &[Group] = &[
     ("fem", fem::run),
     ("compare", compare::run),
     ("field", field::run),
+    ("images", images::run),
 ];
 
 /// Runs every group whose name contains `only` (all when `None`).

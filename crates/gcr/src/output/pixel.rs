@@ -9,6 +9,12 @@
 //! With one sub-sample it is the pixel centre; with N the first N points of the R2 sequence
 //! (`frac(½ + k·(α₁, α₂))`, α the plastic number's reciprocals) over the pixel, a box filter.
 //!
+//! The target error is the pixels': a pixel's error is its sub-samples' over √spp, so each
+//! sub-sample is gathered to √spp times the target (more sub-samples, fewer rays each; the
+//! metrics' `relative_std_error` is the pixels'). Many sub-samples with few rays each resolve
+//! edges (an emitter's outline dominates a Cornell box's squared error); few with many rays are
+//! cheaper where the image is smooth.
+//!
 //! No mesh is needed: the image has the gather's accuracy at every pixel, not the bake's at its
 //! vertices, and costs one gather per sub-sample.
 
@@ -18,6 +24,7 @@ use crate::Trained;
 use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::emitters::Emitters;
+use crate::gather::Gathered;
 use crate::pipeline::{GatherError, GatherStats, radiosity_at_points};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -105,7 +112,19 @@ pub fn render_pixels(
             }
         });
     }
-    let gathered = radiosity_at_points(domain, trained, &Emitters::new(domain), config, &points)?;
+    // A pixel is the mean of its spp independent sub-samples: its error is theirs over √spp, so
+    // the gather's target applies to the pixels (its target for one sub-sample is √spp times
+    // larger, at most 50 %).
+    let spread = f64::from(spp).sqrt();
+    let config = SolveConfig {
+        paths: crate::config::PathSettings {
+            target_error: config.paths.target_error.map(|t| (t * spread).min(0.5)),
+            ..config.paths
+        },
+        ..*config
+    };
+    let gathered = radiosity_at_points(domain, trained, &Emitters::new(domain), &config, &points)?;
+    let pixels = pixel_means(&seen, &gathered, spp as usize);
     Ok(PixelImage {
         width,
         height,
@@ -113,8 +132,32 @@ pub fn render_pixels(
         seen,
         radiosity: gathered.iter().map(|g| g.radiosity).collect(),
         emits,
-        stats: GatherStats::of(&gathered),
+        stats: GatherStats {
+            relative_std_error: crate::relative_std_error(&pixels),
+            ..GatherStats::of(&gathered)
+        },
     })
+}
+
+/// Per pixel, the mean B of its sub-samples and the standard error of that mean
+/// (√(Σ σ²)/spp: independent sub-samples; back faces and background count as exact zeros).
+fn pixel_means(seen: &[Seen], gathered: &[Gathered], spp: usize) -> Vec<Gathered> {
+    seen.chunks(spp)
+        .map(|subs| {
+            let mut px = Gathered::default();
+            for s in subs {
+                if let Seen::Front(i) = s {
+                    for k in 0..3 {
+                        px.radiosity[k] += gathered[*i].radiosity[k] / spp as f64;
+                        px.std_error[k] += gathered[*i].std_error[k].powi(2);
+                    }
+                    px.rays = px.rays.max(gathered[*i].rays);
+                }
+            }
+            px.std_error = px.std_error.map(|v| v.sqrt() / spp as f64);
+            px
+        })
+        .collect()
 }
 
 impl PixelImage {

@@ -1,0 +1,367 @@
+//! The `images` group (issue 18, "done when"): per-pixel images of the 3-D built-ins from their
+//! cameras against Mitsuba 3. Writes `benchmarks-images.md`.
+//!
+//! * **Reference**: a Mitsuba 3 render of the same scene and camera (`xtask/py/mitsuba_image.py`:
+//!   `perspective` sensor with `look_at`, `fov_axis = y`, box filter, `path` integrator, `ldsampler`)
+//!   at `REF_SPP` samples per pixel, cached in `$CARGO_TARGET_DIR/image-refs/` (default `target/`).
+//! * **Error**: relative MSE, Σ (L − L_ref)² / Σ L_ref² over pixels and bands (linear radiance).
+//! * **Solvers**: `gcr solve --image-mode pixel` as the library runs it (the default paths gather to the
+//!   target errors 5, 2, 1 % of the pixels, no networks; `--pixel-samples` 16 and 64, `--gather-rays 4`), and
+//!   Mitsuba at 16–1024 spp. Every
+//!   time includes building the scene (GCR: its BVH; Mitsuba: its meshes and sensor, not the interpreter).
+//!   The reference's own error is estimated from the 1024-spp render's (noise falls as 1/spp in MSE).
+//!
+//! Skipped with a note when `mitsuba` is not importable (the reference needs it).
+//! `IMAGE_SCENES=cornell-box` restricts the scenes.
+
+use super::field::mitsuba_faces;
+use super::gcr::{Curve, plot_curves};
+use crate::Ctx;
+use anyhow::{Context, Result, bail};
+use gcr::output::pixel::render_pixels;
+use gcr::output::raster::PinholeCamera;
+use gcr::{Domain, GatherMode, GatherSamples, PathSettings, SolveConfig, Trained};
+use scene_sampler::{KernelSampler, Scene, SceneBvh};
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The paths gather's first round per sub-sample (`--gather-rays 4`): with many sub-samples per
+/// pixel each needs few rays.
+const PILOT: usize = 4;
+
+/// Samples per pixel of the cached Mitsuba reference.
+const REF_SPP: usize = 4096;
+
+/// Sizes of one run.
+struct Plan {
+    scenes: Vec<String>,
+    size: (u32, u32),
+    targets: &'static [f64],
+    pixel_samples: &'static [u32],
+    spp: &'static [usize],
+    ref_spp: usize,
+}
+
+fn plan(quick: bool) -> Plan {
+    let scenes = std::env::var("IMAGE_SCENES").ok().map(|s| {
+        s.split(',')
+            .map(|x| x.trim().to_string())
+            .collect::<Vec<_>>()
+    });
+    if quick {
+        Plan {
+            scenes: scenes.unwrap_or_else(|| vec!["wall-floor".into()]),
+            size: (32, 32),
+            targets: &[0.05],
+            pixel_samples: &[1],
+            spp: &[16],
+            ref_spp: 256,
+        }
+    } else {
+        Plan {
+            scenes: scenes.unwrap_or_else(|| {
+                ["cornell-box", "two-blockers", "wall-floor", "closed-room"]
+                    .map(String::from)
+                    .to_vec()
+            }),
+            size: (96, 96),
+            targets: &[0.05, 0.02, 0.01],
+            pixel_samples: &[16, 64],
+            spp: &[16, 64, 256, 1024],
+            ref_spp: REF_SPP,
+        }
+    }
+}
+
+/// Σ (a − r)² / Σ r² over pixels and bands.
+fn rel_mse(a: &[[f64; 3]], r: &[[f64; 3]]) -> f64 {
+    let (mut n, mut d) = (0.0, 0.0);
+    for (x, y) in a.iter().zip(r) {
+        for k in 0..3 {
+            n += (x[k] - y[k]).powi(2);
+            d += y[k] * y[k];
+        }
+    }
+    n / d.max(1e-300)
+}
+
+/// One Mitsuba render: samples per pixel, seconds, linear radiance per pixel.
+type Render = (usize, f64, Vec<[f64; 3]>);
+
+/// Mitsuba renders of `scene` from `camera` at each of `spp`, or the reason it was skipped.
+fn mitsuba(
+    scene: &Scene,
+    camera: &PinholeCamera,
+    (w, h): (u32, u32),
+    spp: &[usize],
+    tag: &str,
+) -> Result<std::result::Result<Vec<Render>, String>> {
+    let dir = std::env::temp_dir().join(format!("gcr-images-{}-{tag}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let (ff, cf, of) = (dir.join("faces.txt"), dir.join("camera.txt"), dir.join("l"));
+    std::fs::write(&ff, mitsuba_faces(scene)?)?;
+    let (e, t, u) = (camera.eye, camera.target, camera.up);
+    std::fs::write(
+        &cf,
+        format!(
+            "{} {} {} {} {} {} {} {} {} {} {w} {h}\n",
+            e.x, e.y, e.z, t.x, t.y, t.z, u.x, u.y, u.z, camera.fov_y_degrees
+        ),
+    )?;
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("py/mitsuba_image.py");
+    let out = std::process::Command::new("python3")
+        .arg(&script)
+        .args([&ff, &cf, &of])
+        .args(spp.iter().map(|s| s.to_string()))
+        .output()
+        .context("running python3")?;
+    if out.status.code() == Some(3) {
+        return Ok(Err(String::from_utf8_lossy(&out.stderr).trim().to_string()));
+    }
+    if !out.status.success() {
+        bail!(
+            "mitsuba_image.py failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let mut runs = Vec::new();
+    for line in String::from_utf8_lossy(&out.stdout).lines() {
+        let kv: std::collections::HashMap<&str, &str> = line
+            .split_whitespace()
+            .filter_map(|t| t.split_once('='))
+            .collect();
+        let (Some(s), Some(sc), Some(ld), Some(rd)) = (
+            kv.get("spp"),
+            kv.get("scene"),
+            kv.get("load"),
+            kv.get("render"),
+        ) else {
+            continue;
+        };
+        let spp: usize = s.parse()?;
+        let seconds = sc.parse::<f64>()? + ld.parse::<f64>()? + rd.parse::<f64>()?;
+        let values = read_values(&PathBuf::from(format!("{}.{spp}", of.display())))?;
+        if values.len() != (w * h) as usize {
+            bail!("mitsuba wrote {} pixels for {w}x{h}", values.len());
+        }
+        runs.push((spp, seconds, values));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(Ok(runs))
+}
+
+/// `r g b` per line.
+fn read_values(path: &Path) -> Result<Vec<[f64; 3]>> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+    Ok(text
+        .lines()
+        .map(|l| {
+            let v: Vec<f64> = l
+                .split_whitespace()
+                .map(|x| x.parse().unwrap_or(f64::NAN))
+                .collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect())
+}
+
+/// The cached Mitsuba reference of one scene and size (rendered when missing).
+fn reference(
+    name: &str,
+    scene: &Scene,
+    camera: &PinholeCamera,
+    size: (u32, u32),
+    spp: usize,
+) -> Result<std::result::Result<Vec<[f64; 3]>, String>> {
+    let target = std::env::var("CARGO_TARGET_DIR").unwrap_or_else(|_| "target".into());
+    let dir = Path::new(&target).join("image-refs");
+    std::fs::create_dir_all(&dir)?;
+    let path = dir.join(format!("{name}-{}x{}-{spp}.txt", size.0, size.1));
+    if path.exists() {
+        println!("images: {name} reference from {}", path.display());
+        return Ok(Ok(read_values(&path)?));
+    }
+    let t = Instant::now();
+    let runs = match mitsuba(scene, camera, size, &[spp], &format!("{name}-ref"))? {
+        Ok(r) => r,
+        Err(why) => return Ok(Err(why)),
+    };
+    let values = runs.into_iter().next().context("no reference render")?.2;
+    let text: String = values
+        .iter()
+        .map(|v| format!("{:e} {:e} {:e}\n", v[0], v[1], v[2]))
+        .collect();
+    std::fs::write(&path, text)?;
+    println!(
+        "images: {name} reference at {spp} spp: {:.1} s",
+        t.elapsed().as_secs_f64()
+    );
+    Ok(Ok(values))
+}
+
+/// Every solver on one scene: the curves, and a note.
+fn one(name: &str, p: &Plan) -> Result<std::result::Result<(Vec<Curve>, String), String>> {
+    let scene = scene_sampler::builtin(name)?.into_3d()?;
+    let camera = PinholeCamera::of_scene(&scene);
+    let r = match reference(name, &scene, &camera, p.size, p.ref_spp)? {
+        Ok(r) => r,
+        Err(why) => return Ok(Err(why)),
+    };
+    let label = format!("images: {name}");
+    let mut curves = Vec::new();
+    for &spp in p.pixel_samples {
+        let mut c = Curve::new(&format!("gcr pixel {spp} spp"));
+        for &target in p.targets {
+            let t = Instant::now();
+            let bvh = SceneBvh::new(&scene);
+            let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+            let config = SolveConfig {
+                gather: GatherMode::Paths,
+                gather_samples: GatherSamples {
+                    direct: PILOT,
+                    indirect: PILOT,
+                },
+                paths: PathSettings {
+                    target_error: Some(target),
+                    ..PathSettings::default()
+                },
+                ..SolveConfig::default()
+            };
+            let trained = Trained::without_networks(&domain, &config);
+            let img = render_pixels(
+                &domain,
+                &trained,
+                &config,
+                &camera,
+                (p.size.0, p.size.1, spp),
+            )?;
+            let values: Vec<[f64; 3]> = img
+                .radiance()
+                .radiance
+                .iter()
+                .map(|l| l.map(f64::from))
+                .collect();
+            let seconds = t.elapsed().as_secs_f64();
+            println!(
+                "{label} gcr pixel {spp} spp target {:.0} %: {} rays per point",
+                100.0 * target,
+                img.stats.rays
+            );
+            c.record(&label, img.stats.rays, seconds, rel_mse(&values, &r));
+        }
+        curves.push(c);
+    }
+    let mut note = format!("reference: Mitsuba 3 at {} spp", p.ref_spp);
+    match mitsuba(&scene, &camera, p.size, p.spp, name)? {
+        Ok(runs) => {
+            let mut c = Curve::new("mitsuba 3");
+            for (spp, seconds, values) in &runs {
+                c.record(&label, *spp, *seconds, rel_mse(values, &r));
+            }
+            // The reference's own relative MSE: the last render's, scaled by its spp ratio.
+            if let (Some(last), Some(q)) = (runs.last(), c.points.last()) {
+                write!(
+                    note,
+                    " (its own relative MSE ≈ {:.1e}, from the {}-spp render's)",
+                    q.error * last.0 as f64 / p.ref_spp as f64,
+                    last.0
+                )?;
+            }
+            curves.push(c);
+        }
+        Err(why) => write!(note, "; Mitsuba curve skipped: {why}")?,
+    }
+    Ok(Ok((curves, note)))
+}
+
+/// The other curve's error at `seconds`, interpolated log-log between its runs (None outside).
+fn error_at(c: &Curve, seconds: f64) -> Option<f64> {
+    c.points.windows(2).find_map(|w| {
+        let (a, b) = (w[0], w[1]);
+        (a.seconds <= seconds && seconds <= b.seconds).then(|| {
+            let f = (seconds.ln() - a.seconds.ln()) / (b.seconds.ln() - a.seconds.ln()).max(1e-12);
+            (a.error.ln() + f * (b.error.ln() - a.error.ln())).exp()
+        })
+    })
+}
+
+/// Runs this group and writes `benchmarks-images.md` into `ctx.out`.
+pub fn run(ctx: &Ctx) -> Result<()> {
+    let p = plan(ctx.quick);
+    let figs = ctx.out.join("figures");
+    std::fs::create_dir_all(&figs)?;
+    let mut md = String::new();
+    let mut summary = String::from(
+        "| scene | GCR run | seconds | GCR rel. MSE | Mitsuba rel. MSE at that time | ratio |\n|---|---|---:|---:|---:|---:|\n",
+    );
+    for name in &p.scenes {
+        let (curves, note) = match one(name, &p)? {
+            Ok(x) => x,
+            Err(why) => {
+                println!("images: skipped: {why}");
+                let text =
+                    format!("# Per-pixel images against Mitsuba 3 (issue 18)\n\nSkipped: {why}.\n");
+                std::fs::write(ctx.out.join("benchmarks-images.md"), text)?;
+                return Ok(());
+            }
+        };
+        let png = format!("images-{name}.png");
+        plot_curves(
+            &figs.join(&png),
+            &format!(
+                "{name}, {}x{} pixels: relative MSE against time",
+                p.size.0, p.size.1
+            ),
+            &curves,
+        )?;
+        writeln!(
+            md,
+            "### {name}\n\n| solver | budget | seconds | rel. MSE |\n|---|---:|---:|---:|"
+        )?;
+        for c in &curves {
+            for q in &c.points {
+                writeln!(
+                    md,
+                    "| {} | {} | {:.3} | {:.2e} |",
+                    c.name, q.budget, q.seconds, q.error
+                )?;
+            }
+        }
+        writeln!(md, "\n{note}.\n\n![{name}](figures/{png})\n")?;
+        if let Some(m) = curves.iter().find(|c| c.name == "mitsuba 3") {
+            for c in curves.iter().filter(|c| c.name.starts_with("gcr")) {
+                for q in &c.points {
+                    let other = error_at(m, q.seconds);
+                    writeln!(
+                        summary,
+                        "| {name} | {} ({} rays) | {:.2} | {:.2e} | {} | {} |",
+                        c.name,
+                        q.budget,
+                        q.seconds,
+                        q.error,
+                        other.map_or("outside its runs".into(), |e| format!("{e:.2e}")),
+                        other.map_or("-".into(), |e| format!("{:.2}", q.error / e))
+                    )?;
+                }
+            }
+        }
+    }
+    let out = format!(
+        "# Per-pixel images against Mitsuba 3 (issue 18)\n\n\
+         Generated by `cargo xtask bench --only images{quick}` (release; overwritten by it), {threads} rayon \
+         threads. Each built-in from its own camera at {w}×{h} pixels: `gcr --image-mode pixel` (the default \
+         paths gather run to a target error, no networks) against Mitsuba 3 (`scalar_rgb`, `path`, \
+         `ldsampler`, box filter), both as linear radiance; error = relative MSE against a {ref_spp}-spp \
+         Mitsuba render of the same camera. Ratio < 1: GCR's image is closer to the reference than \
+         Mitsuba's at the same time (log-log interpolated between Mitsuba's runs).\n\n\
+         ## Summary\n\n{summary}\n## Runs\n\n{md}",
+        quick = if ctx.quick { " --quick" } else { "" },
+        threads = rayon::current_num_threads(),
+        w = p.size.0,
+        h = p.size.1,
+        ref_spp = p.ref_spp,
+    );
+    std::fs::write(ctx.out.join("benchmarks-images.md"), out)?;
+    Ok(())
+}

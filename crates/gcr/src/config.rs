@@ -484,7 +484,7 @@ impl Default for GatherSamples {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PathSettings {
     /// Cosine rays per point whose hit gets the path-traced correction L̂ − C (the first ones of
-    /// the gather's `indirect` rays). Default: all of them (`usize::MAX`), which makes the
+    /// the gather's `indirect` rays; with a target error, of each round's). Default: all of them (`usize::MAX`), which makes the
     /// networks' C cancel, so that it is not evaluated: on cornell-box every fraction that reads the
     /// networks measured less accurate per second (docs/estimator-plan.md).
     pub corrections: usize,

@@ -39,7 +39,7 @@
 //! Cost: growth O(steps · z · n); the output layer O(N · z²) per candidate multiplier (dense
 //! matrix products on two threads) plus O(z³) per candidate ridge.
 
-use crate::readout::{Basis, Readout, Standardizer, egop, fit_gcv, nearest_widths};
+use crate::readout::{Basis, Readout, Standardizer, egop, fit_best, fit_gcv, nearest_widths};
 use crate::{GoalFunction, Isgcs, IsgcsError, Params, Termination};
 use ndarray::ArrayView2;
 use rand::{Rng, SeedableRng};
@@ -376,24 +376,26 @@ const METRIC_CELLS: usize = 100;
 /// The input metric (module docs, step 2): pilot Gaussian networks (k-means centres, output
 /// layer chosen by leave-one-out) in the identity metric and then, recursively, in the metric
 /// of the previous pilot's expected gradient outer product; the metric whose pilot has the
-/// lowest leave-one-out score wins (`None`: the identity).
+/// lowest leave-one-out score wins (`None`: the identity), returned with its pilot's width
+/// multiplier (1 when no pilot ran).
 fn learn_metric(
     xs: &[f64],
     ys: &[f64],
     n: usize,
     m: usize,
     params: &RegressorParams,
-) -> Option<Vec<f64>> {
+) -> (Option<Vec<f64>>, f64) {
     let rows = xs.len() / n;
     let sample = rows.min(METRIC_ROWS);
     let z0 = params.max_cells.min(METRIC_CELLS).min(sample / 4);
     if z0 < 4 || n < 2 {
-        return None;
+        return (None, 1.0);
     }
     let (sx, sy) = (&xs[..sample * n], &ys[..sample * m]);
     let yv = ArrayView2::from_shape((sample, m), sy).expect("shape");
-    let mut best: (f64, Option<Vec<f64>>) = (f64::INFINITY, None);
+    let mut best: (f64, Option<Vec<f64>>, f64) = (f64::INFINITY, None, 1.0);
     let mut t: Option<Vec<f64>> = None;
+    let mut start = 1.0;
     for _ in 0..3 {
         let tx = t
             .as_ref()
@@ -406,13 +408,14 @@ fn learn_metric(
             normalized: params.normalized,
             affine: params.affine,
         };
-        let Some((weights, sel)) = fit_gcv(&basis, &tx, yv, None, None, sample) else {
+        let Some((weights, sel)) = fit_gcv(&basis, &tx, yv, None, None, sample, start) else {
             break;
         };
         if sel.score.is_nan() || sel.score >= best.0 {
             break;
         }
-        best = (sel.score, t.clone());
+        start = sel.mult;
+        best = (sel.score, t.clone(), sel.mult);
         // E in the original coordinates: ∇ₓf = Tᵀ ∇f(Tx), so E = Tᵀ E' T.
         let e1 = egop(&basis, sel.mult, &weights, m, &tx);
         let e = match &t {
@@ -438,7 +441,7 @@ fn learn_metric(
         };
         t = Some(next);
     }
-    best.1
+    (best.1, best.2)
 }
 
 /// Smallest scale of a direction in the learned metric, relative to the largest.
@@ -493,10 +496,10 @@ impl Regressor {
         };
         let xs = xstd.apply(&permute(inputs, n));
         let ys = ystd.apply(&permute(targets, m));
-        let transform = if params.metric {
+        let (transform, pilot_mult) = if params.metric {
             learn_metric(&xs, &ys, n, m, params)
         } else {
-            None
+            (None, 1.0)
         };
         let xs = match &transform {
             Some(t) => apply_transform(t, &xs, n),
@@ -562,7 +565,15 @@ impl Regressor {
                 affine: params.affine,
             };
             let yv = ArrayView2::from_shape((sample, m), &ys[..sample * m]).expect("shape");
-            let fitted = fit_gcv(&basis, &xs[..sample * n], yv, Some(1.5), Some(1e-6), sample);
+            let fitted = fit_gcv(
+                &basis,
+                &xs[..sample * n],
+                yv,
+                Some(1.5),
+                Some(1e-6),
+                sample,
+                1.5,
+            );
             tau.clear();
             tau.resize(z, 0.0);
             if let Some((weights, sel)) = fitted {
@@ -614,34 +625,31 @@ impl Regressor {
         };
         let yv = ArrayView2::from_shape((rows, m), &ys).expect("shape checked");
         let select_rows = (3 * basis.cols()).max(1500);
-        // Normalized and plain Gaussians (unless fixed): the lower leave-one-out score wins.
+        // Normalized and plain Gaussians (unless fixed): the lower leave-one-out score on the
+        // selection rows wins; the first walk starts at the metric pilot's multiplier.
         let kinds: &[bool] = if params.choose_basis {
             &[true, false]
         } else {
             std::slice::from_ref(&params.normalized)
         };
-        let mut best: Option<(Basis, Vec<f64>, crate::readout::Selected)> = None;
-        for &normalized in kinds {
-            let basis = Basis {
+        let bases: Vec<Basis> = kinds
+            .iter()
+            .map(|&normalized| Basis {
                 normalized,
                 ..basis.clone()
-            };
-            let fitted = fit_gcv(
-                &basis,
-                &xs,
-                yv,
-                params.width_multiplier,
-                params.ridge,
-                select_rows,
-            );
-            if let Some((w, sel)) = fitted {
-                if best.as_ref().is_none_or(|b| sel.score < b.2.score) {
-                    best = Some((basis, w, sel));
-                }
-            }
-        }
-        let (basis, weights, chosen) =
-            best.ok_or_else(|| RegressorError::Solve("no row activates any cell".into()))?;
+            })
+            .collect();
+        let (index, weights, chosen) = fit_best(
+            &bases,
+            &xs,
+            yv,
+            params.width_multiplier,
+            params.ridge,
+            select_rows,
+            pilot_mult,
+        )
+        .ok_or_else(|| RegressorError::Solve("no row activates any cell".into()))?;
+        let basis = bases[index].clone();
         let readout = Readout {
             basis,
             mult: chosen.mult,

@@ -365,27 +365,25 @@ impl RidgePath {
         let d = self.inverse(relative);
         let rho = relative * self.mean_diag;
         let dof = self.values.iter().map(|&l| l / (l + rho)).sum::<f64>();
-        let (s, z, m) = (self.q.nrows(), self.q.ncols(), self.c.ncols());
+        let (s, m) = (self.q.nrows(), self.c.ncols());
         if s == 0 {
             return (f64::INFINITY, dof);
         }
-        // Fitted values Q (c ∘ d) and leverages (Q ∘ Q) d by matrix products.
-        let mut cd = self.c.clone();
-        for (mut row, dk) in cd.rows_mut().into_iter().zip(&d) {
-            row.iter_mut().for_each(|v| *v *= dk);
-        }
-        let pred = self.q.dot(&cd);
-        let h = self
-            .q2
-            .dot(&ndarray::ArrayView2::from_shape((z, 1), &d).expect("z × 1"));
+        // Fitted values Q (c ∘ d) and leverages (Q ∘ Q) d by matrix-vector products (a
+        // matrix product would repack Q for every candidate).
+        let d = ndarray::Array1::from(d);
+        let h = self.q2.dot(&d);
+        let pred: Vec<ndarray::Array1<f64>> = (0..m)
+            .map(|j| self.q.dot(&(&self.c.column(j) * &d)))
+            .collect();
         let mut press = 0.0;
         for i in 0..s {
-            let hi = h[[i, 0]];
+            let hi = h[i];
             if hi.is_nan() || hi >= 1.0 - 1e-9 {
                 return (f64::INFINITY, dof);
             }
             for j in 0..m {
-                let e = (self.y[[i, j]] - pred[[i, j]]) / (1.0 - hi);
+                let e = (self.y[[i, j]] - pred[j][i]) / (1.0 - hi);
                 press += e * e;
             }
         }

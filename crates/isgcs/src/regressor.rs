@@ -368,6 +368,48 @@ fn metric_root(e: &[f64], n: usize, floor: f64, xs: &[f64]) -> Option<Vec<f64>> 
     Some(t)
 }
 
+/// One growth round's insertions (module docs, step 3): up to `add` ISGCS insertions in
+/// decreasing order of the measured resources `tau` (one per cell), each cell split at most
+/// once. The resources were measured before the round's first split, so a second split of the
+/// same cell would act on an error it may no longer have; repeated splits of one cell gave
+/// clusters of cells 30× narrower than their neighbours, whose few rows have leverages near 1
+/// and spoil the leave-one-out choice of the output layer. When no cell saw any residual, one
+/// insertion by the plain ISGCS rule. Returns the split cells in order; `tau` ends with one
+/// (zero) entry per new cell.
+fn insert_by_resource(
+    net: &mut Isgcs,
+    tau: &mut Vec<f64>,
+    add: usize,
+) -> Result<Vec<usize>, IsgcsError> {
+    let mut split = Vec::with_capacity(add);
+    for _ in 0..add {
+        let q = (0..tau.len())
+            .max_by(|&a, &b| tau[a].total_cmp(&tau[b]).then(b.cmp(&a)))
+            .unwrap_or(0);
+        if tau.get(q).is_none_or(|&t| t <= 0.0) {
+            break;
+        }
+        // `insert` splits the highest-resource cell: q.
+        net.set_resources(tau)?;
+        net.insert();
+        split.push(q);
+        tau[q] = 0.0;
+        tau.push(0.0);
+    }
+    if split.is_empty() {
+        net.set_resources(tau)?;
+        net.insert();
+        tau.push(0.0);
+    }
+    Ok(split)
+}
+
+/// The inverse of an invertible n × n row-major matrix (`None` when singular).
+fn inverse(t: &[f64], n: usize) -> Option<Vec<f64>> {
+    let inv = nalgebra::DMatrix::from_row_slice(n, n, t).try_inverse()?;
+    Some((0..n * n).map(|i| inv[(i / n, i % n)]).collect())
+}
+
 /// Rows of the metric search.
 const METRIC_ROWS: usize = 2000;
 /// Centres of the metric search's pilot networks.
@@ -501,9 +543,10 @@ impl Regressor {
         } else {
             (None, 1.0)
         };
-        let xs = match &transform {
-            Some(t) => apply_transform(t, &xs, n),
-            None => xs,
+        // The standardized rows are kept for the identity-metric readout candidate.
+        let (xs, xs_plain) = match &transform {
+            Some(t) => (apply_transform(t, &xs, n), xs),
+            None => (xs, Vec::new()),
         };
 
         let (k, simplex) = topology_from_data(&xs, n, params.topology_dim);
@@ -603,11 +646,8 @@ impl Regressor {
                     tau[net.bmu(x, None)] += e;
                 }
             }
-            net.set_resources(&tau)?;
             let add = (z * 3 / 10).max(1).min(params.max_cells - z);
-            for _ in 0..add {
-                net.insert();
-            }
+            insert_by_resource(&mut net, &mut tau, add)?;
         }
         let growth_steps = net.steps();
         let settle_steps = (growth_steps as f64 * params.settle).round() as u64;
@@ -649,7 +689,33 @@ impl Regressor {
             pilot_mult,
         )
         .ok_or_else(|| RegressorError::Solve("no row activates any cell".into()))?;
-        let basis = bases[index].clone();
+        let mut basis = bases[index].clone();
+        let (mut weights, mut chosen, mut transform) = (weights, chosen, transform);
+        // The metric was chosen by small pilots; at the model's size the plain standardized
+        // metric can be better (more cells resolve the weak directions too). The same centres,
+        // mapped back (x = T⁻¹ c), get the readout in the standardized metric, and the lower
+        // leave-one-out score on the same selection rows wins.
+        if let Some(t_inv) = transform.as_ref().and_then(|t| inverse(t, n)) {
+            let centres = apply_transform(&t_inv, &basis.centres, n);
+            let plain = Basis {
+                base: nearest_widths(&centres, n, n + 1),
+                centres,
+                ..basis.clone()
+            };
+            if let Some((_, w, sel)) = fit_best(
+                std::slice::from_ref(&plain),
+                &xs_plain,
+                yv,
+                params.width_multiplier,
+                params.ridge,
+                select_rows,
+                chosen.mult,
+            ) {
+                if sel.score < chosen.score {
+                    (basis, weights, chosen, transform) = (plain, w, sel, None);
+                }
+            }
+        }
         let readout = Readout {
             basis,
             mult: chosen.mult,
@@ -729,5 +795,83 @@ impl Regressor {
             .iter()
             .map(|b| b * self.readout.mult)
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A k = 2 network in the plane with `cells` cells (grown by plain ISGCS insertions).
+    fn sheet(cells: usize) -> Isgcs {
+        let simplex = vec![vec![0.0, 0.0], vec![1.0, 0.0], vec![0.0, 1.0]];
+        let mut net = Isgcs::new(Params::accurate(), 2, 1, 2, simplex).unwrap();
+        while net.len() < cells {
+            let tau: Vec<f64> = (0..net.len()).map(|i| 1.0 + i as f64).collect();
+            net.set_resources(&tau).unwrap();
+            net.insert();
+        }
+        net
+    }
+
+    #[test]
+    fn a_round_splits_each_cell_at_most_once_in_resource_order() {
+        // One cell with a resource far above the others: the plain ISGCS rule (resource shared
+        // 2/3 : 1/3 per split) would split it several times in one round; a round splits it
+        // once, then the next cells by resource.
+        let mut net = sheet(8);
+        let z = net.len();
+        let mut tau = vec![1.0; z];
+        tau[3] = 1000.0;
+        tau[5] = 2.0;
+        tau[6] = 3.0;
+        let split = insert_by_resource(&mut net, &mut tau, 3).unwrap();
+        assert_eq!(split, vec![3, 6, 5]);
+        assert_eq!(net.len(), z + 3);
+        assert_eq!(tau.len(), z + 3);
+        // Each new cell is a neighbour of the cell that was split for it.
+        for (new, &q) in (z..z + 3).zip(&split) {
+            assert!(
+                net.neighbours(new).contains(&(q as u32)),
+                "{new} not next to {q}"
+            );
+        }
+        // The reference: the plain rule on the same resources splits cell 3 again.
+        let mut plain = sheet(8);
+        let mut tau = vec![1.0; z];
+        tau[3] = 1000.0;
+        plain.set_resources(&tau).unwrap();
+        for _ in 0..3 {
+            plain.insert();
+        }
+        let again = (z..z + 3)
+            .filter(|&c| plain.neighbours(c).contains(&3))
+            .count();
+        assert!(again >= 2, "the plain rule split cell 3 only {again} times");
+    }
+
+    #[test]
+    fn a_round_without_residuals_still_grows() {
+        let mut net = sheet(5);
+        let mut tau = vec![0.0; 5];
+        assert!(
+            insert_by_resource(&mut net, &mut tau, 2)
+                .unwrap()
+                .is_empty()
+        );
+        assert_eq!((net.len(), tau.len()), (6, 6));
+    }
+
+    #[test]
+    fn inverse_inverts() {
+        let t = [2.0, 1.0, 0.0, 1.0, 3.0, 0.5, 0.0, 0.5, 1.0];
+        let inv = inverse(&t, 3).unwrap();
+        for a in 0..3 {
+            for b in 0..3 {
+                let v: f64 = (0..3).map(|j| t[a * 3 + j] * inv[j * 3 + b]).sum();
+                assert!((v - f64::from(u8::from(a == b))).abs() < 1e-12);
+            }
+        }
+        assert!(inverse(&[1.0, 2.0, 2.0, 4.0], 2).is_none());
     }
 }

@@ -311,39 +311,28 @@ pub(crate) fn fit_gcv(
     select_rows: usize,
     start: f64,
 ) -> Option<(Vec<f64>, Selected)> {
-    fit_best(
-        std::slice::from_ref(basis),
-        xs,
-        ys,
-        mult,
-        ridge,
-        select_rows,
-        start,
-    )
-    .map(|(_, w, s)| (w, s))
+    fit_best(&[(basis, xs)], ys, mult, ridge, select_rows, start).map(|(_, w, s)| (w, s))
 }
 
-/// [`fit_gcv`] for several candidate bases on the same centres: each gets its multiplier
-/// walk (the next one starting at the previous one's best) on the selection rows, the basis
-/// with the lowest selection score on those rows is refitted on every row. Returns its index
-/// in `bases`, weights and choice.
+/// [`fit_gcv`] for several candidate bases, each with its own copy of the rows (`xs` in
+/// that basis' coordinates; the targets are shared): every candidate gets its multiplier
+/// walk from `start` on the first `select_rows` rows (the walks in parallel), the one with
+/// the lowest selection score on those rows (the lowest index on ties) is refitted on every
+/// row. Returns its index in `candidates`, weights and choice.
 pub(crate) fn fit_best(
-    bases: &[Basis],
-    xs: &[f64],
+    candidates: &[(&Basis, &[f64])],
     ys: ArrayView2<'_, f64>,
     mult: Option<f64>,
     ridge: Option<f64>,
     select_rows: usize,
-    mut start: f64,
+    start: f64,
 ) -> Option<(usize, Vec<f64>, Selected)> {
     type Fit = (f64, Array2<f64>, f64, f64);
-    let n = bases.first()?.n;
     let rows = ys.nrows();
     let sel = select_rows.min(rows).max(1);
-    let (sx, sy) = (&xs[..sel * n], ys.slice_axis(Axis(0), Slice::from(..sel)));
-    // Per basis: the chosen multiplier and its fit on the selection rows.
-    let mut best: Option<(usize, f64, Fit)> = None;
-    for (index, basis) in bases.iter().enumerate() {
+    let sy = ys.slice_axis(Axis(0), Slice::from(..sel));
+    let walk = |&(basis, xs): &(&Basis, &[f64])| -> Option<(f64, Fit)> {
+        let sx = &xs[..sel * basis.n];
         let mut kept: Option<(f64, Fit)> = None;
         let mut score = |mult: f64| {
             let Some(fit) = gcv_at(basis, mult, ridge, sx, sy, sel) else {
@@ -382,20 +371,20 @@ pub(crate) fn fit_best(
                 }
             }
         }
-        let Some((m, fit)) = kept else {
-            continue;
-        };
-        start = m;
-        if best.as_ref().is_none_or(|b| fit.0 < b.2.0) {
-            best = Some((index, m, fit));
-        }
-    }
-    let (index, mult, fit) = best?;
+        kept
+    };
+    let walks: Vec<Option<(f64, Fit)>> = candidates.par_iter().map(walk).collect();
+    let (index, (mult, fit)) = walks
+        .into_iter()
+        .enumerate()
+        .filter_map(|(i, w)| w.map(|w| (i, w)))
+        .min_by(|a, b| a.1.1.0.total_cmp(&b.1.1.0).then(a.0.cmp(&b.0)))?;
     // Refit on every row unless the selection rows were all rows.
+    let (basis, xs) = candidates[index];
     let (score, weights, relative, dof) = if sel == rows {
         fit
     } else {
-        gcv_at(&bases[index], mult, ridge, xs, ys, sel)?
+        gcv_at(basis, mult, ridge, xs, ys, sel)?
     };
     Some((
         index,
@@ -557,4 +546,43 @@ pub(crate) fn nearest_widths(centres: &[f64], n: usize, q: usize) -> Vec<f64> {
             if w > 0.0 { w } else { 1e-6 }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fit_best_keeps_the_candidate_with_the_lower_leave_one_out_score() {
+        // y = sin 3x on 400 rows in [-1, 1], 20 centres spread over the rows. Candidate 0 sees
+        // the rows stretched by 5 (most rows far from every centre), candidate 1 the rows
+        // themselves: candidate 1 must win, and its weights must reproduce the function.
+        let rows = 400;
+        let xs: Vec<f64> = (0..rows)
+            .map(|i| -1.0 + 2.0 * ((i as f64 * 0.618_034) % 1.0))
+            .collect();
+        let ys: Vec<f64> = xs.iter().map(|x| (3.0 * x).sin()).collect();
+        let stretched: Vec<f64> = xs.iter().map(|x| 5.0 * x).collect();
+        let centres: Vec<f64> = (0..20).map(|i| -1.0 + 2.0 * i as f64 / 19.0).collect();
+        let basis = Basis {
+            n: 1,
+            base: nearest_widths(&centres, 1, 2),
+            centres,
+            normalized: false,
+            affine: false,
+        };
+        let yv = ArrayView2::from_shape((rows, 1), &ys).unwrap();
+        let candidates = [(&basis, &stretched[..]), (&basis, &xs[..])];
+        let (index, weights, chosen) = fit_best(&candidates, yv, None, None, 200, 1.0).unwrap();
+        assert_eq!(index, 1, "chose the stretched rows ({chosen:?})");
+        let mut row = vec![0.0; basis.cols()];
+        for x in [-0.9, -0.3, 0.2, 0.7] {
+            basis.row(chosen.mult, &[x], &mut row);
+            let f: f64 = row.iter().zip(&weights).map(|(a, w)| a * w).sum();
+            assert!((f - (3.0 * x).sin()).abs() < 1e-3, "f({x}) = {f}");
+        }
+        // Equal candidates: the first one.
+        let same = [(&basis, &xs[..]), (&basis, &xs[..])];
+        assert_eq!(fit_best(&same, yv, None, None, 200, 1.0).unwrap().0, 0);
+    }
 }

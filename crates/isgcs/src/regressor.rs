@@ -20,24 +20,25 @@
 //!    ([`Isgcs::relax`]: every cell to the mean of the rows it wins) on a sample of 4z + 200 rows;
 //!    a least-squares output fit on that sample; each cell's resource τ^SL becomes the summed
 //!    squared residual of the rows it wins ([`Isgcs::set_resources`]); then 0.3 z insertions
-//!    ([`Isgcs::insert`]: the longest edge of the highest-resource cell is split, the resource
-//!    shared 2/3 : 1/3). This is the supervised resource of sec. 2.4 measured on the least-
-//!    squares network instead of the slowly converging delta rule: with λ-step online
-//!    resources and few steps per insertion the network kept splitting the same high-error
-//!    region (cells 100× narrower there, rms/σ 1.25 on Franke at 300 cells). After growth,
-//!    ⅓ as many settling steps and five batch USL steps on all rows.
+//!    ([`Isgcs::insert`]: the longest edge of the highest-resource cell is split), in
+//!    decreasing order of the measured resource and each cell split at most once per round
+//!    (the resources are measured once per round). This is the supervised resource of
+//!    sec. 2.4 measured on the least-squares network instead of the slowly converging delta
+//!    rule. After growth, ⅓ as many settling steps and five batch USL steps on all rows.
 //! 4. **Output layer**: the network's centres with per-cell widths d_i = mean distance to the
-//!    n + 1 nearest other centres, times a multiplier μ, normalized Gaussians; the weights by
-//!    ridge least squares on every row. μ (a walk by √2 from 1, on at most max(3z, 1500)
-//!    rows) and the relative ridge (10⁻¹²…1, decades refined to half decades) minimise the
-//!    leave-one-out error estimate: the exact closed-form leave-one-out residuals
-//!    e_i/(1 − h_ii) of 256 random rows, but never below the GCV estimate N·RSS/(N − tr H)²
-//!    (tr H by 24 Rademacher probes). GCV alone (mean leverage) missed single rows that a
-//!    cluster of narrow cells interpolates (the jump function: rms/σ 0.30 → 0.12). With
-//!    `choose_basis` (default) this runs for normalized and plain Gaussians; the lower score wins.
+//!    n + 1 nearest other centres, times a multiplier μ; the weights by ridge least squares on
+//!    every row. Candidates (with `choose_basis`, the default): normalized and plain Gaussians,
+//!    each in the learned metric and, when a metric was learned, in the standardized metric at
+//!    the same centres mapped back (x = T⁻¹c; the pilots that chose T had fewer centres).
+//!    For each candidate μ walks by √2 from the pilot's multiplier on the first max(3z, 1500)
+//!    rows (candidates in parallel); for each μ the relative ridge (10⁻¹²…1, decades refined
+//!    to quarter decades) minimises the exact closed-form leave-one-out error
+//!    mean(e_i/(1 − h_ii))² over those rows, every ridge from one symmetric eigendecomposition
+//!    of AᵀA (`linalg::RidgePath`). The candidate with the lowest score is refitted on all rows
+//!    (its ridge re-chosen by the leave-one-out error of the same rows on the full fit).
 //!
-//! Cost: growth O(steps · z · n); the output layer O(N · z²) per candidate multiplier (dense
-//! matrix products on two threads) plus O(z³) per candidate ridge.
+//! Cost: growth O(steps · z · n); the output layer O(S · z² + z³) per candidate multiplier
+//! (S selection rows; dense matrix products on two threads) plus O(S · z) per candidate ridge.
 
 use crate::readout::{Basis, Readout, Standardizer, egop, fit_best, fit_gcv, nearest_widths};
 use crate::{GoalFunction, Isgcs, IsgcsError, Params, Termination};
@@ -99,9 +100,9 @@ pub struct RegressorParams {
     pub lambda: Option<usize>,
     /// Settling steps after growth, as a multiple of the growth steps (default ⅓).
     pub settle: f64,
-    /// Relative ridge (× mean diagonal of AᵀA); `None`: chosen by GCV.
+    /// Relative ridge (× mean diagonal of AᵀA); `None`: chosen by leave-one-out.
     pub ridge: Option<f64>,
-    /// Width multiplier μ on the nearest-centre widths; `None`: chosen by GCV.
+    /// Width multiplier μ on the nearest-centre widths; `None`: chosen by leave-one-out.
     pub width_multiplier: Option<f64>,
     /// Normalized Gaussians (a partition of unity; bounded extrapolation). Default true.
     pub normalized: bool,
@@ -112,7 +113,8 @@ pub struct RegressorParams {
     /// Default true.
     #[serde(default = "yes")]
     pub choose_basis: bool,
-    /// Learn an input metric from the data (module docs, step 1b). Default true.
+    /// Learn an input metric from the data (module docs, step 1b); the output layer is then
+    /// also tried in the standardized metric at the same centres (step 4). Default true.
     #[serde(default = "yes")]
     pub metric: bool,
 }
@@ -665,23 +667,44 @@ impl Regressor {
         };
         let yv = ArrayView2::from_shape((rows, m), &ys).expect("shape checked");
         let select_rows = (3 * basis.cols()).max(1500);
-        // Normalized and plain Gaussians (unless fixed): the lower leave-one-out score on the
-        // selection rows wins; the first walk starts at the metric pilot's multiplier.
+        // Normalized and plain Gaussians (unless fixed), in the learned and the standardized
+        // metric: the lowest leave-one-out score on the selection rows wins; the walks start
+        // at the metric pilot's multiplier.
         let kinds: &[bool] = if params.choose_basis {
             &[true, false]
         } else {
             std::slice::from_ref(&params.normalized)
         };
-        let bases: Vec<Basis> = kinds
-            .iter()
-            .map(|&normalized| Basis {
-                normalized,
+        // The metric was chosen by small pilots; at the model's size the standardized metric
+        // can be better (more cells resolve the weak directions too): the same centres, mapped
+        // back (x = T⁻¹ c), are candidates in the standardized metric as well.
+        let t_inv = transform.as_ref().and_then(|t| inverse(t, n));
+        let back = t_inv.as_ref().map(|t_inv| {
+            let centres = apply_transform(t_inv, &basis.centres, n);
+            Basis {
+                base: nearest_widths(&centres, n, n + 1),
+                centres,
                 ..basis.clone()
-            })
+            }
+        });
+        let mut bases: Vec<(Basis, bool)> = Vec::new();
+        for (geometry, in_metric) in [(Some(&basis), true), (back.as_ref(), false)] {
+            if let Some(g) = geometry {
+                for &normalized in kinds {
+                    let b = Basis {
+                        normalized,
+                        ..g.clone()
+                    };
+                    bases.push((b, in_metric));
+                }
+            }
+        }
+        let candidates: Vec<(&Basis, &[f64])> = bases
+            .iter()
+            .map(|(b, in_metric)| (b, if *in_metric { &xs[..] } else { &xs_plain[..] }))
             .collect();
         let (index, weights, chosen) = fit_best(
-            &bases,
-            &xs,
+            &candidates,
             yv,
             params.width_multiplier,
             params.ridge,
@@ -689,33 +712,8 @@ impl Regressor {
             pilot_mult,
         )
         .ok_or_else(|| RegressorError::Solve("no row activates any cell".into()))?;
-        let mut basis = bases[index].clone();
-        let (mut weights, mut chosen, mut transform) = (weights, chosen, transform);
-        // The metric was chosen by small pilots; at the model's size the plain standardized
-        // metric can be better (more cells resolve the weak directions too). The same centres,
-        // mapped back (x = T⁻¹ c), get the readout in the standardized metric, and the lower
-        // leave-one-out score on the same selection rows wins.
-        if let Some(t_inv) = transform.as_ref().and_then(|t| inverse(t, n)) {
-            let centres = apply_transform(&t_inv, &basis.centres, n);
-            let plain = Basis {
-                base: nearest_widths(&centres, n, n + 1),
-                centres,
-                ..basis.clone()
-            };
-            if let Some((_, w, sel)) = fit_best(
-                std::slice::from_ref(&plain),
-                &xs_plain,
-                yv,
-                params.width_multiplier,
-                params.ridge,
-                select_rows,
-                chosen.mult,
-            ) {
-                if sel.score < chosen.score {
-                    (basis, weights, chosen, transform) = (plain, w, sel, None);
-                }
-            }
-        }
+        let (basis, in_metric) = bases.swap_remove(index);
+        let transform = if in_metric { transform } else { None };
         let readout = Readout {
             basis,
             mult: chosen.mult,

@@ -1,5 +1,5 @@
 //! The least-squares output layer of a Gaussian network with fixed centres, chosen by
-//! generalized cross-validation (the default regressor) or on a holdout (the k-means RBF
+//! exact leave-one-out (the default regressor) or on a holdout (the k-means RBF
 //! reference), on standardized inputs and outputs.
 
 use crate::linalg::{RidgePath, gcv, gram_add, rademacher, ridge_fit};

@@ -237,8 +237,6 @@ pub(crate) struct RidgeFit {
     pub rss: f64,
     /// tr(A (G + ρI)⁻¹ Aᵀ) (estimated by Rademacher probes).
     pub dof: f64,
-    /// The Cholesky factor L of G + ρI (lower triangle).
-    pub factor: Array2<f64>,
 }
 
 /// Solves (G + ρI) W = B for ρ = `relative` × mean diagonal of G, with the residual sum of
@@ -276,7 +274,6 @@ pub(crate) fn ridge_fit(
         weights: w,
         rss,
         dof,
-        factor: l,
     })
 }
 
@@ -297,33 +294,136 @@ pub(crate) fn gcv(rows: usize, fit: &RidgeFit) -> f64 {
     }
 }
 
-/// The relative ridge in 10⁻¹²…10⁰ minimising `score` (a coarse search over even decades,
-/// then refined by decades and half decades around the best), with its fit.
-pub(crate) fn search_ridge(
-    mut evaluate: impl FnMut(f64) -> Option<(f64, RidgeFit)>,
-) -> Option<(f64, RidgeFit)> {
-    let mut best: Option<(f64, RidgeFit)> = None;
-    let mut tried: Vec<f64> = Vec::new();
-    let mut try_one = |e: f64, best: &mut Option<(f64, RidgeFit)>| {
-        if !(-12.0..=0.0).contains(&e) || tried.iter().any(|t| (t - e).abs() < 1e-9) {
-            return;
+/// Every ridge solution of one least-squares problem at once, from one symmetric
+/// eigendecomposition G = AᵀA = V Λ Vᵀ: for ρ the weights are W(ρ) = V (Λ + ρI)⁻¹ VᵀB, the
+/// effective degrees of freedom tr H = Σ λ_k/(λ_k + ρ), and for the rows kept for
+/// leave-one-out (their design rows a_i, Q = A_S V) the fitted values a_iᵀW(ρ) =
+/// Σ_k q_ik c_k/(λ_k + ρ) (c = VᵀB) and the leverages h_ii = Σ_k q_ik²/(λ_k + ρ). One
+/// candidate ρ then costs O(S z (m + 1)) instead of an O(z³) factorisation.
+pub(crate) struct RidgePath {
+    /// λ_k (clamped at 0: rounding can make them slightly negative).
+    values: Vec<f64>,
+    /// V, z × z.
+    vectors: Array2<f64>,
+    /// VᵀB, z × m.
+    c: Array2<f64>,
+    /// Q = A_S V, S × z.
+    q: Array2<f64>,
+    /// Q ∘ Q (elementwise square).
+    q2: Array2<f64>,
+    /// The targets of the S rows, S × m.
+    y: Array2<f64>,
+    /// tr G / z (the unit of the relative ridge).
+    mean_diag: f64,
+}
+
+impl RidgePath {
+    /// From G (z × z, symmetric), B = AᵀY (z × m), and the design rows `a_loo` (S × z) and
+    /// targets `y_loo` (S × m) of the rows whose leave-one-out residuals are scored. `None`
+    /// when G has no positive diagonal.
+    pub fn new(
+        g: &Array2<f64>,
+        b: &Array2<f64>,
+        a_loo: ArrayView2<'_, f64>,
+        y_loo: ArrayView2<'_, f64>,
+    ) -> Option<Self> {
+        let z = g.nrows();
+        let mean_diag = g.diag().sum() / z.max(1) as f64;
+        if !(mean_diag > 0.0 && mean_diag.is_finite()) {
+            return None;
         }
-        tried.push(e);
-        if let Some((score, fit)) = evaluate(10f64.powf(e)) {
-            if score.is_finite() && best.as_ref().is_none_or(|(s, _)| score < *s) {
-                *best = Some((score, fit));
+        let gm = nalgebra::DMatrix::from_fn(z, z, |i, j| g[[i, j]]);
+        let eig = nalgebra::SymmetricEigen::new(gm);
+        let values: Vec<f64> = eig.eigenvalues.iter().map(|&l| l.max(0.0)).collect();
+        if values.iter().any(|l| !l.is_finite()) {
+            return None;
+        }
+        let vectors = Array2::from_shape_fn((z, z), |(i, k)| eig.eigenvectors[(i, k)]);
+        let c = vectors.t().dot(b);
+        let q = a_loo.dot(&vectors);
+        let q2 = q.mapv(|v| v * v);
+        Some(Self {
+            values,
+            vectors,
+            c,
+            q,
+            q2,
+            y: y_loo.to_owned(),
+            mean_diag,
+        })
+    }
+
+    /// 1/(λ_k + ρ) for ρ = `relative` × mean diagonal of G.
+    fn inverse(&self, relative: f64) -> Vec<f64> {
+        let rho = relative * self.mean_diag;
+        self.values.iter().map(|&l| 1.0 / (l + rho)).collect()
+    }
+
+    /// The mean squared exact leave-one-out residual e_i/(1 − h_ii) over the S rows (∞ when a
+    /// leverage reaches 1) and tr H, at the relative ridge `relative`.
+    pub fn loo(&self, relative: f64) -> (f64, f64) {
+        let d = self.inverse(relative);
+        let rho = relative * self.mean_diag;
+        let dof = self.values.iter().map(|&l| l / (l + rho)).sum::<f64>();
+        let (s, m) = (self.q.nrows(), self.c.ncols());
+        if s == 0 {
+            return (f64::INFINITY, dof);
+        }
+        // Fitted values Q (c ∘ d) and leverages (Q ∘ Q) d by matrix-vector products (a
+        // matrix product would repack Q for every candidate).
+        let d = ndarray::Array1::from(d);
+        let h = self.q2.dot(&d);
+        let pred: Vec<ndarray::Array1<f64>> = (0..m)
+            .map(|j| self.q.dot(&(&self.c.column(j) * &d)))
+            .collect();
+        let mut press = 0.0;
+        for i in 0..s {
+            let hi = h[i];
+            if hi.is_nan() || hi >= 1.0 - 1e-9 {
+                return (f64::INFINITY, dof);
+            }
+            for j in 0..m {
+                let e = (self.y[[i, j]] - pred[j][i]) / (1.0 - hi);
+                press += e * e;
             }
         }
-    };
-    for e in [-12.0, -10.0, -8.0, -6.0, -4.0, -2.0, 0.0] {
-        try_one(e, &mut best);
+        (press / s as f64, dof)
     }
-    for step in [1.0, 0.5] {
-        let centre = best.as_ref()?.1.relative.log10();
-        try_one(centre - step, &mut best);
-        try_one(centre + step, &mut best);
+
+    /// W(ρ) = V (Λ + ρI)⁻¹ VᵀB (z × m) at the relative ridge `relative`.
+    pub fn weights(&self, relative: f64) -> Array2<f64> {
+        let d = self.inverse(relative);
+        let mut cd = self.c.clone();
+        for (mut row, dk) in cd.rows_mut().into_iter().zip(&d) {
+            row.iter_mut().for_each(|v| *v *= dk);
+        }
+        self.vectors.dot(&cd)
     }
-    best
+
+    /// The relative ridge in 10⁻¹²…10⁰ with the lowest leave-one-out score (decades, then
+    /// refined by half and quarter decades around the best), with that score and tr H.
+    pub fn best_ridge(&self) -> Option<(f64, f64, f64)> {
+        let mut best: Option<(f64, f64, f64)> = None;
+        let try_one = |e: f64, best: &mut Option<(f64, f64, f64)>| {
+            if !(-12.0..=0.0).contains(&e) {
+                return;
+            }
+            let r = 10f64.powf(e);
+            let (score, dof) = self.loo(r);
+            if score.is_finite() && best.is_none_or(|(s, _, _)| score < s) {
+                *best = Some((score, r, dof));
+            }
+        };
+        for e in -12..=0 {
+            try_one(e as f64, &mut best);
+        }
+        for step in [0.5, 0.25] {
+            let centre = best?.1.log10();
+            try_one(centre - step, &mut best);
+            try_one(centre + step, &mut best);
+        }
+        best.map(|(s, r, d)| (r, s, d))
+    }
 }
 
 #[cfg(test)]
@@ -382,5 +482,63 @@ mod tests {
             "{b:?}"
         );
         assert!(ridge_solve(&[0.0; 4], 2, &mut b, 1, 1e-9).is_none());
+    }
+
+    #[test]
+    fn ridge_path_matches_cholesky_and_brute_force_leave_one_out() {
+        // A random 40 × 12 design, two outputs: the path's weights equal the Cholesky
+        // solution, its tr H the exact trace, its leave-one-out residuals those of refits
+        // without each row.
+        let (rows, z) = (40, 12);
+        let a =
+            rademacher(rows, z, 7).mapv(|v| v * 0.5) + &rademacher(rows, z, 8).mapv(|v| v * 0.3);
+        let y = rademacher(rows, 2, 9);
+        let g = a.t().dot(&a);
+        let b = a.t().dot(&y);
+        let path = RidgePath::new(&g, &b, a.view(), y.view()).unwrap();
+        let mean_diag = g.diag().sum() / z as f64;
+        for relative in [1e-6, 1e-2, 1.0] {
+            let fit = ridge_fit(&g, &b, 0.0, relative, &Array2::zeros((z, 0))).unwrap();
+            let w = path.weights(relative);
+            let err = (&w - &fit.weights)
+                .mapv(f64::abs)
+                .fold(0.0f64, |m, &v| m.max(v));
+            assert!(err < 1e-8, "weights differ by {err}");
+            let rho = relative * mean_diag;
+            let mut gi = g.clone();
+            for i in 0..z {
+                gi[[i, i]] += rho;
+            }
+            // tr H = tr(G (G + ρI)⁻¹) = Σ_i (G (G + ρI)⁻¹)_ii, by solving with G's columns.
+            let mut x = g.clone();
+            let mut l = gi.clone();
+            assert!(cholesky_in_place(&mut l, 0.0));
+            forward(&l, &mut x);
+            backward(&l, &mut x);
+            let trace: f64 = (0..z).map(|i| x[[i, i]]).sum();
+            let (press, dof) = path.loo(relative);
+            assert!((dof - trace).abs() < 1e-8, "{dof} vs {trace}");
+            let mut brute = 0.0;
+            for out in 0..rows {
+                let keep: Vec<usize> = (0..rows).filter(|&r| r != out).collect();
+                let ak = a.select(Axis(0), &keep);
+                let yk = y.select(Axis(0), &keep);
+                let mut gk = ak.t().dot(&ak);
+                for i in 0..z {
+                    gk[[i, i]] += rho;
+                }
+                let mut wk = ak.t().dot(&yk);
+                assert!(cholesky_in_place(&mut gk, 0.0));
+                forward(&gk, &mut wk);
+                backward(&gk, &mut wk);
+                let pred = a.row(out).dot(&wk);
+                brute += (&y.row(out) - &pred).mapv(|e| e * e).sum();
+            }
+            brute /= rows as f64;
+            assert!(
+                (press - brute).abs() < 1e-8 * brute.max(1.0),
+                "{press} vs {brute}"
+            );
+        }
     }
 }

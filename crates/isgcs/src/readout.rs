@@ -1,17 +1,14 @@
 //! The least-squares output layer of a Gaussian network with fixed centres, chosen by
-//! generalized cross-validation (the default regressor) or on a holdout (the k-means RBF
+//! exact leave-one-out (the default regressor) or on a holdout (the k-means RBF
 //! reference), on standardized inputs and outputs.
 
-use crate::linalg::{RidgeFit, forward, gcv, gram_add, rademacher, ridge_fit, search_ridge};
+use crate::linalg::{RidgePath, gcv, gram_add, rademacher, ridge_fit};
 use ndarray::{Array2, ArrayView2, Axis, Slice};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Rows per block when the design matrix is accumulated into the Gram matrix.
 const ROW_BLOCK: usize = 2048;
-
-/// Rows whose exact leave-one-out residual enters the selection score.
-const LOO_ROWS: usize = 256;
 
 /// Per-feature affine map to zero mean and unit standard deviation (features without spread
 /// keep scale 1).
@@ -257,65 +254,53 @@ pub(crate) struct Selected {
     pub score: f64,
 }
 
-/// The best ridge by GCV (or the given one) for one multiplier on the given rows, with its
-/// GCV score.
+/// One multiplier's output layer on the given rows: the weights, the relative ridge, tr H and
+/// the selection score. Without a given ridge, the ridge minimises the exact leave-one-out
+/// error of the first `loo_rows` rows (a random sample: the rows are shuffled) on the full
+/// fit, all ridges from one eigendecomposition ([`RidgePath`]); the score is that error.
+/// With a given ridge, one Cholesky solve, scored by GCV.
 fn gcv_at(
     basis: &Basis,
     mult: f64,
     ridge: Option<f64>,
     xs: &[f64],
     ys: ArrayView2<'_, f64>,
-) -> Option<(f64, RidgeFit)> {
-    let (g, b, yy, blocks) = basis.normal_equations(mult, xs, ys, true);
-    let probes = rademacher(g.nrows(), 24, 0x5eed);
+    loo_rows: usize,
+) -> Option<(f64, Array2<f64>, f64, f64)> {
     let rows = ys.nrows();
-    // Leave-one-out residuals e_i / (1 − h_ii) on the first rows (a random sample: the rows
-    // are shuffled), h_ii = |L⁻¹ a_i|²: unlike GCV's mean leverage this sees single rows
-    // that a cluster of narrow cells interpolates.
-    let loo_rows = rows
-        .min(LOO_ROWS)
-        .min(blocks.first().map_or(0, |a| a.nrows()));
-    let sub = blocks.first().map(|a| {
-        a.slice_axis(Axis(0), Slice::from(..loo_rows))
-            .t()
-            .to_owned()
-    });
-    let eval = |r: f64| {
+    let (g, b, yy, blocks) = basis.normal_equations(mult, xs, ys, true);
+    if let Some(r) = ridge {
+        let probes = rademacher(g.nrows(), 24, 0x5eed);
         let mut fit = ridge_fit(&g, &b, yy, r, &probes)?;
         // The closed form yy − 2⟨W, B⟩ + ⟨W, GW⟩ cancels badly for small ridges.
         fit.rss = residual(&blocks, &fit.weights, ys);
-        let score = match &sub {
-            Some(at) if loo_rows > 0 && ridge.is_none() => {
-                let mut v = at.clone();
-                forward(&fit.factor, &mut v);
-                let pred = at.t().dot(&fit.weights);
-                let mut press = 0.0;
-                for i in 0..loo_rows {
-                    let h = v.column(i).iter().map(|x| x * x).sum::<f64>();
-                    if h >= 1.0 - 1e-9 {
-                        return Some((f64::INFINITY, fit));
-                    }
-                    for c in 0..ys.ncols() {
-                        let e = (ys[[i, c]] - pred[[i, c]]) / (1.0 - h);
-                        press += e * e;
-                    }
-                }
-                // Blend: the subset's leave-one-out error, but never below GCV's estimate.
-                (press / loo_rows as f64).max(gcv(rows, &fit))
-            }
-            _ => gcv(rows, &fit),
-        };
-        Some((score, fit))
-    };
-    match ridge {
-        Some(r) => eval(r),
-        None => search_ridge(eval),
+        return Some((gcv(rows, &fit), fit.weights, fit.relative, fit.dof));
     }
+    let loo_rows = loo_rows.clamp(1, rows);
+    let mut parts = Vec::new();
+    let mut left = loo_rows;
+    for a in &blocks {
+        if left == 0 {
+            break;
+        }
+        let take = left.min(a.nrows());
+        parts.push(a.slice_axis(Axis(0), Slice::from(..take)));
+        left -= take;
+    }
+    let a_loo = ndarray::concatenate(Axis(0), &parts).ok()?;
+    let path = RidgePath::new(
+        &g,
+        &b,
+        a_loo.view(),
+        ys.slice_axis(Axis(0), Slice::from(..loo_rows)),
+    )?;
+    let (relative, score, dof) = path.best_ridge()?;
+    Some((score, path.weights(relative), relative, dof))
 }
 
-/// Chooses the width multiplier (unless given: a geometric walk by √2 from 1, on at most
-/// `select_rows` rows) and the relative ridge (unless given) by generalized cross-validation,
-/// then refits on every row. `xs`/`ys` are standardized and in random row order; returns the
+/// Chooses the width multiplier (unless given: a geometric walk by √2 from `start`, on at
+/// most `select_rows` rows) and the relative ridge (unless given) by leave-one-out, then
+/// refits on every row. `xs`/`ys` are standardized and in random row order; returns the
 /// weights (cols × m) and what was chosen.
 pub(crate) fn fit_gcv(
     basis: &Basis,
@@ -324,49 +309,97 @@ pub(crate) fn fit_gcv(
     mult: Option<f64>,
     ridge: Option<f64>,
     select_rows: usize,
+    start: f64,
 ) -> Option<(Vec<f64>, Selected)> {
-    let n = basis.n;
+    fit_best(&[(basis, xs)], ys, mult, ridge, select_rows, start).map(|(_, w, s)| (w, s))
+}
+
+/// [`fit_gcv`] for several candidate bases, each with its own copy of the rows (`xs` in
+/// that basis' coordinates; the targets are shared): every candidate gets its multiplier
+/// walk from `start` on the first `select_rows` rows (the walks in parallel), the one with
+/// the lowest selection score on those rows (the lowest index on ties) is refitted on every
+/// row. Returns its index in `candidates`, weights and choice.
+pub(crate) fn fit_best(
+    candidates: &[(&Basis, &[f64])],
+    ys: ArrayView2<'_, f64>,
+    mult: Option<f64>,
+    ridge: Option<f64>,
+    select_rows: usize,
+    start: f64,
+) -> Option<(usize, Vec<f64>, Selected)> {
+    type Fit = (f64, Array2<f64>, f64, f64);
     let rows = ys.nrows();
-    let mult = match mult {
-        Some(m) => m,
-        None => {
-            let sel = select_rows.min(rows).max(1);
-            let (sx, sy) = (&xs[..sel * n], ys.slice_axis(Axis(0), Slice::from(..sel)));
-            let score =
-                |mult: f64| gcv_at(basis, mult, ridge, sx, sy).map_or(f64::INFINITY, |(s, _)| s);
-            let step = std::f64::consts::SQRT_2;
-            let mut best = (1.0, score(1.0));
-            for dir in [step, 1.0 / step] {
-                let mut mult = best.0 * dir;
-                let mut improved = false;
-                while (0.2..=12.0).contains(&mult) {
-                    let s = score(mult);
-                    if s < best.1 {
-                        best = (mult, s);
-                        improved = true;
-                        mult *= dir;
-                    } else {
+    let sel = select_rows.min(rows).max(1);
+    let sy = ys.slice_axis(Axis(0), Slice::from(..sel));
+    let walk = |&(basis, xs): &(&Basis, &[f64])| -> Option<(f64, Fit)> {
+        let sx = &xs[..sel * basis.n];
+        let mut kept: Option<(f64, Fit)> = None;
+        let mut score = |mult: f64| {
+            let Some(fit) = gcv_at(basis, mult, ridge, sx, sy, sel) else {
+                return f64::INFINITY;
+            };
+            let s = fit.0;
+            if kept.as_ref().is_none_or(|k| s < k.1.0) {
+                kept = Some((mult, fit));
+            }
+            s
+        };
+        match mult {
+            Some(m) => {
+                score(m);
+            }
+            None => {
+                let step = std::f64::consts::SQRT_2;
+                let first = start.clamp(MULT_RANGE.0, MULT_RANGE.1);
+                let mut at = (first, score(first));
+                for dir in [step, 1.0 / step] {
+                    let mut mult = at.0 * dir;
+                    let mut improved = false;
+                    while (MULT_RANGE.0..=MULT_RANGE.1).contains(&mult) {
+                        let s = score(mult);
+                        if s < at.1 {
+                            at = (mult, s);
+                            improved = true;
+                            mult *= dir;
+                        } else {
+                            break;
+                        }
+                    }
+                    if improved {
                         break;
                     }
                 }
-                if improved {
-                    break;
-                }
             }
-            best.0
         }
+        kept
     };
-    let (score, fit) = gcv_at(basis, mult, ridge, xs, ys)?;
+    let walks: Vec<Option<(f64, Fit)>> = candidates.par_iter().map(walk).collect();
+    let (index, (mult, fit)) = walks
+        .into_iter()
+        .enumerate()
+        .filter_map(|(i, w)| w.map(|w| (i, w)))
+        .min_by(|a, b| a.1.1.0.total_cmp(&b.1.1.0).then(a.0.cmp(&b.0)))?;
+    // Refit on every row unless the selection rows were all rows.
+    let (basis, xs) = candidates[index];
+    let (score, weights, relative, dof) = if sel == rows {
+        fit
+    } else {
+        gcv_at(basis, mult, ridge, xs, ys, sel)?
+    };
     Some((
-        fit.weights.into_raw_vec_and_offset().0,
+        index,
+        weights.into_raw_vec_and_offset().0,
         Selected {
             mult,
-            ridge: fit.relative,
-            dof: fit.dof,
+            ridge: relative,
+            dof,
             score,
         },
     ))
 }
+
+/// The range of the width multiplier walk.
+const MULT_RANGE: (f64, f64) = (0.2, 12.0);
 
 /// Chooses multiplier and relative ridge from the grids by the mean squared error on the last
 /// `holdout` share of the rows (fitted on the others), then refits on every row.
@@ -513,4 +546,43 @@ pub(crate) fn nearest_widths(centres: &[f64], n: usize, q: usize) -> Vec<f64> {
             if w > 0.0 { w } else { 1e-6 }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fit_best_keeps_the_candidate_with_the_lower_leave_one_out_score() {
+        // y = sin 3x on 400 rows in [-1, 1], 20 centres spread over the rows. Candidate 0 sees
+        // the rows stretched by 5 (most rows far from every centre), candidate 1 the rows
+        // themselves: candidate 1 must win, and its weights must reproduce the function.
+        let rows = 400;
+        let xs: Vec<f64> = (0..rows)
+            .map(|i| -1.0 + 2.0 * ((i as f64 * 0.618_034) % 1.0))
+            .collect();
+        let ys: Vec<f64> = xs.iter().map(|x| (3.0 * x).sin()).collect();
+        let stretched: Vec<f64> = xs.iter().map(|x| 5.0 * x).collect();
+        let centres: Vec<f64> = (0..20).map(|i| -1.0 + 2.0 * i as f64 / 19.0).collect();
+        let basis = Basis {
+            n: 1,
+            base: nearest_widths(&centres, 1, 2),
+            centres,
+            normalized: false,
+            affine: false,
+        };
+        let yv = ArrayView2::from_shape((rows, 1), &ys).unwrap();
+        let candidates = [(&basis, &stretched[..]), (&basis, &xs[..])];
+        let (index, weights, chosen) = fit_best(&candidates, yv, None, None, 200, 1.0).unwrap();
+        assert_eq!(index, 1, "chose the stretched rows ({chosen:?})");
+        let mut row = vec![0.0; basis.cols()];
+        for x in [-0.9, -0.3, 0.2, 0.7] {
+            basis.row(chosen.mult, &[x], &mut row);
+            let f: f64 = row.iter().zip(&weights).map(|(a, w)| a * w).sum();
+            assert!((f - (3.0 * x).sin()).abs() < 1e-3, "f({x}) = {f}");
+        }
+        // Equal candidates: the first one.
+        let same = [(&basis, &xs[..]), (&basis, &xs[..])];
+        assert_eq!(fit_best(&same, yv, None, None, 200, 1.0).unwrap().0, 0);
+    }
 }

@@ -20,26 +20,27 @@
 //!    ([`Isgcs::relax`]: every cell to the mean of the rows it wins) on a sample of 4z + 200 rows;
 //!    a least-squares output fit on that sample; each cell's resource τ^SL becomes the summed
 //!    squared residual of the rows it wins ([`Isgcs::set_resources`]); then 0.3 z insertions
-//!    ([`Isgcs::insert`]: the longest edge of the highest-resource cell is split, the resource
-//!    shared 2/3 : 1/3). This is the supervised resource of sec. 2.4 measured on the least-
-//!    squares network instead of the slowly converging delta rule: with λ-step online
-//!    resources and few steps per insertion the network kept splitting the same high-error
-//!    region (cells 100× narrower there, rms/σ 1.25 on Franke at 300 cells). After growth,
-//!    ⅓ as many settling steps and five batch USL steps on all rows.
+//!    ([`Isgcs::insert`]: the longest edge of the highest-resource cell is split), in
+//!    decreasing order of the measured resource and each cell split at most once per round
+//!    (the resources are measured once per round). This is the supervised resource of
+//!    sec. 2.4 measured on the least-squares network instead of the slowly converging delta
+//!    rule. After growth, ⅓ as many settling steps and five batch USL steps on all rows.
 //! 4. **Output layer**: the network's centres with per-cell widths d_i = mean distance to the
-//!    n + 1 nearest other centres, times a multiplier μ, normalized Gaussians; the weights by
-//!    ridge least squares on every row. μ (a walk by √2 from 1, on at most max(3z, 1500)
-//!    rows) and the relative ridge (10⁻¹²…1, decades refined to half decades) minimise the
-//!    leave-one-out error estimate: the exact closed-form leave-one-out residuals
-//!    e_i/(1 − h_ii) of 256 random rows, but never below the GCV estimate N·RSS/(N − tr H)²
-//!    (tr H by 24 Rademacher probes). GCV alone (mean leverage) missed single rows that a
-//!    cluster of narrow cells interpolates (the jump function: rms/σ 0.30 → 0.12). With
-//!    `choose_basis` (default) this runs for normalized and plain Gaussians; the lower score wins.
+//!    n + 1 nearest other centres, times a multiplier μ; the weights by ridge least squares on
+//!    every row. Candidates (with `choose_basis`, the default): normalized and plain Gaussians,
+//!    each in the learned metric and, when a metric was learned, in the standardized metric at
+//!    the same centres mapped back (x = T⁻¹c; the pilots that chose T had fewer centres).
+//!    For each candidate μ walks by √2 from the pilot's multiplier on the first max(3z, 1500)
+//!    rows (candidates in parallel); for each μ the relative ridge (10⁻¹²…1, decades refined
+//!    to quarter decades) minimises the exact closed-form leave-one-out error
+//!    mean(e_i/(1 − h_ii))² over those rows, every ridge from one symmetric eigendecomposition
+//!    of AᵀA (`linalg::RidgePath`). The candidate with the lowest score is refitted on all rows
+//!    (its ridge re-chosen by the leave-one-out error of the same rows on the full fit).
 //!
-//! Cost: growth O(steps · z · n); the output layer O(N · z²) per candidate multiplier (dense
-//! matrix products on two threads) plus O(z³) per candidate ridge.
+//! Cost: growth O(steps · z · n); the output layer O(S · z² + z³) per candidate multiplier
+//! (S selection rows; dense matrix products on two threads) plus O(S · z) per candidate ridge.
 
-use crate::readout::{Basis, Readout, Standardizer, egop, fit_gcv, nearest_widths};
+use crate::readout::{Basis, Readout, Standardizer, egop, fit_best, fit_gcv, nearest_widths};
 use crate::{GoalFunction, Isgcs, IsgcsError, Params, Termination};
 use ndarray::ArrayView2;
 use rand::{Rng, SeedableRng};
@@ -99,9 +100,9 @@ pub struct RegressorParams {
     pub lambda: Option<usize>,
     /// Settling steps after growth, as a multiple of the growth steps (default ⅓).
     pub settle: f64,
-    /// Relative ridge (× mean diagonal of AᵀA); `None`: chosen by GCV.
+    /// Relative ridge (× mean diagonal of AᵀA); `None`: chosen by leave-one-out.
     pub ridge: Option<f64>,
-    /// Width multiplier μ on the nearest-centre widths; `None`: chosen by GCV.
+    /// Width multiplier μ on the nearest-centre widths; `None`: chosen by leave-one-out.
     pub width_multiplier: Option<f64>,
     /// Normalized Gaussians (a partition of unity; bounded extrapolation). Default true.
     pub normalized: bool,
@@ -112,7 +113,8 @@ pub struct RegressorParams {
     /// Default true.
     #[serde(default = "yes")]
     pub choose_basis: bool,
-    /// Learn an input metric from the data (module docs, step 1b). Default true.
+    /// Learn an input metric from the data (module docs, step 1b); the output layer is then
+    /// also tried in the standardized metric at the same centres (step 4). Default true.
     #[serde(default = "yes")]
     pub metric: bool,
 }
@@ -368,6 +370,48 @@ fn metric_root(e: &[f64], n: usize, floor: f64, xs: &[f64]) -> Option<Vec<f64>> 
     Some(t)
 }
 
+/// One growth round's insertions (module docs, step 3): up to `add` ISGCS insertions in
+/// decreasing order of the measured resources `tau` (one per cell), each cell split at most
+/// once. The resources were measured before the round's first split, so a second split of the
+/// same cell would act on an error it may no longer have; repeated splits of one cell gave
+/// clusters of cells 30× narrower than their neighbours, whose few rows have leverages near 1
+/// and spoil the leave-one-out choice of the output layer. When no cell saw any residual, one
+/// insertion by the plain ISGCS rule. Returns the split cells in order; `tau` ends with one
+/// (zero) entry per new cell.
+fn insert_by_resource(
+    net: &mut Isgcs,
+    tau: &mut Vec<f64>,
+    add: usize,
+) -> Result<Vec<usize>, IsgcsError> {
+    let mut split = Vec::with_capacity(add);
+    for _ in 0..add {
+        let q = (0..tau.len())
+            .max_by(|&a, &b| tau[a].total_cmp(&tau[b]).then(b.cmp(&a)))
+            .unwrap_or(0);
+        if tau.get(q).is_none_or(|&t| t <= 0.0) {
+            break;
+        }
+        // `insert` splits the highest-resource cell: q.
+        net.set_resources(tau)?;
+        net.insert();
+        split.push(q);
+        tau[q] = 0.0;
+        tau.push(0.0);
+    }
+    if split.is_empty() {
+        net.set_resources(tau)?;
+        net.insert();
+        tau.push(0.0);
+    }
+    Ok(split)
+}
+
+/// The inverse of an invertible n × n row-major matrix (`None` when singular).
+fn inverse(t: &[f64], n: usize) -> Option<Vec<f64>> {
+    let inv = nalgebra::DMatrix::from_row_slice(n, n, t).try_inverse()?;
+    Some((0..n * n).map(|i| inv[(i / n, i % n)]).collect())
+}
+
 /// Rows of the metric search.
 const METRIC_ROWS: usize = 2000;
 /// Centres of the metric search's pilot networks.
@@ -376,24 +420,26 @@ const METRIC_CELLS: usize = 100;
 /// The input metric (module docs, step 2): pilot Gaussian networks (k-means centres, output
 /// layer chosen by leave-one-out) in the identity metric and then, recursively, in the metric
 /// of the previous pilot's expected gradient outer product; the metric whose pilot has the
-/// lowest leave-one-out score wins (`None`: the identity).
+/// lowest leave-one-out score wins (`None`: the identity), returned with its pilot's width
+/// multiplier (1 when no pilot ran).
 fn learn_metric(
     xs: &[f64],
     ys: &[f64],
     n: usize,
     m: usize,
     params: &RegressorParams,
-) -> Option<Vec<f64>> {
+) -> (Option<Vec<f64>>, f64) {
     let rows = xs.len() / n;
     let sample = rows.min(METRIC_ROWS);
     let z0 = params.max_cells.min(METRIC_CELLS).min(sample / 4);
     if z0 < 4 || n < 2 {
-        return None;
+        return (None, 1.0);
     }
     let (sx, sy) = (&xs[..sample * n], &ys[..sample * m]);
     let yv = ArrayView2::from_shape((sample, m), sy).expect("shape");
-    let mut best: (f64, Option<Vec<f64>>) = (f64::INFINITY, None);
+    let mut best: (f64, Option<Vec<f64>>, f64) = (f64::INFINITY, None, 1.0);
     let mut t: Option<Vec<f64>> = None;
+    let mut start = 1.0;
     for _ in 0..3 {
         let tx = t
             .as_ref()
@@ -406,13 +452,14 @@ fn learn_metric(
             normalized: params.normalized,
             affine: params.affine,
         };
-        let Some((weights, sel)) = fit_gcv(&basis, &tx, yv, None, None, sample) else {
+        let Some((weights, sel)) = fit_gcv(&basis, &tx, yv, None, None, sample, start) else {
             break;
         };
         if sel.score.is_nan() || sel.score >= best.0 {
             break;
         }
-        best = (sel.score, t.clone());
+        start = sel.mult;
+        best = (sel.score, t.clone(), sel.mult);
         // E in the original coordinates: ∇ₓf = Tᵀ ∇f(Tx), so E = Tᵀ E' T.
         let e1 = egop(&basis, sel.mult, &weights, m, &tx);
         let e = match &t {
@@ -438,7 +485,7 @@ fn learn_metric(
         };
         t = Some(next);
     }
-    best.1
+    (best.1, best.2)
 }
 
 /// Smallest scale of a direction in the learned metric, relative to the largest.
@@ -493,14 +540,15 @@ impl Regressor {
         };
         let xs = xstd.apply(&permute(inputs, n));
         let ys = ystd.apply(&permute(targets, m));
-        let transform = if params.metric {
+        let (transform, pilot_mult) = if params.metric {
             learn_metric(&xs, &ys, n, m, params)
         } else {
-            None
+            (None, 1.0)
         };
-        let xs = match &transform {
-            Some(t) => apply_transform(t, &xs, n),
-            None => xs,
+        // The standardized rows are kept for the identity-metric readout candidate.
+        let (xs, xs_plain) = match &transform {
+            Some(t) => (apply_transform(t, &xs, n), xs),
+            None => (xs, Vec::new()),
         };
 
         let (k, simplex) = topology_from_data(&xs, n, params.topology_dim);
@@ -562,7 +610,15 @@ impl Regressor {
                 affine: params.affine,
             };
             let yv = ArrayView2::from_shape((sample, m), &ys[..sample * m]).expect("shape");
-            let fitted = fit_gcv(&basis, &xs[..sample * n], yv, Some(1.5), Some(1e-6), sample);
+            let fitted = fit_gcv(
+                &basis,
+                &xs[..sample * n],
+                yv,
+                Some(1.5),
+                Some(1e-6),
+                sample,
+                1.5,
+            );
             tau.clear();
             tau.resize(z, 0.0);
             if let Some((weights, sel)) = fitted {
@@ -592,11 +648,8 @@ impl Regressor {
                     tau[net.bmu(x, None)] += e;
                 }
             }
-            net.set_resources(&tau)?;
             let add = (z * 3 / 10).max(1).min(params.max_cells - z);
-            for _ in 0..add {
-                net.insert();
-            }
+            insert_by_resource(&mut net, &mut tau, add)?;
         }
         let growth_steps = net.steps();
         let settle_steps = (growth_steps as f64 * params.settle).round() as u64;
@@ -614,34 +667,53 @@ impl Regressor {
         };
         let yv = ArrayView2::from_shape((rows, m), &ys).expect("shape checked");
         let select_rows = (3 * basis.cols()).max(1500);
-        // Normalized and plain Gaussians (unless fixed): the lower leave-one-out score wins.
+        // Normalized and plain Gaussians (unless fixed), in the learned and the standardized
+        // metric: the lowest leave-one-out score on the selection rows wins; the walks start
+        // at the metric pilot's multiplier.
         let kinds: &[bool] = if params.choose_basis {
             &[true, false]
         } else {
             std::slice::from_ref(&params.normalized)
         };
-        let mut best: Option<(Basis, Vec<f64>, crate::readout::Selected)> = None;
-        for &normalized in kinds {
-            let basis = Basis {
-                normalized,
+        // The metric was chosen by small pilots; at the model's size the standardized metric
+        // can be better (more cells resolve the weak directions too): the same centres, mapped
+        // back (x = T⁻¹ c), are candidates in the standardized metric as well.
+        let t_inv = transform.as_ref().and_then(|t| inverse(t, n));
+        let back = t_inv.as_ref().map(|t_inv| {
+            let centres = apply_transform(t_inv, &basis.centres, n);
+            Basis {
+                base: nearest_widths(&centres, n, n + 1),
+                centres,
                 ..basis.clone()
-            };
-            let fitted = fit_gcv(
-                &basis,
-                &xs,
-                yv,
-                params.width_multiplier,
-                params.ridge,
-                select_rows,
-            );
-            if let Some((w, sel)) = fitted {
-                if best.as_ref().is_none_or(|b| sel.score < b.2.score) {
-                    best = Some((basis, w, sel));
+            }
+        });
+        let mut bases: Vec<(Basis, bool)> = Vec::new();
+        for (geometry, in_metric) in [(Some(&basis), true), (back.as_ref(), false)] {
+            if let Some(g) = geometry {
+                for &normalized in kinds {
+                    let b = Basis {
+                        normalized,
+                        ..g.clone()
+                    };
+                    bases.push((b, in_metric));
                 }
             }
         }
-        let (basis, weights, chosen) =
-            best.ok_or_else(|| RegressorError::Solve("no row activates any cell".into()))?;
+        let candidates: Vec<(&Basis, &[f64])> = bases
+            .iter()
+            .map(|(b, in_metric)| (b, if *in_metric { &xs[..] } else { &xs_plain[..] }))
+            .collect();
+        let (index, weights, chosen) = fit_best(
+            &candidates,
+            yv,
+            params.width_multiplier,
+            params.ridge,
+            select_rows,
+            pilot_mult,
+        )
+        .ok_or_else(|| RegressorError::Solve("no row activates any cell".into()))?;
+        let (basis, in_metric) = bases.swap_remove(index);
+        let transform = if in_metric { transform } else { None };
         let readout = Readout {
             basis,
             mult: chosen.mult,
@@ -721,5 +793,83 @@ impl Regressor {
             .iter()
             .map(|b| b * self.readout.mult)
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A k = 2 network in the plane with `cells` cells (grown by plain ISGCS insertions).
+    fn sheet(cells: usize) -> Isgcs {
+        let simplex = vec![vec![0.0, 0.0], vec![1.0, 0.0], vec![0.0, 1.0]];
+        let mut net = Isgcs::new(Params::accurate(), 2, 1, 2, simplex).unwrap();
+        while net.len() < cells {
+            let tau: Vec<f64> = (0..net.len()).map(|i| 1.0 + i as f64).collect();
+            net.set_resources(&tau).unwrap();
+            net.insert();
+        }
+        net
+    }
+
+    #[test]
+    fn a_round_splits_each_cell_at_most_once_in_resource_order() {
+        // One cell with a resource far above the others: the plain ISGCS rule (resource shared
+        // 2/3 : 1/3 per split) would split it several times in one round; a round splits it
+        // once, then the next cells by resource.
+        let mut net = sheet(8);
+        let z = net.len();
+        let mut tau = vec![1.0; z];
+        tau[3] = 1000.0;
+        tau[5] = 2.0;
+        tau[6] = 3.0;
+        let split = insert_by_resource(&mut net, &mut tau, 3).unwrap();
+        assert_eq!(split, vec![3, 6, 5]);
+        assert_eq!(net.len(), z + 3);
+        assert_eq!(tau.len(), z + 3);
+        // Each new cell is a neighbour of the cell that was split for it.
+        for (new, &q) in (z..z + 3).zip(&split) {
+            assert!(
+                net.neighbours(new).contains(&(q as u32)),
+                "{new} not next to {q}"
+            );
+        }
+        // The reference: the plain rule on the same resources splits cell 3 again.
+        let mut plain = sheet(8);
+        let mut tau = vec![1.0; z];
+        tau[3] = 1000.0;
+        plain.set_resources(&tau).unwrap();
+        for _ in 0..3 {
+            plain.insert();
+        }
+        let again = (z..z + 3)
+            .filter(|&c| plain.neighbours(c).contains(&3))
+            .count();
+        assert!(again >= 2, "the plain rule split cell 3 only {again} times");
+    }
+
+    #[test]
+    fn a_round_without_residuals_still_grows() {
+        let mut net = sheet(5);
+        let mut tau = vec![0.0; 5];
+        assert!(
+            insert_by_resource(&mut net, &mut tau, 2)
+                .unwrap()
+                .is_empty()
+        );
+        assert_eq!((net.len(), tau.len()), (6, 6));
+    }
+
+    #[test]
+    fn inverse_inverts() {
+        let t = [2.0, 1.0, 0.0, 1.0, 3.0, 0.5, 0.0, 0.5, 1.0];
+        let inv = inverse(&t, 3).unwrap();
+        for a in 0..3 {
+            for b in 0..3 {
+                let v: f64 = (0..3).map(|j| t[a * 3 + j] * inv[j * 3 + b]).sum();
+                assert!((v - f64::from(u8::from(a == b))).abs() < 1e-12);
+            }
+        }
+        assert!(inverse(&[1.0, 2.0, 2.0, 4.0], 2).is_none());
     }
 }

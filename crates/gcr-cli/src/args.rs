@@ -166,11 +166,14 @@ pub struct SolveArgs {
     #[arg(long, value_name = "WxH", value_parser = parse_resolution, default_value = "512x512")]
     pub resolution: (u32, u32),
     /// How 3-D images get B: `mesh` rasterizes the output mesh (B at its vertices,
-    /// interpolated: fast, the bake's accuracy), `pixel` gathers B at every pixel's visible point
-    /// with the output gather (to its target error over the pixels; no mesh needed).
+    /// interpolated: fast, the bake's accuracy), `pixel` estimates each pixel with the output
+    /// gather (the default paths gather: a path tracer over the pixel's footprint, to the target
+    /// error of the pixels; no mesh needed).
     #[arg(long, default_value = "mesh")]
     pub image_mode: ImageMode,
-    /// `--image-mode pixel`: sub-samples per pixel (box filter; 1 is the pixel centre), 1 to 4096.
+    /// `--image-mode pixel` with a gather that reads the networks: sub-samples per pixel (box
+    /// filter; 1 is the pixel centre), 1 to 4096. The default paths gather gives every ray its
+    /// own point in the pixel instead.
     #[arg(long, default_value_t = 1)]
     pub pixel_samples: u32,
     /// Exposure of the tone-mapped outputs (PNG/JPEG, glTF and PLY colours): display value =

@@ -243,6 +243,68 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         out
     }
 
+    /// One round of `rays` samples of the mean B over a footprint (a pixel): sample i's receiver
+    /// is `receiver(u)` at its own Sobol point u (dimensions 10 and 11; `None`: it sees no front
+    /// face and counts 0), where it gets E, one shadow ray and one cosine ray continued as a path
+    /// (every ray corrected: the networks are not read). A path tracer whose first vertex is the
+    /// receiver; replicates, rounds and seeds as [`PathGather::estimate`].
+    pub fn estimate_footprint(
+        &self,
+        receiver: &impl Fn([f64; 2]) -> Option<(DVec3, DVec3, u32)>,
+        seed: u64,
+        first: usize,
+        rays: usize,
+    ) -> PointEstimate {
+        let mut rng =
+            ChaCha8Rng::seed_from_u64(seed ^ (first as u64).wrapping_mul(0xD1B5_4A32_D192_ED03));
+        let replicates = REPLICATES.min(rays).max(1);
+        let qmc = |i: usize, dim: u32| {
+            let (r, j) = (i % replicates, first + i / replicates);
+            let scramble = (seed ^ (r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) as u32;
+            f64::from(sobol_burley::sample(j as u32, dim, scramble)).min(1.0 - f64::EPSILON)
+        };
+        // One shadow ray and one cosine ray per sample.
+        let mis = Mis {
+            emitters: self.emitters,
+            n_e: 1.0,
+            n_c: 1.0,
+        };
+        let mut share = [[0.0; MAX_BANDS]; REPLICATES];
+        for i in 0..rays {
+            let Some((y, n, face)) = receiver([qmc(i, 10), qmc(i, 11)]) else {
+                continue;
+            };
+            let z = Vertex { p: y, n, face };
+            let (rho, e) = (self.domain.reflectance(face), self.domain.emission(face));
+            let mut b = e;
+            if rho.iter().any(|r| *r != 0.0) {
+                let mut light = self.next_event(&z, &mis, (qmc(i, 0), [qmc(i, 1), qmc(i, 2)]));
+                let (_, d, hit) = self.cosine_ray(&z, &mis, false, [qmc(i, 3), qmc(i, 4)]);
+                let l = match hit {
+                    Some(x) => {
+                        let first = std::array::from_fn(|d| qmc(i, 5 + d as u32));
+                        self.reflected(&x, Some(first), &mut rng)
+                    }
+                    None => [0.0; MAX_BANDS],
+                };
+                for k in 0..MAX_BANDS {
+                    light[k] += d[k] + l[k];
+                    b[k] += rho[k] * light[k];
+                }
+            }
+            for k in 0..MAX_BANDS {
+                share[i % replicates][k] += b[k] / rays as f64;
+            }
+        }
+        PointEstimate {
+            share,
+            replicates,
+            rays,
+            reflects: true,
+            ..PointEstimate::default()
+        }
+    }
+
     /// L̂(x): the reflected radiosity at a path vertex by path tracing: at each vertex one shadow
     /// ray and one cosine ray, MIS-combined for the direct light, continued with Russian roulette
     /// from `PathSettings::roulette_depth` with continuation probability q = max_k ρ_k at the

@@ -86,25 +86,33 @@ fn paths_to_target(
     target: f64,
     config: &SolveConfig,
 ) -> Vec<Gathered> {
-    let round = |first: usize, rays: usize| -> Vec<PointEstimate> {
-        let samples = GatherSamples {
-            direct: rays,
-            indirect: rays,
-        };
-        points
-            .par_iter()
-            .zip(seeds)
-            .map(|(&p, &seed)| paths.estimate(p, seed, first, samples))
+    rounds_to_target(
+        points.len(),
+        |i, first, samples| paths.estimate(points[i], seeds[i], first, samples),
+        config.gather_samples,
+        target,
+        config.paths.max_rays,
+    )
+}
+
+/// The rounds of [`paths_to_target`] for any `count` estimates, `estimate(i, first, samples)`
+/// being estimate i's round with `samples` rays from Sobol index `first` on (a point's gather,
+/// or a pixel's footprint, [`PathGather::estimate_footprint`]).
+pub(crate) fn rounds_to_target(
+    count: usize,
+    estimate: impl Fn(usize, usize, GatherSamples) -> PointEstimate + Sync,
+    pilot: GatherSamples,
+    target: f64,
+    max_rays: usize,
+) -> Vec<Gathered> {
+    let round = |first: usize, samples: GatherSamples| -> Vec<PointEstimate> {
+        (0..count)
+            .into_par_iter()
+            .map(|i| estimate(i, first, samples))
             .collect()
     };
-    let max_rays = config.paths.max_rays;
     // ⟨Pilot round: the configured rays⟩
-    let pilot = config.gather_samples;
-    let mut estimates: Vec<PointEstimate> = points
-        .par_iter()
-        .zip(seeds)
-        .map(|(&p, &seed)| paths.estimate(p, seed, 0, pilot))
-        .collect();
+    let mut estimates = round(0, pilot);
     let mut rays = pilot.direct.max(pilot.indirect).min(max_rays);
     loop {
         let gathered: Vec<Gathered> = estimates.iter().map(PointEstimate::gathered).collect();
@@ -133,7 +141,11 @@ fn paths_to_target(
             .min(max_rays - rays)
             .next_multiple_of(REPLICATES);
         // Each replicate has used ⌈rays / REPLICATES⌉ Sobol points of its sequence so far.
-        let next = round(rays.div_ceil(REPLICATES), more);
+        let samples = GatherSamples {
+            direct: more,
+            indirect: more,
+        };
+        let next = round(rays.div_ceil(REPLICATES), samples);
         for (e, n) in estimates.iter_mut().zip(&next) {
             e.merge(n);
         }

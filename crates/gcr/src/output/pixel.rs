@@ -1,31 +1,33 @@
-//! Per-pixel images (`--image-mode pixel`, beyond the dissertation): B at each pixel's visible
-//! point by the output gather itself, instead of rasterizing the output mesh.
+//! Per-pixel images (`--image-mode pixel`, beyond the dissertation): B by the output gather at
+//! the surfaces the pixels see, instead of rasterizing the output mesh. Pixel (i, j) of W × H
+//! covers [i, i + 1) × [j, j + 1) of the camera of [`super::raster`] (centre ((i + ½)/W,
+//! (j + ½)/H): Mitsuba's `perspective` framing); a pixel is the mean of L = B/π over it (a box
+//! filter; back faces and the background are black).
 //!
-//! A pinhole ray through each of a pixel's sub-samples (the camera of [`super::raster`]: pixel
-//! (i, j) of W × H has its centre at ((i + ½)/W, (j + ½)/H), Mitsuba's `perspective` framing)
-//! finds the first surface; at every front-facing hit [`radiosity_at_points`] gathers B — with the
-//! default paths gather to its target error over all the hits, with its standard errors — and a
-//! pixel is the mean of L = B/π over its sub-samples (back faces and the background are black).
-//! With one sub-sample it is the pixel centre; with N the first N points of the R2 sequence
-//! (`frac(½ + k·(α₁, α₂))`, α the plastic number's reciprocals) over the pixel, a box filter.
-//!
-//! The target error is the pixels': a pixel's error is its sub-samples' over √spp, so each
-//! sub-sample is gathered to √spp times the target (more sub-samples, fewer rays each; the
-//! metrics' `relative_std_error` is the pixels'). Many sub-samples with few rays each resolve
-//! edges (an emitter's outline dominates a Cornell box's squared error); few with many rays are
-//! cheaper where the image is smooth.
+//! * **The paths gather with every ray corrected (the default)**: each pixel's footprint is
+//!   estimated as a whole ([`render_footprints`]): every ray has its own point in the pixel, where
+//!   it gets E, one shadow ray and one cosine ray continued as a path — a path tracer with Owen-
+//!   scrambled Sobol points over the pixel and the first bounce, in rounds to the target error of
+//!   the pixels (`--quality`, `--target-error`), with their standard errors. Edges converge with
+//!   the rays (an emitter's outline dominates a Cornell box's squared error).
+//! * **The other gathers** read the networks at fixed points: `--pixel-samples N` sub-samples per
+//!   pixel (1: the centre; N: the first N points of the R2 sequence `frac(½ + k·(α₁, α₂))`), B
+//!   gathered at each visible point ([`radiosity_at_points`]), their mean. A pixel's error is its
+//!   sub-samples' over √N, so a target applies to each sub-sample ×√N.
 //!
 //! No mesh is needed: the image has the gather's accuracy at every pixel, not the bake's at its
-//! vertices, and costs one gather per sub-sample.
+//! vertices.
 
 use super::raster::{Coverage, PinholeCamera, RadianceImage};
 use super::tonemap::{Exposure, srgb_encode};
 use crate::Trained;
 use crate::config::SolveConfig;
+use crate::config::{GatherMode, GatherSamples};
 use crate::domain::Domain;
 use crate::emitters::Emitters;
 use crate::gather::Gathered;
-use crate::pipeline::{GatherError, GatherStats, radiosity_at_points};
+use crate::paths::PathGather;
+use crate::pipeline::{GatherError, GatherStats, radiosity_at_points, rounds_to_target};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -50,13 +52,26 @@ pub struct PixelImage {
     height: u32,
     spp: u32,
     seen: Vec<Seen>,
-    /// B at the front hits, in the order of [`Seen::Front`].
+    /// B at the front hits (footprints: per pixel), in the order of [`Seen::Front`].
     radiosity: Vec<[f64; 3]>,
-    /// Whether each front hit emits (left out of the automatic exposure, like the emitters of a
-    /// mesh).
-    emits: Vec<bool>,
+    /// Whether each entry of `radiosity` enters the automatic exposure: a front hit that does not
+    /// emit (left out, like the emitters of a mesh).
+    lit: Vec<bool>,
+    /// What the sub-samples (footprints: the pixel centres) saw.
+    coverage: Coverage,
     /// What the gather measured at the hits.
     pub stats: GatherStats,
+}
+
+/// Seen fractions of a list of sub-samples.
+fn coverage_of(seen: &[Seen]) -> Coverage {
+    let n = seen.len().max(1) as f64;
+    let count = |f: fn(&Seen) -> bool| seen.iter().filter(|s| f(s)).count() as f64 / n;
+    Coverage {
+        front: count(|s| matches!(s, Seen::Front(_))),
+        back: count(|s| matches!(s, Seen::Back)),
+        nothing: count(|s| matches!(s, Seen::Nothing)),
+    }
 }
 
 /// Renders `camera`'s view of `domain` (3-D) at `width × height` with `spp` sub-samples per
@@ -71,6 +86,9 @@ pub fn render_pixels(
     let Domain::ThreeD(k) = domain else {
         return Ok(PixelImage::empty(width, height, spp));
     };
+    if config.gather == GatherMode::Paths && !config.reads_networks() {
+        return Ok(render_footprints(domain, config, camera, (width, height)));
+    }
     let (scene, bvh) = (k.scene, k.bvh);
     let spp = spp.max(1);
     let aspect = f64::from(width) / f64::from(height);
@@ -100,14 +118,14 @@ pub fn render_pixels(
     // ⟨B at every front hit, by the output gather (to its target over all of them)⟩
     let mut seen = Vec::with_capacity(n);
     let mut points = Vec::new();
-    let mut emits = Vec::new();
+    let mut lit = Vec::new();
     for h in &hits {
         seen.push(match *h {
             None => Seen::Nothing,
             Some((_, _, _, false)) => Seen::Back,
             Some((x, nx, face, true)) => {
                 points.push((x, nx, face));
-                emits.push(!scene.faces[face as usize].emission.is_zero());
+                lit.push(scene.faces[face as usize].emission.is_zero());
                 Seen::Front(points.len() - 1)
             }
         });
@@ -129,14 +147,115 @@ pub fn render_pixels(
         width,
         height,
         spp,
+        coverage: coverage_of(&seen),
         seen,
         radiosity: gathered.iter().map(|g| g.radiosity).collect(),
-        emits,
+        lit,
         stats: GatherStats {
             relative_std_error: crate::relative_std_error(&pixels),
             ..GatherStats::of(&gathered)
         },
     })
+}
+
+/// The paths gather over each pixel's footprint ([`PathGather::estimate_footprint`]): every ray
+/// has its own point in the pixel (a path tracer's antialiasing, Sobol dimensions for the pixel
+/// and the first bounce), rounds to the target error over the pixels as at points
+/// ([`rounds_to_target`]). `--pixel-samples` plays no part: the rays are the sub-samples.
+fn render_footprints(
+    domain: &Domain,
+    config: &SolveConfig,
+    camera: &PinholeCamera,
+    (width, height): (u32, u32),
+) -> PixelImage {
+    let Domain::ThreeD(k) = domain else {
+        return PixelImage::empty(width, height, 1);
+    };
+    let (scene, bvh) = (k.scene, k.bvh);
+    let aspect = f64::from(width) / f64::from(height);
+    let first_hit = |sx: f64, sy: f64| {
+        let dir = camera.ray_direction(sx, sy, aspect);
+        let hit = bvh.closest_hit(camera.eye, dir, f64::INFINITY, u32::MAX)?;
+        let normal = scene.faces[hit.face as usize].normal;
+        Some((hit.point, normal, hit.face, normal.dot(dir) < 0.0))
+    };
+    let n = (width * height) as usize;
+    let pixel = |p: usize| ((p % width as usize) as f64, (p / width as usize) as f64);
+    // ⟨The pixel centres: what the image shows, for the coverage and the exposure⟩
+    let centres: Vec<Seen> = (0..n)
+        .into_par_iter()
+        .map(|p| {
+            let (px, py) = pixel(p);
+            match first_hit(
+                (px + 0.5) / f64::from(width),
+                (py + 0.5) / f64::from(height),
+            ) {
+                None => Seen::Nothing,
+                Some((_, _, _, false)) => Seen::Back,
+                Some((_, _, face, true)) => Seen::Front(face as usize),
+            }
+        })
+        .collect();
+    let lit = centres
+        .iter()
+        .map(|s| matches!(s, Seen::Front(f) if scene.faces[*f].emission.is_zero()))
+        .collect();
+    // ⟨Each pixel's mean B over its footprint, in rounds to the target⟩
+    let emitters = Emitters::new(domain);
+    let gather = PathGather::new(
+        domain,
+        &emitters,
+        |_, _| [0.0; 3],
+        config.gather_samples,
+        config.paths,
+    );
+    let seed = |p: usize| {
+        crate::pipeline::point_seed(
+            config.seed,
+            DVec3::new(p as f64, 0.0, 0.0),
+            (DVec3::ZERO, 1e9),
+        )
+    };
+    let estimate = |p: usize, first: usize, samples: GatherSamples| {
+        let (px, py) = pixel(p);
+        let receiver = |u: [f64; 2]| {
+            let sx = (px + u[0]) / f64::from(width);
+            let sy = (py + u[1]) / f64::from(height);
+            match first_hit(sx, sy) {
+                Some((x, nx, face, true)) => Some((x, nx, face)),
+                _ => None,
+            }
+        };
+        gather.estimate_footprint(
+            &receiver,
+            seed(p),
+            first,
+            samples.direct.max(samples.indirect),
+        )
+    };
+    let gathered: Vec<Gathered> = match config.paths.target_error {
+        Some(target) => rounds_to_target(
+            n,
+            estimate,
+            config.gather_samples,
+            target,
+            config.paths.max_rays,
+        ),
+        None => (0..n)
+            .into_par_iter()
+            .map(|p| estimate(p, 0, config.gather_samples).gathered())
+            .collect(),
+    };
+    PixelImage {
+        width,
+        height,
+        spp: 1,
+        seen: (0..n).map(Seen::Front).collect(),
+        radiosity: gathered.iter().map(|g| g.radiosity).collect(),
+        lit,
+        coverage: coverage_of(&centres),
+        stats: GatherStats::of(&gathered),
+    }
 }
 
 /// Per pixel, the mean B of its sub-samples and the standard error of that mean
@@ -162,13 +281,15 @@ fn pixel_means(seen: &[Seen], gathered: &[Gathered], spp: usize) -> Vec<Gathered
 
 impl PixelImage {
     fn empty(width: u32, height: u32, spp: u32) -> Self {
+        let seen = vec![Seen::Nothing; (width * height * spp.max(1)) as usize];
         Self {
             width,
             height,
             spp: spp.max(1),
-            seen: vec![Seen::Nothing; (width * height * spp.max(1)) as usize],
+            coverage: coverage_of(&seen),
+            seen,
             radiosity: Vec::new(),
-            emits: Vec::new(),
+            lit: Vec::new(),
             stats: GatherStats::default(),
         }
     }
@@ -177,20 +298,14 @@ impl PixelImage {
     pub fn lit(&self) -> impl Iterator<Item = [f64; 3]> + '_ {
         self.radiosity
             .iter()
-            .zip(&self.emits)
-            .filter(|(_, e)| !**e)
+            .zip(&self.lit)
+            .filter(|(_, l)| **l)
             .map(|(b, _)| *b)
     }
 
-    /// What the sub-samples saw, as fractions.
+    /// What the sub-samples (with the paths gather: the pixel centres) saw, as fractions.
     pub fn coverage(&self) -> Coverage {
-        let n = self.seen.len().max(1) as f64;
-        let count = |f: fn(&Seen) -> bool| self.seen.iter().filter(|s| f(s)).count() as f64 / n;
-        Coverage {
-            front: count(|s| matches!(s, Seen::Front(_))),
-            back: count(|s| matches!(s, Seen::Back)),
-            nothing: count(|s| matches!(s, Seen::Nothing)),
-        }
+        self.coverage
     }
 
     /// Per pixel, the mean of `map(B)` over its sub-samples (0 where they see no front face).
@@ -240,7 +355,6 @@ impl PixelImage {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::{GatherMode, GatherSamples};
     use crate::output::raster::project;
     use scene_sampler::{AnyScene, KernelSampler, SceneBvh, builtin};
 

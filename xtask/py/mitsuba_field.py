@@ -27,6 +27,7 @@ except ImportError as e:  # the bench skips Mitsuba with a note
 import numpy as np
 
 mi.set_variant("scalar_rgb")
+from mitsuba_scene import scene_dict  # noqa: E402  (after the variant)
 
 
 def main():
@@ -37,34 +38,7 @@ def main():
     pts = np.loadtxt(points_path, ndmin=2)
     lo, hi = tri[:, :9].reshape(-1, 3).min(0), tri[:, :9].reshape(-1, 3).max(0)
     offset = 1e-3 * float(np.linalg.norm(hi - lo))
-    # one mesh per material (rho, Ke)
-    groups = {}
-    for row in tri:
-        groups.setdefault(tuple(row[9:15]), []).append(row[:9])
-    scene = {"type": "scene", "integrator": {"type": "path", "max_depth": -1}}
-    for k, (mat, rows) in enumerate(groups.items()):
-        v = np.asarray(rows, dtype=np.float64).reshape(-1, 3)
-        props = mi.Properties()
-        props["bsdf"] = mi.load_dict(
-            {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(mat[:3])}}
-        )
-        if max(mat[3:]) > 0:
-            props["emitter"] = mi.load_dict(
-                {"type": "area", "radiance": {"type": "rgb", "value": list(mat[3:])}}
-            )
-        mesh = mi.Mesh(
-            f"m{k}",
-            vertex_count=len(v),
-            face_count=len(rows),
-            has_vertex_normals=False,
-            has_vertex_texcoords=False,
-            props=props,
-        )
-        params = mi.traverse(mesh)
-        params["vertex_positions"] = v.ravel().tolist()
-        params["faces"] = list(range(len(v)))
-        params.update()
-        scene[f"mesh{k}"] = mesh
+    scene = scene_dict(tri)
     n = len(pts)
     t_scene = time.perf_counter() - t0
     for spp in spps:

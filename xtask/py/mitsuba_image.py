@@ -25,38 +25,7 @@ except ImportError as e:  # the bench skips Mitsuba with a note
 import numpy as np
 
 mi.set_variant("scalar_rgb")
-
-
-def scene_dict(tri):
-    """The triangles as one Mitsuba mesh per material, in a scene dict."""
-    groups = {}
-    for row in tri:
-        groups.setdefault(tuple(row[9:15]), []).append(row[:9])
-    scene = {"type": "scene", "integrator": {"type": "path", "max_depth": -1}}
-    for k, (mat, rows) in enumerate(groups.items()):
-        v = np.asarray(rows, dtype=np.float64).reshape(-1, 3)
-        props = mi.Properties()
-        props["bsdf"] = mi.load_dict(
-            {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(mat[:3])}}
-        )
-        if max(mat[3:]) > 0:
-            props["emitter"] = mi.load_dict(
-                {"type": "area", "radiance": {"type": "rgb", "value": list(mat[3:])}}
-            )
-        mesh = mi.Mesh(
-            f"m{k}",
-            vertex_count=len(v),
-            face_count=len(rows),
-            has_vertex_normals=False,
-            has_vertex_texcoords=False,
-            props=props,
-        )
-        params = mi.traverse(mesh)
-        params["vertex_positions"] = v.ravel().tolist()
-        params["faces"] = list(range(len(v)))
-        params.update()
-        scene[f"mesh{k}"] = mesh
-    return scene
+from mitsuba_scene import scene_dict  # noqa: E402  (after the variant)
 
 
 def main():

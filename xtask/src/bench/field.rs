@@ -275,6 +275,66 @@ pub(super) fn mitsuba_faces(scene: &Scene) -> Result<String> {
     Ok(faces)
 }
 
+/// Runs `xtask/py/<script>` with `files` and the sample counts: its stdout, or why Mitsuba is
+/// missing (the script's exit code 3).
+pub(super) fn run_mitsuba(
+    script: &str,
+    files: &[&Path],
+    spp: &[usize],
+) -> Result<std::result::Result<Vec<u8>, String>> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("py")
+        .join(script);
+    let out = std::process::Command::new("python3")
+        .arg(&path)
+        .args(files)
+        .args(spp.iter().map(|s| s.to_string()))
+        .output()
+        .context("running python3")?;
+    if out.status.code() == Some(3) {
+        return Ok(Err(String::from_utf8_lossy(&out.stderr).trim().to_string()));
+    }
+    if !out.status.success() {
+        bail!("{script} failed: {}", String::from_utf8_lossy(&out.stderr));
+    }
+    Ok(Ok(out.stdout))
+}
+
+/// The `spp=… scene=… load=… render=…` lines the Mitsuba scripts print: (spp, seconds), the seconds
+/// being the scene's meshes, the sensors and the render (not the interpreter's start and import).
+pub(super) fn mitsuba_runs(stdout: &[u8]) -> Result<Vec<(usize, f64)>> {
+    let mut runs = Vec::new();
+    for line in String::from_utf8_lossy(stdout).lines() {
+        let kv: std::collections::HashMap<&str, &str> = line
+            .split_whitespace()
+            .filter_map(|t| t.split_once('='))
+            .collect();
+        let (Some(s), Some(sc), Some(ld), Some(rd)) = (
+            kv.get("spp"),
+            kv.get("scene"),
+            kv.get("load"),
+            kv.get("render"),
+        ) else {
+            continue;
+        };
+        let seconds = sc.parse::<f64>()? + ld.parse::<f64>()? + rd.parse::<f64>()?;
+        runs.push((s.parse()?, seconds));
+    }
+    Ok(runs)
+}
+
+/// A file of `r g b` lines (NaN where a value does not parse).
+pub(super) fn read_values(path: &Path) -> Result<Vec<[f64; 3]>> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+    Ok(text
+        .lines()
+        .map(|l| {
+            let mut v = l.split_whitespace().map(|x| x.parse().unwrap_or(f64::NAN));
+            [(); 3].map(|_| v.next().unwrap_or(f64::NAN))
+        })
+        .collect())
+}
+
 /// Mitsuba 3 through `xtask/py/mitsuba_field.py`: one curve, or the reason it was skipped.
 fn mitsuba(
     scene: &Scene,
@@ -303,50 +363,13 @@ fn mitsuba(
     let (ff, pf, of) = (dir.join("faces.txt"), dir.join("points.txt"), dir.join("b"));
     std::fs::write(&ff, faces)?;
     std::fs::write(&pf, pts)?;
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("py/mitsuba_field.py");
-    let out = std::process::Command::new("python3")
-        .arg(&script)
-        .args([&ff, &pf, &of])
-        .args(spp.iter().map(|s| s.to_string()))
-        .output()
-        .context("running python3")?;
-    if out.status.code() == Some(3) {
-        return Ok(Err(String::from_utf8_lossy(&out.stderr).trim().to_string()));
-    }
-    if !out.status.success() {
-        bail!(
-            "mitsuba_field.py failed: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
+    let stdout = match run_mitsuba("mitsuba_field.py", &[&ff, &pf, &of], spp)? {
+        Ok(o) => o,
+        Err(why) => return Ok(Err(why)),
+    };
     let mut c = Curve::new("mitsuba 3");
-    for line in String::from_utf8_lossy(&out.stdout).lines() {
-        let kv: std::collections::HashMap<&str, &str> = line
-            .split_whitespace()
-            .filter_map(|t| t.split_once('='))
-            .collect();
-        let (Some(s), Some(sc), Some(ld), Some(rd)) = (
-            kv.get("spp"),
-            kv.get("scene"),
-            kv.get("load"),
-            kv.get("render"),
-        ) else {
-            continue;
-        };
-        let spp: usize = s.parse()?;
-        // the scene's meshes, the sensors and the render; the interpreter's start and import are not counted
-        let seconds = sc.parse::<f64>()? + ld.parse::<f64>()? + rd.parse::<f64>()?;
-        let text = std::fs::read_to_string(format!("{}.{spp}", of.display()))?;
-        let values: Vec<[f64; 3]> = text
-            .lines()
-            .map(|l| {
-                let v: Vec<f64> = l
-                    .split_whitespace()
-                    .map(|x| x.parse().unwrap_or(f64::NAN))
-                    .collect();
-                [v[0], v[1], v[2]]
-            })
-            .collect();
+    for (spp, seconds) in mitsuba_runs(&stdout)? {
+        let values = read_values(Path::new(&format!("{}.{spp}", of.display())))?;
         if values.len() != points.len() {
             bail!(
                 "mitsuba wrote {} values for {} points",

@@ -14,7 +14,7 @@
 //! Skipped with a note when `mitsuba` is not importable (the reference needs it).
 //! `IMAGE_SCENES=cornell-box` restricts the scenes.
 
-use super::field::mitsuba_faces;
+use super::field::{mitsuba_faces, mitsuba_runs, read_values, run_mitsuba};
 use super::gcr::{Curve, plot_curves};
 use crate::Ctx;
 use anyhow::{Context, Result, bail};
@@ -105,38 +105,12 @@ fn mitsuba(
             e.x, e.y, e.z, t.x, t.y, t.z, u.x, u.y, u.z, camera.fov_y_degrees
         ),
     )?;
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("py/mitsuba_image.py");
-    let out = std::process::Command::new("python3")
-        .arg(&script)
-        .args([&ff, &cf, &of])
-        .args(spp.iter().map(|s| s.to_string()))
-        .output()
-        .context("running python3")?;
-    if out.status.code() == Some(3) {
-        return Ok(Err(String::from_utf8_lossy(&out.stderr).trim().to_string()));
-    }
-    if !out.status.success() {
-        bail!(
-            "mitsuba_image.py failed: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
+    let stdout = match run_mitsuba("mitsuba_image.py", &[&ff, &cf, &of], spp)? {
+        Ok(o) => o,
+        Err(why) => return Ok(Err(why)),
+    };
     let mut runs = Vec::new();
-    for line in String::from_utf8_lossy(&out.stdout).lines() {
-        let kv: std::collections::HashMap<&str, &str> = line
-            .split_whitespace()
-            .filter_map(|t| t.split_once('='))
-            .collect();
-        let (Some(s), Some(sc), Some(ld), Some(rd)) = (
-            kv.get("spp"),
-            kv.get("scene"),
-            kv.get("load"),
-            kv.get("render"),
-        ) else {
-            continue;
-        };
-        let spp: usize = s.parse()?;
-        let seconds = sc.parse::<f64>()? + ld.parse::<f64>()? + rd.parse::<f64>()?;
+    for (spp, seconds) in mitsuba_runs(&stdout)? {
         let values = read_values(&PathBuf::from(format!("{}.{spp}", of.display())))?;
         if values.len() != (w * h) as usize {
             bail!("mitsuba wrote {} pixels for {w}x{h}", values.len());
@@ -145,21 +119,6 @@ fn mitsuba(
     }
     let _ = std::fs::remove_dir_all(&dir);
     Ok(Ok(runs))
-}
-
-/// `r g b` per line.
-fn read_values(path: &Path) -> Result<Vec<[f64; 3]>> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
-    Ok(text
-        .lines()
-        .map(|l| {
-            let v: Vec<f64> = l
-                .split_whitespace()
-                .map(|x| x.parse().unwrap_or(f64::NAN))
-                .collect();
-            [v[0], v[1], v[2]]
-        })
-        .collect())
 }
 
 /// The cached Mitsuba reference of one scene and size (rendered when missing).

@@ -8,15 +8,14 @@
 //! the cosine continuation's hits by the power heuristic).
 
 use crate::error::BaselineError;
-use crate::stats::{
-    Adaptive, AdaptiveEstimate, Estimate, mis_cosine, mis_light, point_rng, run_fixed,
-    survives_roulette,
-};
+use crate::stats::{Adaptive, AdaptiveEstimate, Estimate, point_rng, run_fixed, survives_roulette};
 use glam::DVec2;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use scene_sampler::{EmitterTable, FlatPoint, FlatVisibility, FlatlandScene, cosine_halfplane};
+use scene_sampler::{
+    EmitterTable, FlatPoint, FlatVisibility, FlatlandScene, PowerHeuristic, cosine_halfplane,
+};
 
 mod exact;
 pub use exact::{ExactOptions, ExactSolver, crossed_strings, point_to_segment};
@@ -73,7 +72,7 @@ fn path(
                         segment: ef,
                     };
                     if vis.visible(&xp, &at) {
-                        let w = mis_light(g, p_e);
+                        let w = PowerHeuristic::ONE_EACH.light(g, p_e);
                         for b in 0..3 {
                             out[b] += throughput[b] * w * e.emission.0[b];
                         }
@@ -93,7 +92,7 @@ fn path(
         }
         let ns = &scene.segments[next.segment as usize];
         if !ns.emission.is_zero() {
-            let w = mis_cosine(
+            let w = PowerHeuristic::ONE_EACH.cosine(
                 geometry(at.point, at.normal, next.point, next.normal),
                 lights.power_density(next.segment),
             );

@@ -9,12 +9,14 @@
 //! keeps the old estimator for comparisons.
 
 use crate::error::BaselineError;
-use crate::stats::{mis_cosine, mis_light, point_rng, run_fixed, survives_roulette};
+use crate::stats::{point_rng, run_fixed, survives_roulette};
 use glam::DVec3;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use scene_sampler::{EmitterTable, Scene, SceneBvh, SurfacePoint, cosine_hemisphere};
+use scene_sampler::{
+    EmitterTable, PowerHeuristic, Scene, SceneBvh, SurfacePoint, cosine_hemisphere,
+};
 use std::f64::consts::PI;
 
 pub use crate::stats::{Adaptive, AdaptiveEstimate, Estimate, relative_error_bound};
@@ -102,7 +104,7 @@ fn path(
                         face: ef,
                     };
                     if bvh.visible(&xp, &at) {
-                        let w = mis_light(g, p_e);
+                        let w = PowerHeuristic::ONE_EACH.light(g, p_e);
                         for b in 0..3 {
                             out[b] += throughput[b] * w * e.emission.0[b];
                         }
@@ -122,7 +124,7 @@ fn path(
         }
         let nf = &scene.faces[next.face as usize];
         if !nf.emission.is_zero() {
-            let w = mis_cosine(
+            let w = PowerHeuristic::ONE_EACH.cosine(
                 geometry(at.point, at.normal, next.point, next.normal),
                 lights.power_density(next.face),
             );

@@ -196,30 +196,6 @@ pub(crate) fn run_fixed(paths: usize, mut path: impl FnMut() -> [f64; 3]) -> Est
     acc.estimate()
 }
 
-/// Power-heuristic MIS weight (one sample per technique) of a point drawn by **emitter sampling**, times its
-/// estimator `G/p_e`: `G·p_e/(p_e² + G²)` per unit emission, written as `1/(p_e/G + G/p_e)` so that it is 0,
-/// not NaN, when `G` overflows (a point at the edge where an emitter meets the receiver).
-pub(crate) fn mis_light(g: f64, p_e: f64) -> f64 {
-    if g.is_nan() || g <= 0.0 || p_e.is_nan() || p_e <= 0.0 {
-        return 0.0;
-    }
-    let w = 1.0 / (p_e / g + g / p_e);
-    if w.is_finite() { w } else { 0.0 }
-}
-
-/// Power-heuristic MIS weight of an emitter point **hit by the cosine-sampled continuation** (density `G`
-/// per unit area): `G²/(G² + p_e²)` = `1/(1 + (p_e/G)²)`, 1 where `G` is infinite or nothing samples the face.
-pub(crate) fn mis_cosine(g: f64, p_e: f64) -> f64 {
-    if p_e.is_nan() || p_e <= 0.0 {
-        return 1.0;
-    }
-    if g.is_nan() || g <= 0.0 {
-        return 0.0;
-    }
-    let r = p_e / g;
-    1.0 / (1.0 + r * r)
-}
-
 /// Russian roulette of the path tracers after three bounces: survival probability = the largest
 /// throughput, the survivors' throughput divided by it, so that no weight exceeds 1 (finite
 /// variance at any ρ < 1; a cap at 0.95 made the weights grow by ρ/0.95 per bounce above ρ = 0.95,

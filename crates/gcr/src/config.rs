@@ -302,6 +302,14 @@ impl SolveConfig {
 
     /// Checks every setting; the error names the first one out of range.
     pub fn validate(&self) -> Result<(), ConfigError> {
+        self.validate_budgets()?;
+        self.validate_projection()?;
+        self.validate_gather()?;
+        self.validate_surfaces()
+    }
+
+    /// The budgets: network sizes, time, samples, the insertion and FEM periods.
+    fn validate_budgets(&self) -> Result<(), ConfigError> {
         let bad = |m: String| Err(ConfigError::Invalid(m));
         if !(10..=200_000).contains(&self.kernel_cells) {
             return bad(format!(
@@ -337,6 +345,12 @@ impl SolveConfig {
                 self.lambda
             ));
         }
+        Ok(())
+    }
+
+    /// The projected kernel's settings (resampling, rejection, tolerance, clamps).
+    fn validate_projection(&self) -> Result<(), ConfigError> {
+        let bad = |m: String| Err(ConfigError::Invalid(m));
         if !(0.0..=1.0).contains(&self.resample_critical_fraction) {
             return bad(format!(
                 "critical resampling fraction {} (expected 0 to 1)",
@@ -370,6 +384,12 @@ impl SolveConfig {
                 self.projection_min_support
             ));
         }
+        Ok(())
+    }
+
+    /// The output gather's rays and target error.
+    fn validate_gather(&self) -> Result<(), ConfigError> {
+        let bad = |m: String| Err(ConfigError::Invalid(m));
         if self.gather_samples.direct + self.gather_samples.indirect > 1_000_000 {
             return bad("gather samples per point above 1000000".into());
         }
@@ -402,6 +422,12 @@ impl SolveConfig {
             // there are no shadow rays: B would silently be E (or E + direct).
             return bad("the ray gather needs at least 1 cosine ray per point".into());
         }
+        Ok(())
+    }
+
+    /// The surface clusters and the breaking of the output mesh.
+    fn validate_surfaces(&self) -> Result<(), ConfigError> {
+        let bad = |m: String| Err(ConfigError::Invalid(m));
         let theta = self.surface_clusters.theta;
         if !(0.0..=4.0).contains(&theta) {
             return bad(format!(
@@ -416,6 +442,7 @@ impl SolveConfig {
                 self.breaking.max_normal_angle
             ));
         }
+
         Ok(())
     }
 }

@@ -5,7 +5,7 @@
 //! network input dimensions differ: the kernel network sees (x, y) ∈ R^6 in 3-D and R^4 in
 //! Flatland, the shading network R^3 or R^2.
 
-use crate::element::{Bands, Element, MAX_BANDS};
+use crate::element::{BANDS, Bands, Element};
 use glam::{DVec2, DVec3};
 use scene_sampler::{
     FlatKernelSampler, FlatPoint, FlatlandScene, KernelSampler, Scene, SurfacePoint,
@@ -271,7 +271,7 @@ impl Domain<'_> {
                 .map(|s| (s.emission.0, s.rho.0))
                 .collect(),
         };
-        let mut bound = [0.0; MAX_BANDS];
+        let mut bound = [0.0; BANDS];
         for (k, b) in bound.iter_mut().enumerate() {
             let e = faces.iter().map(|f| f.0[k]).fold(0.0, f64::max);
             let rho = faces.iter().map(|f| f.1[k]).fold(0.0, f64::max);

@@ -1,12 +1,8 @@
-//! Per-band values and the surface elements integrals run over.
+//! The surface elements integrals run over (and the band array, [`Bands`], from the scenes).
 
 use glam::DVec3;
 
-/// Maximum colour bands.
-pub const MAX_BANDS: usize = 3;
-
-/// Per-band values (grey scenes use band 0 only).
-pub type Bands = [f64; MAX_BANDS];
+pub use scene_sampler::{BANDS, Bands};
 
 /// A surface element of an integration domain: a segment (Flatland, z = 0), a triangle, or a
 /// planar convex quadrilateral (two coplanar scene triangles sharing an edge, merged: its exact

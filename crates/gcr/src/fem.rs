@@ -25,7 +25,7 @@
 use crate::cluster::{ClusterTree, Mask};
 use crate::config::{BaseDomain, SurfaceClusters, Transfer};
 use crate::domain::Domain;
-use crate::element::{Bands, Element, MAX_BANDS};
+use crate::element::{BANDS, Bands, Element};
 use crate::shading::ShadingGeometry;
 use crate::spatial::{BoxGrid, width_a};
 use gauss_integrals::support_radius;
@@ -134,7 +134,7 @@ impl KernelCells {
     /// per band (eq. 2.1–2.3 with the kernel's 6-D / 4-D input), summed over every cell whose
     /// facing masks accept the normals `nx` at x and `ny` at y.
     pub fn evaluate(&self, x: DVec3, nx: DVec3, y: DVec3, ny: DVec3) -> Bands {
-        let mut out = [0.0; MAX_BANDS];
+        let mut out = [0.0; BANDS];
         for o in 0..self.len() {
             if !self.accepts(o, nx, ny) {
                 continue;
@@ -625,14 +625,14 @@ impl Base {
         scratch: &mut Vec<u32>,
     ) -> Bands {
         self.cells_near(x, 0.0, scratch);
-        let mut out = [0.0; MAX_BANDS];
+        let mut out = [0.0; BANDS];
         for &k in scratch.iter() {
             let k = k as usize;
             if !self.lives_on(k, normal) {
                 continue;
             }
             let g = (-self.a[k] * self.geo.centres[k].distance_squared(x)).exp();
-            for band in 0..MAX_BANDS {
+            for band in 0..BANDS {
                 out[band] += coeff[k][band] * g;
             }
         }
@@ -694,7 +694,7 @@ fn half_integrals(
 /// network (fig. 4.13c), with `sender` from [`sender_integrals`], at a surface point y with unit
 /// normal `n` (only cells whose receiver half faces like `n` contribute; a zero `n` takes all).
 pub fn reflected_from_kernel(kernel: &KernelCells, sender: &[f64], y: DVec3, n: DVec3) -> Bands {
-    let mut out = [0.0; MAX_BANDS];
+    let mut out = [0.0; BANDS];
     for o in 0..kernel.len() {
         if !kernel.accepts_receiver(o, n) {
             continue;
@@ -702,7 +702,7 @@ pub fn reflected_from_kernel(kernel: &KernelCells, sender: &[f64], y: DVec3, n: 
         let g = sender[o]
             * (-kernel.wy[o].distance_squared(y) / (kernel.width[o] * kernel.width[o])).exp();
         if g != 0.0 {
-            for band in 0..MAX_BANDS {
+            for band in 0..BANDS {
                 out[band] += kernel.v[o][band] * g;
             }
         }
@@ -732,8 +732,8 @@ pub fn fem_step(base: Base, kernel: &KernelCells, sender: &mut Vec<f64>) -> FemS
     }
     // ⟨Receiver projections u_q = ⟨Λ_q|B_refl⟩ and the coefficients γ = G⁻¹u⟩
     let u = receiver_projections(&base, kernel, sender);
-    let mut gamma = vec![[0.0; MAX_BANDS]; base.len()];
-    for band in 0..MAX_BANDS {
+    let mut gamma = vec![[0.0; BANDS]; base.len()];
+    for band in 0..BANDS {
         let ub: Vec<f64> = u.iter().map(|x| x[band]).collect();
         for (g, v) in gamma.iter_mut().zip(ortho.solve(&ub)) {
             g[band] = v;
@@ -816,7 +816,7 @@ fn receiver_projections(base: &Base, kernel: &KernelCells, sender: &[f64]) -> Ve
     let partial: Vec<Vec<Bands>> = (0..kernel.len().div_ceil(CHUNK))
         .into_par_iter()
         .map(|chunk| {
-            let mut acc = vec![[0.0; MAX_BANDS]; n];
+            let mut acc = vec![[0.0; BANDS]; n];
             let (mut near, mut scratch) = (Vec::new(), Vec::new());
             for o in chunk * CHUNK..((chunk + 1) * CHUNK).min(kernel.len()) {
                 if sender[o] == 0.0 {
@@ -837,7 +837,7 @@ fn receiver_projections(base: &Base, kernel: &KernelCells, sender: &[f64]) -> Ve
                         kernel.facing_y(o),
                         &mut scratch,
                     );
-                    for band in 0..MAX_BANDS {
+                    for band in 0..BANDS {
                         acc[q][band] += kernel.v[o][band] * sender[o] * beta;
                     }
                 }
@@ -845,10 +845,10 @@ fn receiver_projections(base: &Base, kernel: &KernelCells, sender: &[f64]) -> Ve
             acc
         })
         .collect();
-    let mut u = vec![[0.0; MAX_BANDS]; n];
+    let mut u = vec![[0.0; BANDS]; n];
     for acc in partial {
         for (x, y) in u.iter_mut().zip(acc) {
-            for band in 0..MAX_BANDS {
+            for band in 0..BANDS {
                 x[band] += y[band];
             }
         }

@@ -29,12 +29,12 @@
 
 use crate::config::GatherSamples;
 use crate::domain::Domain;
-use crate::element::{Bands, MAX_BANDS};
+use crate::element::{BANDS, Bands};
 use crate::emitters::Emitters;
 use glam::{DVec2, DVec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use scene_sampler::{cosine_halfplane, cosine_hemisphere, uniform_triangle};
+use scene_sampler::{PowerHeuristic, cosine_halfplane, cosine_hemisphere, uniform_triangle};
 use std::f64::consts::PI;
 
 /// Result of a gather at one point.
@@ -69,8 +69,8 @@ pub fn gather(
         n_e: samples.direct as f64,
         n_c: samples.indirect as f64,
     };
-    let mut direct = [0.0; MAX_BANDS];
-    let mut indirect = [0.0; MAX_BANDS];
+    let mut direct = [0.0; BANDS];
+    let mut indirect = [0.0; BANDS];
     // ⟨Direct light: shadow rays to emitter points, stratified over the emitter choice⟩
     if !emitters.is_empty() && samples.direct > 0 {
         for i in 0..samples.direct {
@@ -83,7 +83,7 @@ pub fn gather(
             }
             let u = [rng.random::<f64>(), rng.random::<f64>()];
             if let Some(d) = shadow_ray(domain, &mis, ef, u, (y, n, face)) {
-                for b in 0..MAX_BANDS {
+                for b in 0..BANDS {
                     direct[b] += d[b];
                 }
             }
@@ -97,7 +97,7 @@ pub fn gather(
             continue;
         };
         let b = b_refl(hit.x, hit.nx, hit.face);
-        for band in 0..MAX_BANDS {
+        for band in 0..BANDS {
             indirect[band] += b[band].max(0.0) / mis.n_c;
             direct[band] += hit.direct[band];
         }
@@ -108,7 +108,7 @@ pub fn gather(
         rays: samples.direct.max(samples.indirect),
         ..Gathered::default()
     };
-    for b in 0..MAX_BANDS {
+    for b in 0..BANDS {
         out.from_networks[b] = rho[b] * indirect[b];
         out.radiosity[b] = e[b] + rho[b] * (direct[b] + indirect[b]);
     }
@@ -153,7 +153,7 @@ pub(crate) fn cosine_ray(
         return None;
     }
     let e = domain.emission(fx);
-    let mut direct = [0.0; MAX_BANDS];
+    let mut direct = [0.0; BANDS];
     if e.iter().any(|v| *v != 0.0) {
         let w = mis.cosine(geometry(domain, cx, -n.dot(d), d), fx);
         if w > 0.0 {
@@ -168,8 +168,8 @@ pub(crate) fn cosine_ray(
     })
 }
 
-/// The power heuristic of the two direct-light techniques (module docs), written with ratios so
-/// that g → ∞ at an edge gives the limits 0 and 1/n_c instead of ∞/∞.
+/// The power heuristic of the two direct-light techniques (module docs) at n_e emitter and n_c
+/// cosine samples per point, [`PowerHeuristic`] with the emitter table's density of a face.
 pub(crate) struct Mis<'a> {
     pub(crate) emitters: &'a Emitters,
     pub(crate) n_e: f64,
@@ -177,32 +177,32 @@ pub(crate) struct Mis<'a> {
 }
 
 impl Mis<'_> {
-    /// n_e · p_e(x): the emitter technique's sample density at a point of `face`.
-    fn a(&self, face: u32) -> f64 {
+    /// The emitter technique's area density p_e at a point of `face` (0 without emitters).
+    fn p_e(&self, face: u32) -> f64 {
         if self.emitters.is_empty() {
             0.0
         } else {
-            self.n_e * self.emitters.table().power_density(face)
+            self.emitters.table().power_density(face)
+        }
+    }
+
+    fn heuristic(&self) -> PowerHeuristic {
+        PowerHeuristic {
+            light_samples: self.n_e,
+            cosine_samples: self.n_c,
         }
     }
 
     /// Weight per unit emission of an emitter point with geometry term `g`, drawn by emitter
-    /// sampling: E·G·a/(a² + b²).
+    /// sampling ([`PowerHeuristic::light`]).
     pub(crate) fn light(&self, g: f64, face: u32) -> f64 {
-        let (a, b) = (self.a(face), self.n_c * g);
-        let r = b / a;
-        g / a / (1.0 + r * r)
+        self.heuristic().light(g, self.p_e(face))
     }
 
-    /// Weight per unit emission of an emitter point hit by a cosine ray: b²/(n_c·(a² + b²)); its
-    /// limit 1/n_c where r → 0 at an edge makes g infinite.
+    /// Weight per unit emission of an emitter point hit by a cosine ray
+    /// ([`PowerHeuristic::cosine`]; 1/n_c where g is infinite at an edge).
     pub(crate) fn cosine(&self, g: f64, face: u32) -> f64 {
-        if g == f64::INFINITY {
-            return 1.0 / self.n_c;
-        }
-        let (a, b) = (self.a(face), self.n_c * g);
-        let r = a / b;
-        1.0 / (self.n_c * (1.0 + r * r))
+        self.heuristic().cosine(g, self.p_e(face))
     }
 }
 

@@ -53,7 +53,7 @@ pub use config::{
     PathSettings, SolveConfig, StrengthFrom, SurfaceClusters, Transfer,
 };
 pub use domain::{Domain, Ray};
-pub use element::{Bands, MAX_BANDS};
+pub use element::{BANDS, Bands};
 pub use emitters::Emitters;
 pub use gather::Gathered;
 pub use mesh::ShadedMesh;

@@ -122,17 +122,6 @@ pub struct Metrics {
     pub images: Vec<ImageRecord>,
 }
 
-impl Metrics {
-    /// Records what the output gather measured (the last output set wins: the mesh after the
-    /// probes) and the target it ran to.
-    pub fn record_gather(&mut self, stats: &crate::GatherStats, config: &crate::SolveConfig) {
-        self.network_share = stats.network_share;
-        self.relative_std_error = stats.relative_std_error;
-        self.gather_rays = stats.rays;
-        self.target_error = config.paths.target_error;
-    }
-}
-
 /// One 3-D image written by a solve.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct ImageRecord {

@@ -31,7 +31,7 @@
 
 use crate::config::{GatherSamples, PathSettings};
 use crate::domain::Domain;
-use crate::element::{Bands, MAX_BANDS};
+use crate::element::{BANDS, Bands};
 use crate::emitters::Emitters;
 use crate::gather::{Gathered, Mis, cosine_ray, shadow_ray};
 use glam::DVec3;
@@ -94,11 +94,11 @@ impl PointEstimate {
         let total = (self.rays + other.rays) as f64;
         let (w, v) = (self.rays as f64 / total, other.rays as f64 / total);
         for (a, b) in self.share.iter_mut().zip(&other.share) {
-            for k in 0..MAX_BANDS {
+            for k in 0..BANDS {
                 a[k] = w * a[k] + v * b[k];
             }
         }
-        for k in 0..MAX_BANDS {
+        for k in 0..BANDS {
             self.from_networks[k] = w * self.from_networks[k] + v * other.from_networks[k];
         }
         self.rays += other.rays;
@@ -117,7 +117,7 @@ impl PointEstimate {
         }
         let (e, share, replicates) = (self.emission, &self.share, self.replicates);
         let r = replicates as f64;
-        for k in 0..MAX_BANDS {
+        for k in 0..BANDS {
             let total: f64 = share[..replicates].iter().map(|s| s[k]).sum();
             let mean = total / r;
             let spread: f64 = share[..replicates]
@@ -202,10 +202,10 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             f64::from(sobol_burley::sample(j as u32, dim, scramble)).min(1.0 - f64::EPSILON)
         };
         // Per replicate, its share of ρ·(D̂ + mean C + mean correction).
-        let mut share = [[0.0; MAX_BANDS]; REPLICATES];
-        let mut from_networks = [0.0; MAX_BANDS];
+        let mut share = [[0.0; BANDS]; REPLICATES];
+        let mut from_networks = [0.0; BANDS];
         let mut add = |i: usize, t: Bands, scale: f64| {
-            for k in 0..MAX_BANDS {
+            for k in 0..BANDS {
                 share[i % replicates][k] += rho[k] * t[k] * scale;
             }
         };
@@ -225,7 +225,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             let (c, d, hit) = self.cosine_ray(&z, &mis, networks_read, [qmc(i, 3), qmc(i, 4)]);
             add(i, d, 1.0);
             add(i, c, 1.0 / n_c as f64);
-            for k in 0..MAX_BANDS {
+            for k in 0..BANDS {
                 from_networks[k] += rho[k] * c[k] / n_c as f64;
             }
             if i < corrected {
@@ -269,7 +269,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             n_e: 1.0,
             n_c: 1.0,
         };
-        let mut share = [[0.0; MAX_BANDS]; REPLICATES];
+        let mut share = [[0.0; BANDS]; REPLICATES];
         for i in 0..rays {
             let Some((y, n, face)) = receiver([qmc(i, 10), qmc(i, 11)]) else {
                 continue;
@@ -285,14 +285,14 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
                         let first = std::array::from_fn(|d| qmc(i, 5 + d as u32));
                         self.reflected(&x, Some(first), &mut rng)
                     }
-                    None => [0.0; MAX_BANDS],
+                    None => [0.0; BANDS],
                 };
-                for k in 0..MAX_BANDS {
+                for k in 0..BANDS {
                     light[k] += d[k] + l[k];
                     b[k] += rho[k] * light[k];
                 }
             }
-            for k in 0..MAX_BANDS {
+            for k in 0..BANDS {
                 share[i % replicates][k] += b[k] / rays as f64;
             }
         }
@@ -315,7 +315,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
     /// `L̂(x) = Σ_v β_v ρ_v (NEE_v + emitter hit_v)`, `β` the product of ρ/q over the earlier
     /// vertices: the recursion `L̂(x) = ρ·(NEE + hit + L̂(next)/q)` unrolled.
     fn reflected(&self, x: &Vertex, first: Option<[f64; 5]>, rng: &mut ChaCha8Rng) -> Bands {
-        let (mut out, mut beta) = ([0.0; MAX_BANDS], [1.0; MAX_BANDS]);
+        let (mut out, mut beta) = ([0.0; BANDS], [1.0; BANDS]);
         let (mut x, mut first) = (*x, first);
         for depth in 1..=MAX_DEPTH {
             let rho = self.domain.reflectance(x.face);
@@ -343,16 +343,16 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             let mut next = None;
             if q > 0.0 && (q >= 1.0 || rng.random::<f64>() < q) {
                 let (_, d, hit) = self.cosine_ray(&x, &mis, false, [u[3], u[4]]);
-                for k in 0..MAX_BANDS {
+                for k in 0..BANDS {
                     light[k] += d[k];
                 }
                 next = hit;
             }
-            for k in 0..MAX_BANDS {
+            for k in 0..BANDS {
                 out[k] += beta[k] * rho[k] * light[k];
             }
             let Some(n) = next else { break };
-            for k in 0..MAX_BANDS {
+            for k in 0..BANDS {
                 beta[k] *= rho[k] / q;
             }
             x = n;
@@ -367,7 +367,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             Some(ef) if ef != z.face => {
                 shadow_ray(self.domain, mis, ef, u, (z.p, z.n, z.face)).unwrap_or_default()
             }
-            _ => [0.0; MAX_BANDS],
+            _ => [0.0; BANDS],
         }
     }
 
@@ -381,12 +381,12 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         u: [f64; 2],
     ) -> (Bands, Bands, Option<Vertex>) {
         let Some(hit) = cosine_ray(self.domain, mis, (z.p, z.n, z.face), u) else {
-            return ([0.0; MAX_BANDS], [0.0; MAX_BANDS], None);
+            return ([0.0; BANDS], [0.0; BANDS], None);
         };
         let c = if networks {
             (self.networks)(hit.x, hit.nx).map(|v| v.max(0.0))
         } else {
-            [0.0; MAX_BANDS]
+            [0.0; BANDS]
         };
         let x = Vertex {
             p: hit.x,
@@ -432,7 +432,7 @@ mod tests {
         let (samples, settings) = counts(8, 32, 8);
         let points = SurfacePoints::of(d.scene_3d().unwrap(), 200);
         for scale in [0.0, 1.0, 3.0] {
-            let net = move |_: DVec3, _: DVec3| [scale * (exact - e); MAX_BANDS];
+            let net = move |_: DVec3, _: DVec3| [scale * (exact - e); BANDS];
             let g = PathGather::new(&d, &em, net, samples, settings);
             let (mut sum, mut var, mut sq) = (0.0, 0.0, 0.0);
             for (i, &(y, n, f)) in points.0.iter().enumerate() {
@@ -467,7 +467,7 @@ mod tests {
     fn without_corrections_it_is_the_ray_gather() {
         let (d, em, exact, e) = furnace();
         let (samples, settings) = counts(16, 16, 0);
-        let net = |_: DVec3, _: DVec3| [exact - e; MAX_BANDS];
+        let net = |_: DVec3, _: DVec3| [exact - e; BANDS];
         let g = PathGather::new(&d, &em, net, samples, settings);
         for (i, &(y, n, f)) in SurfacePoints::of(d.scene_3d().unwrap(), 20)
             .0
@@ -494,7 +494,7 @@ mod tests {
         let points = SurfacePoints::of(d.scene_3d().unwrap(), 100);
         for (i, &(y, n, f)) in points.0.iter().enumerate() {
             let r = g.gather((y, n, f), i as u64);
-            assert_eq!(r.from_networks, [0.0; MAX_BANDS]);
+            assert_eq!(r.from_networks, [0.0; BANDS]);
             sum += r.radiosity[0];
             var += r.std_error[0].powi(2);
         }

@@ -4,7 +4,7 @@
 use crate::config::GatherSamples;
 use crate::config::{GatherMode, SolveConfig};
 use crate::domain::Domain;
-use crate::element::{Bands, MAX_BANDS};
+use crate::element::{BANDS, Bands};
 use crate::emitters::Emitters;
 use crate::gather::{Gathered, gather};
 use crate::mesh::ShadedMesh;
@@ -204,7 +204,7 @@ fn radiosity_at(
     let e = domain.emission(face);
     let reflected = |b: Bands| {
         let mut out = Gathered::default();
-        for k in 0..MAX_BANDS {
+        for k in 0..BANDS {
             out.from_networks[k] = b[k].max(0.0);
             out.radiosity[k] = e[k] + out.from_networks[k];
         }
@@ -322,7 +322,7 @@ pub fn relative_std_error(gathered: &[Gathered]) -> Option<f64> {
         .iter()
         .filter(|g| g.std_error.iter().any(|s| *s != 0.0))
     {
-        for k in 0..MAX_BANDS {
+        for k in 0..BANDS {
             v += g.std_error[k] * g.std_error[k];
             b += g.radiosity[k] * g.radiosity[k];
         }

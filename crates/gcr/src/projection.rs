@@ -26,7 +26,7 @@
 //! dependent cells instead of amplifying the Monte-Carlo noise in b.
 
 use crate::cluster::Mask;
-use crate::element::{Bands, MAX_BANDS};
+use crate::element::{BANDS, Bands};
 use crate::fem::{KernelCells, SceneSurface};
 use crate::sample::Sample;
 use crate::spatial::width_a;
@@ -175,15 +175,15 @@ pub fn kernel_moments(
     let partial: Vec<Vec<Bands>> = samples
         .par_chunks(chunk)
         .map(|part| {
-            let mut b = vec![[0.0; MAX_BANDS]; n];
+            let mut b = vec![[0.0; BANDS]; n];
             for smp in part {
                 if smp.inv_px == 0.0 {
                     continue;
                 }
                 let rho = reflectance(smp.ray.face_y);
-                let mut w = [0.0; MAX_BANDS];
+                let mut w = [0.0; BANDS];
                 let mut any = false;
-                for k in 0..MAX_BANDS {
+                for k in 0..BANDS {
                     if smp.ray.kernel[k] > 0.0 {
                         w[k] = rho[k] * smp.s[k] * smp.inv_px;
                         any |= w[k] != 0.0;
@@ -193,7 +193,7 @@ pub fn kernel_moments(
                     continue;
                 }
                 for_each_cell_at(kernel, (&a, cut), excluded, smp, |o, g| {
-                    for k in 0..MAX_BANDS {
+                    for k in 0..BANDS {
                         b[o][k] += g * w[k];
                     }
                 });
@@ -201,10 +201,10 @@ pub fn kernel_moments(
             b
         })
         .collect();
-    let mut b = vec![[0.0; MAX_BANDS]; n];
+    let mut b = vec![[0.0; BANDS]; n];
     for part in partial {
         for (acc, v) in b.iter_mut().zip(part) {
-            for k in 0..MAX_BANDS {
+            for k in 0..BANDS {
                 acc[k] += v[k];
             }
         }
@@ -283,10 +283,10 @@ pub fn sampled_reflected_power(
     let partial: Vec<Bands> = samples
         .par_chunks(1024)
         .map(|part| {
-            let mut w = [0.0; MAX_BANDS];
+            let mut w = [0.0; BANDS];
             for smp in part.iter().filter(|smp| smp.inv_px != 0.0) {
                 let rho = reflectance(smp.ray.face_y);
-                for k in 0..MAX_BANDS {
+                for k in 0..BANDS {
                     if smp.ray.kernel[k] > 0.0 {
                         w[k] += rho[k] * smp.s[k] * smp.inv_px;
                     }
@@ -295,9 +295,9 @@ pub fn sampled_reflected_power(
             w
         })
         .collect();
-    let mut p = [0.0; MAX_BANDS];
+    let mut p = [0.0; BANDS];
     for w in partial {
-        for k in 0..MAX_BANDS {
+        for k in 0..BANDS {
             p[k] += w[k];
         }
     }
@@ -329,10 +329,10 @@ pub fn closed_reflected_power(
     let partial: Vec<[Bands; 3]> = samples
         .par_chunks(1024)
         .map(|part| {
-            let mut acc = [[0.0; MAX_BANDS]; 3];
+            let mut acc = [[0.0; BANDS]; 3];
             for smp in part.iter().filter(|smp| smp.inv_px != 0.0) {
                 let rho = reflectance(smp.ray.face_y);
-                for k in 0..MAX_BANDS {
+                for k in 0..BANDS {
                     if smp.ray.kernel[k] > 0.0 {
                         acc[0][k] += rho[k] * smp.s[k] * smp.inv_px;
                     }
@@ -343,17 +343,17 @@ pub fn closed_reflected_power(
             acc
         })
         .collect();
-    let mut sum = [[0.0; MAX_BANDS]; 3];
+    let mut sum = [[0.0; BANDS]; 3];
     for acc in partial {
         for (t, a) in sum.iter_mut().zip(acc) {
-            for k in 0..MAX_BANDS {
+            for k in 0..BANDS {
                 t[k] += a[k];
             }
         }
     }
     let inv = 1.0 / shots.max(1) as f64;
-    let mut p = [0.0; MAX_BANDS];
-    for k in 0..MAX_BANDS {
+    let mut p = [0.0; BANDS];
+    for k in 0..BANDS {
         if sum[1][k] > 0.0 {
             p[k] = sum[0][k] / sum[1][k] * (sum[2][k] * inv + generated[k]);
         }
@@ -364,9 +364,9 @@ pub fn closed_reflected_power(
 /// Reflected power per band of the kernel collection: `∫_S B_refl = Σ_o v_o·c_o·r_o` with the
 /// sender integrals c_o and receiver integrals r_o ([`crate::fem::receiver_integrals`]).
 pub fn kernel_reflected_power(kernel: &KernelCells, sender: &[f64], receiver: &[f64]) -> Bands {
-    let mut p = [0.0; MAX_BANDS];
+    let mut p = [0.0; BANDS];
     for o in 0..kernel.len() {
-        for k in 0..MAX_BANDS {
+        for k in 0..BANDS {
             p[k] += kernel.v[o][k] * sender[o] * receiver[o];
         }
     }
@@ -423,8 +423,8 @@ fn collection_at(
 /// The sampled-power weights `w_k,i·N = ρ_k(y_i)·inv_px_i` of a sample (0 in bands without
 /// kernel, as in [`kernel_moments`]).
 fn power_weights(smp: &Sample, rho: Bands) -> Bands {
-    let mut w = [0.0; MAX_BANDS];
-    for k in 0..MAX_BANDS {
+    let mut w = [0.0; BANDS];
+    for k in 0..BANDS {
         if smp.ray.kernel[k] > 0.0 {
             w[k] = rho[k] * smp.inv_px;
         }
@@ -476,16 +476,16 @@ pub fn bounce_operator(
     let rows: Vec<(Vec<Bands>, Bands)> = by_cell
         .par_iter()
         .map(|list| {
-            let mut row = vec![[0.0; MAX_BANDS]; m];
-            let mut me = [0.0; MAX_BANDS];
+            let mut row = vec![[0.0; BANDS]; m];
+            let mut me = [0.0; BANDS];
             for &(j, g) in list {
                 let (w, _, coll) = &per[j as usize];
                 let e = &samples[shot[j as usize]].ray.emission_x;
-                for k in 0..MAX_BANDS {
+                for k in 0..BANDS {
                     me[k] += g * w[k] * e[k] * inv;
                 }
                 for &(p, ap) in coll {
-                    for k in 0..MAX_BANDS {
+                    for k in 0..BANDS {
                         row[p as usize][k] += g * w[k] * ap * inv;
                     }
                 }
@@ -493,23 +493,23 @@ pub fn bounce_operator(
             (row, me)
         })
         .collect();
-    let (mut atw, mut atu) = (vec![[0.0; MAX_BANDS]; m], vec![[0.0; MAX_BANDS]; m]);
-    let (mut we, mut ue) = ([0.0; MAX_BANDS], [0.0; MAX_BANDS]);
+    let (mut atw, mut atu) = (vec![[0.0; BANDS]; m], vec![[0.0; BANDS]; m]);
+    let (mut we, mut ue) = ([0.0; BANDS], [0.0; BANDS]);
     for (j, (w, _, coll)) in per.iter().enumerate() {
         let smp = &samples[shot[j]];
         let (e, u) = (&smp.ray.emission_x, smp.inv_px * inv);
-        for k in 0..MAX_BANDS {
+        for k in 0..BANDS {
             we[k] += w[k] * e[k] * inv;
             ue[k] += u * e[k];
         }
         for &(p, ap) in coll {
-            for k in 0..MAX_BANDS {
+            for k in 0..BANDS {
                 atw[p as usize][k] += w[k] * ap * inv;
                 atu[p as usize][k] += u * ap;
             }
         }
     }
-    let ma = (0..MAX_BANDS)
+    let ma = (0..BANDS)
         .map(|k| DMatrix::from_fn(m, m, |o, p| rows[o].0[p][k]))
         .collect();
     let me = rows.iter().map(|r| r.1).collect();
@@ -596,7 +596,7 @@ impl KernelProjection {
             reflectance,
             (self.tol, &self.excluded),
         );
-        for k in 0..MAX_BANDS {
+        for k in 0..BANDS {
             let rhs: Vec<f64> = b.iter().map(|v| v[k]).collect();
             let v = self.ortho.solve(&rhs);
             for (o, x) in v.into_iter().enumerate() {
@@ -641,7 +641,7 @@ mod tests {
             kernel.wx.push(wx);
             kernel.wy.push(wy);
             kernel.width.push(d);
-            kernel.v.push([0.0; MAX_BANDS]);
+            kernel.v.push([0.0; BANDS]);
         }
         kernel
     }
@@ -709,7 +709,7 @@ mod tests {
         let some = KernelProjection::excluding(&kernel, &surface, 1e-6, 1e-6, &[false, true]);
         some.fit(&mut kernel, &samples, shots, &reflectance);
         assert_eq!(some.report().rejected, 1);
-        assert_eq!(kernel.v[1], [0.0; MAX_BANDS]);
+        assert_eq!(kernel.v[1], [0.0; BANDS]);
         assert!(kernel.v[0][0] != 0.0 && kernel.v[2][0] != 0.0);
     }
 

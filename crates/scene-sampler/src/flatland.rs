@@ -232,7 +232,7 @@ impl FlatlandScene {
                 Some(n) => format!("segment {i} ({n})"),
                 None => format!("segment {i}"),
             };
-            let rho = crate::load::check_file_material(
+            let rho = crate::scene::check_file_material(
                 source,
                 &label,
                 s.rho.spectrum(),

@@ -35,6 +35,7 @@ pub mod error;
 pub mod flatland;
 pub mod kernel;
 pub mod load;
+pub mod mis;
 pub mod probe;
 pub mod sample;
 pub mod scene;
@@ -47,16 +48,17 @@ pub use error::{Result, SceneError};
 pub use flatland::{FlatView, FlatlandScene, Segment};
 pub use kernel::{FlatKernelSample, FlatKernelSampler, KernelSample, KernelSampler, Samples};
 pub use load::{
-    RHO_MAX, load, load_flatland, load_gltf, load_obj, load_or_builtin, to_gltf, to_obj,
-    write_flatland, write_gltf, write_obj,
+    load, load_flatland, load_gltf, load_obj, load_or_builtin, to_gltf, to_obj, write_flatland,
+    write_gltf, write_obj,
 };
+pub use mis::PowerHeuristic;
 pub use probe::{FlatProbe, Probe, parse_flat_probes, parse_probes, read_flat_probes, read_probes};
 pub use sample::{
     FlatPoint, FlatSampler, SurfacePoint, SurfaceSampler, cosine_halfplane, cosine_hemisphere,
     orthonormal_basis,
 };
-pub use scene::{Camera, Face, Scene};
-pub use spectrum::Spectrum;
+pub use scene::{Camera, Face, RHO_MAX, Scene};
+pub use spectrum::{BANDS, Bands, Spectrum};
 
 /// A scene of either dimension, as returned by [`load`] and [`builtin`].
 #[derive(Clone, Debug)]

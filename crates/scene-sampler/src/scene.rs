@@ -302,6 +302,44 @@ impl Scene {
     }
 }
 
+/// The largest reflectance a scene file may give: a file's ρ ≥ 1 in some band (which would create energy) is
+/// clamped to this, with one warning naming the material. Not refused: white (1, 1, 1) is the common
+/// default of modelling tools, e.g. glTF's `baseColorFactor`.
+pub const RHO_MAX: f64 = 0.98;
+
+/// Checks a file's material, clamping ρ ≥ 1 to [`RHO_MAX`] (one warning in `warnings`). Negative or
+/// non-finite ρ or emission is an error naming the material. `e` is the emitted radiosity (already ×π).
+pub(crate) fn check_file_material(
+    source: &str,
+    material: &str,
+    rho: Spectrum,
+    e: Spectrum,
+    warnings: &mut Vec<String>,
+) -> Result<Spectrum> {
+    let bad = |message: String| SceneError::BadMaterial {
+        source_name: source.into(),
+        material: material.into(),
+        message,
+    };
+    for (what, v) in [("reflectance", rho), ("emission", e)] {
+        if let Some(x) = v.0.iter().find(|x| !x.is_finite()) {
+            return Err(bad(format!("non-finite {what} {x}")));
+        }
+        if let Some(x) = v.0.iter().find(|&&x| x < 0.0) {
+            return Err(bad(format!("negative {what} {x}")));
+        }
+    }
+    if rho.0.iter().any(|&x| x >= 1.0) {
+        warnings.push(format!(
+            "{source}: material `{material}`: reflectance {} {} {} is not below 1 (it would create energy); \
+             clamped to {RHO_MAX}",
+            rho.0[0], rho.0[1], rho.0[2]
+        ));
+        return Ok(Spectrum(rho.0.map(|x| if x >= 1.0 { RHO_MAX } else { x })));
+    }
+    Ok(rho)
+}
+
 /// Checks ρ ∈ [0,1) and E ≥ 0, both finite, for face `i`.
 pub(crate) fn check_material(source: &str, i: usize, rho: Spectrum, e: Spectrum) -> Result<()> {
     if !rho.is_finite() {

@@ -2,12 +2,19 @@
 
 use std::ops::{Add, AddAssign, Div, Mul, MulAssign, Sub};
 
+/// Colour bands of every scene and solver: r, g, b.
+pub const BANDS: usize = 3;
+
+/// One value per colour band, the plain array the solvers compute with (grey scenes: band 0, or
+/// the same value in every band); [`Spectrum`] wraps it for materials, with arithmetic.
+pub type Bands = [f64; BANDS];
+
 /// One value per colour band (r, g, b).
 ///
 /// Grey scenes (`bands == 1` on the scene) store the same value in all three slots, so that callers can always
 /// compute in RGB and report only band 0 for grey scenes. Arithmetic is component-wise.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Spectrum(pub [f64; 3]);
+pub struct Spectrum(pub Bands);
 
 impl Spectrum {
     /// All bands zero.

@@ -12,7 +12,7 @@
 //! estimates) and the gather's seconds.
 
 use gcr::{Domain, Emitters, GatherMode, GatherSamples, SolveConfig, radiosity_at_points};
-use scene_sampler::{KernelSampler, SceneBvh, SurfaceSampler};
+use scene_sampler::{KernelSampler, Scene, SceneBvh, SurfacePoint, SurfaceSampler};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
@@ -41,43 +41,7 @@ fn main() -> anyhow::Result<()> {
     let points = SurfaceSampler::new(&scene).spread(count, |p| {
         all_emit || scene.faces[p.face as usize].emission.is_zero()
     });
-    // The reference is the slow part of a sweep over seeds or budgets: it is cached in the
-    // system's temporary directory, keyed by everything it depends on.
-    let cache = std::env::temp_dir().join(format!("gcr-gather-samples-{name}-{count}-{paths}.txt"));
-    let reference: Vec<baselines::Estimate> = match std::fs::read_to_string(&cache) {
-        Ok(text) => text
-            .lines()
-            .map(|l| {
-                let v: Vec<f64> = l
-                    .split(' ')
-                    .map(|x| x.parse().unwrap_or(f64::NAN))
-                    .collect();
-                baselines::Estimate {
-                    mean: [v[0], v[1], v[2]],
-                    std_error: [v[3], v[4], v[5]],
-                    paths,
-                }
-            })
-            .collect(),
-        Err(_) => {
-            let r = baselines::pointwise::radiosity_at(&scene, &bvh, &points, paths, 0x5EED);
-            let text: String = r
-                .iter()
-                .map(|e| {
-                    let [a, b, c] = e.mean;
-                    let [d, f, g] = e.std_error;
-                    format!("{a:e} {b:e} {c:e} {d:e} {f:e} {g:e}\n")
-                })
-                .collect();
-            std::fs::write(&cache, text)?;
-            r
-        }
-    };
-    anyhow::ensure!(
-        reference.len() == points.len(),
-        "stale cache {}",
-        cache.display()
-    );
+    let reference = cached_reference(&scene, &bvh, &points, name, paths)?;
     let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
     let emitters = Emitters::new(&domain);
     let config = SolveConfig {
@@ -135,4 +99,54 @@ fn main() -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// The path-traced reference at `points`: the slow part of a sweep over seeds or budgets, so it
+/// is cached in the system's temporary directory, keyed by everything it depends on.
+fn cached_reference(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    points: &[SurfacePoint],
+    name: &str,
+    paths: usize,
+) -> anyhow::Result<Vec<baselines::Estimate>> {
+    let cache = std::env::temp_dir().join(format!(
+        "gcr-gather-samples-{name}-{}-{paths}.txt",
+        points.len()
+    ));
+    let reference = match std::fs::read_to_string(&cache) {
+        Ok(text) => text
+            .lines()
+            .map(|l| {
+                let v: Vec<f64> = l
+                    .split(' ')
+                    .map(|x| x.parse().unwrap_or(f64::NAN))
+                    .collect();
+                baselines::Estimate {
+                    mean: [v[0], v[1], v[2]],
+                    std_error: [v[3], v[4], v[5]],
+                    paths,
+                }
+            })
+            .collect(),
+        Err(_) => {
+            let r = baselines::pointwise::radiosity_at(scene, bvh, points, paths, 0x5EED);
+            let text: String = r
+                .iter()
+                .map(|e| {
+                    let [a, b, c] = e.mean;
+                    let [d, f, g] = e.std_error;
+                    format!("{a:e} {b:e} {c:e} {d:e} {f:e} {g:e}\n")
+                })
+                .collect();
+            std::fs::write(&cache, text)?;
+            r
+        }
+    };
+    anyhow::ensure!(
+        reference.len() == points.len(),
+        "stale cache {}",
+        cache.display()
+    );
+    Ok(reference)
 }

@@ -4,7 +4,7 @@
 //! `cargo run --release -p gcr --example kernel_diagnostics -- cornell-box 200`
 
 use gcr::{Domain, SolveConfig};
-use scene_sampler::{KernelSampler, SceneBvh};
+use scene_sampler::{KernelSampler, Scene, SceneBvh, SurfacePoint};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
@@ -59,6 +59,20 @@ fn main() -> anyhow::Result<()> {
             fden += t * t;
         }
     }
+    print_target_quantiles(&trained);
+    least_squares_fit(&scene, &trained, &points, &reference);
+    println!(
+        "{name} cells={cells} B_refl rel_l2={:.3} sum_ratio={:.3} fit_rel_rms={:.3} samples={} seconds={secs:.1}",
+        (num / den).sqrt(),
+        sk / sr,
+        (fnum / fden).sqrt(),
+        trained.samples.len()
+    );
+    Ok(())
+}
+
+/// The distribution of the kernel network's targets K·s (band 0) on the final samples.
+fn print_target_quantiles(trained: &gcr::Trained) {
     let mut t: Vec<f64> = trained
         .samples
         .iter()
@@ -77,7 +91,16 @@ fn main() -> anyhow::Result<()> {
         q(1.0),
         top / total
     );
-    // Least-squares output weights on the same centres and widths (ridge 1e-8·trace/n).
+}
+
+/// Least-squares output weights on the same centres and widths (ridge 1e-6·trace/n): their fit
+/// on the samples and B_refl at the probes.
+fn least_squares_fit(
+    scene: &Scene,
+    trained: &gcr::Trained,
+    points: &[SurfacePoint],
+    reference: &[baselines::Estimate],
+) {
     let n = trained.kernel.len();
     let m = trained.samples.len();
     let mut phi = nalgebra::DMatrix::<f64>::zeros(m, n);
@@ -106,7 +129,7 @@ fn main() -> anyhow::Result<()> {
         }
     }
     let (mut lnum, mut lden) = (0.0, 0.0);
-    for (p, r) in points.iter().zip(&reference) {
+    for (p, r) in points.iter().zip(reference) {
         if !scene.faces[p.face as usize].emission.is_zero() {
             continue;
         }
@@ -121,12 +144,4 @@ fn main() -> anyhow::Result<()> {
         fit.norm() / rhs.norm(),
         (lnum / lden).sqrt()
     );
-    println!(
-        "{name} cells={cells} B_refl rel_l2={:.3} sum_ratio={:.3} fit_rel_rms={:.3} samples={} seconds={secs:.1}",
-        (num / den).sqrt(),
-        sk / sr,
-        (fnum / fden).sqrt(),
-        trained.samples.len()
-    );
-    Ok(())
 }

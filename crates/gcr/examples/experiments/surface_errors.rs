@@ -8,8 +8,10 @@
 //! The ray gather averages B_refl over the hemisphere it sees, so pointwise errors that cancel
 //! within an object matter less than a wrong mean per object; this prints both.
 
+use baselines::pointwise::Estimate;
+use gcr::Gathered;
 use gcr::{Domain, Emitters, GatherMode, SolveConfig, radiosity_at_points};
-use scene_sampler::{KernelSampler, SceneBvh, SurfaceSampler};
+use scene_sampler::{KernelSampler, Scene, SceneBvh, SurfacePoint, SurfaceSampler};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
@@ -49,8 +51,71 @@ fn main() -> anyhow::Result<()> {
         &at,
     )?;
     let rays = radiosity_at_points(&domain, &trained, &emitters, &config, &at)?;
+    let acc = per_object_sums(&scene, &points, &reference, &kernel, &rays);
+    let tr = print_per_object(&scene, &acc, &reference, name, cells, count, paths);
+    // Oracle: the kernel collection scaled per object and band to the reference's mean.
+    let factor: Vec<[f64; 3]> = acc
+        .0
+        .iter()
+        .map(|a| {
+            std::array::from_fn(|b| {
+                if a[b][1] != 0.0 {
+                    a[b][0] / a[b][1]
+                } else {
+                    1.0
+                }
+            })
+        })
+        .collect();
+    let oracle: Vec<_> = at
+        .iter()
+        .enumerate()
+        .map(|(i, &(y, nrm, face))| {
+            gcr::stages::gather(
+                &domain,
+                &emitters,
+                y,
+                nrm,
+                face,
+                config.gather_samples,
+                i as u64,
+                &|x, n, f| {
+                    let k = trained.reflected_kernel(x, n);
+                    let s = factor[scene.faces[f as usize].object as usize];
+                    std::array::from_fn(|b| k[b] * s[b])
+                },
+            )
+        })
+        .collect();
+    let e2: f64 = oracle
+        .iter()
+        .zip(&reference)
+        .map(|(g, r)| {
+            (0..3)
+                .map(|b| (g.radiosity[b] - r.mean[b]).powi(2))
+                .sum::<f64>()
+        })
+        .sum();
+    print_worst(&scene, &points, &reference, &rays, &kernel);
+    println!(
+        "rays with B_refl scaled per object to the reference's means: {:.3}",
+        (e2 / tr).sqrt()
+    );
+    Ok(())
+}
+
+/// Per object and band: Σ ref, Σ kernel, Σ (kernel − ref)², Σ ref², Σ (rays − ref)²; with the
+/// point count per object.
+type Sums = (Vec<[[f64; 5]; 3]>, Vec<usize>);
+
+fn per_object_sums(
+    scene: &Scene,
+    points: &[SurfacePoint],
+    reference: &[Estimate],
+    kernel: &[Gathered],
+    rays: &[Gathered],
+) -> Sums {
     let objects = scene.objects.len();
-    // Per object and band: Σ ref, Σ kernel, Σ (kernel − ref)², Σ ref², Σ (rays − ref)², count.
     let mut acc = vec![[[0.0f64; 5]; 3]; objects];
     let mut n = vec![0usize; objects];
     for (i, p) in points.iter().enumerate() {
@@ -69,6 +134,20 @@ fn main() -> anyhow::Result<()> {
             a[4] += (g - reference[i].mean[b]).powi(2);
         }
     }
+    (acc, n)
+}
+
+/// Prints the per-object table; returns Σ ref² (the normalization of the relative errors).
+fn print_per_object(
+    scene: &Scene,
+    (acc, n): &Sums,
+    reference: &[Estimate],
+    name: &str,
+    cells: usize,
+    count: usize,
+    paths: usize,
+) -> f64 {
+    let objects = scene.objects.len();
     println!("{name}, {cells} cells, {count} area-uniform points, reference {paths} paths");
     println!(
         "| object | points | mean B_refl ref (r g b) | mean kernel / ref − 1 (r g b) | rel. L2 kernel | rel. L2 rays (of B) |"
@@ -111,51 +190,20 @@ fn main() -> anyhow::Result<()> {
         (tg / tr).sqrt(),
         (noise / tr).sqrt()
     );
-    // Oracle: the kernel collection scaled per object and band to the reference's mean.
-    let factor: Vec<[f64; 3]> = acc
-        .iter()
-        .map(|a| {
-            std::array::from_fn(|b| {
-                if a[b][1] != 0.0 {
-                    a[b][0] / a[b][1]
-                } else {
-                    1.0
-                }
-            })
-        })
-        .collect();
-    let oracle: Vec<_> = at
-        .iter()
-        .enumerate()
-        .map(|(i, &(y, nrm, face))| {
-            gcr::stages::gather(
-                &domain,
-                &emitters,
-                y,
-                nrm,
-                face,
-                config.gather_samples,
-                i as u64,
-                &|x, n, f| {
-                    let k = trained.reflected_kernel(x, n);
-                    let s = factor[scene.faces[f as usize].object as usize];
-                    std::array::from_fn(|b| k[b] * s[b])
-                },
-            )
-        })
-        .collect();
-    let e2: f64 = oracle
-        .iter()
-        .zip(&reference)
-        .map(|(g, r)| {
-            (0..3)
-                .map(|b| (g.radiosity[b] - r.mean[b]).powi(2))
-                .sum::<f64>()
-        })
-        .sum();
+    tr
+}
+
+/// The 20 points with the largest squared error of the ray gather.
+fn print_worst(
+    scene: &Scene,
+    points: &[SurfacePoint],
+    reference: &[Estimate],
+    rays: &[Gathered],
+    kernel: &[Gathered],
+) {
     let mut worst: Vec<(f64, usize)> = rays
         .iter()
-        .zip(&reference)
+        .zip(reference)
         .enumerate()
         .map(|(i, (g, r))| {
             let d: f64 = (0..3).map(|b| (g.radiosity[b] - r.mean[b]).powi(2)).sum();
@@ -186,9 +234,4 @@ fn main() -> anyhow::Result<()> {
             kernel[i].radiosity[0],
         );
     }
-    println!(
-        "rays with B_refl scaled per object to the reference's means: {:.3}",
-        (e2 / tr).sqrt()
-    );
-    Ok(())
 }

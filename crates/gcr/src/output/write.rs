@@ -20,6 +20,7 @@ use crate::pipeline::{GatherStats, output_mesh, radiosity_at_points};
 use crate::retriangulate::RetriangulateLimits;
 use crate::solve::Trained;
 use glam::DVec3;
+use scene_sampler::Scene;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -258,7 +259,7 @@ pub fn write_outputs(
     if let Some(path) = &paths.probe_out {
         let tg = Instant::now();
         let (text, stats) = probe_values(domain, trained, &emitters, config, plan.probes())?;
-        metrics.record_gather(&stats, config);
+        record_gather(&mut metrics, &stats, config);
         metrics.seconds.gather += tg.elapsed().as_secs_f64();
         staged.write_bytes(path, text.as_bytes())?;
     }
@@ -334,7 +335,7 @@ fn write_3d(
     let tg = Instant::now();
     let mesh = if plan.needs_mesh() {
         let (mesh, stats) = output_mesh(domain, trained, config, RetriangulateLimits::default())?;
-        metrics.record_gather(&stats, config);
+        record_gather(metrics, &stats, config);
         metrics.output_vertices = mesh.vertex_count();
         metrics.output_triangles = mesh.triangle_count();
         Some(mesh)
@@ -357,25 +358,13 @@ fn write_3d(
         Some(scale) => Exposure { scale },
         None => exposure_of_mesh(m),
     });
-    let mut jobs = Vec::new();
-    for (path, choice, source) in images {
-        let camera = match choice {
-            CameraChoice::Given(c) => (c, source),
-            CameraChoice::Scene { fov } if scene.camera_given => {
-                let mut c = PinholeCamera::of_scene(scene);
-                c.fov_y_degrees = fov.unwrap_or(c.fov_y_degrees);
-                (c, "scene")
-            }
-            CameraChoice::Scene { fov } | CameraChoice::Automatic { fov } => {
-                let (mesh, exposure) = mesh
-                    .as_ref()
-                    .zip(mesh_exposure.as_ref())
-                    .expect("the automatic camera's outputs build the mesh (needs_mesh)");
-                automatic(domain, mesh, exposure, settings, fov)
-            }
-        };
-        jobs.push((path, camera));
-    }
+    let jobs = image_cameras(
+        domain,
+        scene,
+        &images,
+        mesh.as_ref().zip(mesh_exposure.as_ref()),
+        settings,
+    );
     // ⟨Per-pixel images: B gathered at every sub-sample's visible point⟩
     let tg = Instant::now();
     let mut rendered = Vec::new();
@@ -383,12 +372,13 @@ fn write_3d(
         for (_, (camera, _)) in &jobs {
             let size = (settings.width, settings.height, settings.pixel_samples);
             let img = super::pixel::render_pixels(domain, trained, config, camera, size)?;
-            metrics.record_gather(&img.stats, config);
+            record_gather(metrics, &img.stats, config);
             rendered.push(img);
         }
     }
     metrics.seconds.gather += tg.elapsed().as_secs_f64();
     let to = Instant::now();
+    // ⟨One exposure for every tone-mapped output⟩
     let exposure = match (settings.exposure, &mesh_exposure, rendered.first()) {
         (Some(scale), _, _) => Exposure { scale },
         (None, Some(e), _) => *e,
@@ -399,13 +389,7 @@ fn write_3d(
         || paths.ply.is_some()
         || jobs.iter().any(|(p, _)| format_of(p) != Format::Exr);
     if tone_mapped {
-        metrics.exposure = Some(exposure.scale);
-        metrics.exposure_source = if settings.exposure.is_some() {
-            "given"
-        } else {
-            "auto"
-        }
-        .into();
+        record_exposure(metrics, &exposure, settings);
     }
     // ⟨The images, then the meshes⟩
     for (i, (path, (camera, source))) in jobs.iter().enumerate() {
@@ -432,6 +416,55 @@ fn write_3d(
     }
     metrics.seconds.output += to.elapsed().as_secs_f64();
     Ok(())
+}
+
+/// Records what the output gather measured (the last output set wins: the mesh after the
+/// probes) and the target it ran to.
+fn record_gather(metrics: &mut Metrics, stats: &GatherStats, config: &SolveConfig) {
+    metrics.network_share = stats.network_share;
+    metrics.relative_std_error = stats.relative_std_error;
+    metrics.gather_rays = stats.rays;
+    metrics.target_error = config.paths.target_error;
+}
+
+/// Records the exposure of the tone-mapped outputs and where it came from.
+fn record_exposure(metrics: &mut Metrics, exposure: &Exposure, settings: &ImageSettings) {
+    metrics.exposure = Some(exposure.scale);
+    metrics.exposure_source = if settings.exposure.is_some() {
+        "given"
+    } else {
+        "auto"
+    }
+    .into();
+}
+
+/// Each image's camera with its source name: the given one, the scene's, or the automatic one
+/// (from the mesh's brightness at its own exposure, before the outputs' exposure is known).
+fn image_cameras<'a>(
+    domain: &Domain,
+    scene: &Scene,
+    images: &[(&'a Path, CameraChoice, &'static str)],
+    mesh: Option<(&ShadedMesh, &Exposure)>,
+    settings: &ImageSettings,
+) -> Vec<(&'a Path, (PinholeCamera, &'static str))> {
+    let mut jobs = Vec::new();
+    for &(path, choice, source) in images {
+        let camera = match choice {
+            CameraChoice::Given(c) => (c, source),
+            CameraChoice::Scene { fov } if scene.camera_given => {
+                let mut c = PinholeCamera::of_scene(scene);
+                c.fov_y_degrees = fov.unwrap_or(c.fov_y_degrees);
+                (c, "scene")
+            }
+            CameraChoice::Scene { fov } | CameraChoice::Automatic { fov } => {
+                let (mesh, exposure) =
+                    mesh.expect("the automatic camera's outputs build the mesh (needs_mesh)");
+                automatic(domain, mesh, exposure, settings, fov)
+            }
+        };
+        jobs.push((path, camera));
+    }
+    jobs
 }
 
 /// Writes a per-pixel image: linear radiance for .exr, tone-mapped for PNG and JPEG.

@@ -8,7 +8,7 @@
 
 use super::SolveError;
 use super::samples::Sample;
-use crate::element::{Bands, MAX_BANDS};
+use crate::element::{BANDS, Bands};
 
 /// Relative pivot thresholds a diverging projection is redone with, in turn, the gentlest
 /// first (on wall-floor at 400 cells only 0.5 and 0.9 converged; on cornell-box at 1850–2000
@@ -45,7 +45,7 @@ pub(super) const UNSTABLE_FACTOR: f64 = 10.0;
 pub(super) fn bound_excess(samples: &[Sample], bound: &Bands) -> f64 {
     samples
         .iter()
-        .flat_map(|s| (0..MAX_BANDS).map(move |k| (s.s[k].abs(), k)))
+        .flat_map(|s| (0..BANDS).map(move |k| (s.s[k].abs(), k)))
         .map(|(v, k)| {
             if v.is_finite() {
                 v / bound[k].max(f64::MIN_POSITIVE)
@@ -144,8 +144,8 @@ mod tests {
                 ny: DVec3::NEG_Y,
                 face_x: 0,
                 face_y: 1,
-                kernel: [0.0; MAX_BANDS],
-                emission_x: [0.0; MAX_BANDS],
+                kernel: [0.0; BANDS],
+                emission_x: [0.0; BANDS],
             },
             s,
             inv_px: 0.0,
@@ -172,7 +172,7 @@ mod tests {
     #[test]
     fn a_divergence_is_a_change_growing_twice_in_a_row() {
         let mut w = BounceWatch::default();
-        let s = [sample([1.0; MAX_BANDS])];
+        let s = [sample([1.0; BANDS])];
         assert!(!w.diverging(0.5), "nothing recorded yet");
         w.record(0.5, &s);
         assert!(!w.diverging(0.6), "one growth is not yet a divergence");
@@ -187,17 +187,17 @@ mod tests {
     #[test]
     fn restore_returns_the_strengths_after_the_smallest_change() {
         let mut w = BounceWatch::default();
-        let mut s = [sample([1.0; MAX_BANDS])];
+        let mut s = [sample([1.0; BANDS])];
         w.restore(&mut s);
-        assert_eq!(s[0].s, [1.0; MAX_BANDS], "nothing recorded: unchanged");
+        assert_eq!(s[0].s, [1.0; BANDS], "nothing recorded: unchanged");
         w.record(1e-2, &s);
-        s[0].s = [2.0; MAX_BANDS];
+        s[0].s = [2.0; BANDS];
         w.record(1e-5, &s);
-        s[0].s = [3.0; MAX_BANDS];
+        s[0].s = [3.0; BANDS];
         w.record(1e-3, &s);
-        s[0].s = [9.0; MAX_BANDS];
+        s[0].s = [9.0; BANDS];
         w.restore(&mut s);
-        assert_eq!(s[0].s, [2.0; MAX_BANDS]);
+        assert_eq!(s[0].s, [2.0; BANDS]);
         assert!(w.settled());
         let mut unsettled = BounceWatch::default();
         unsettled.record(1e-2, &s);
@@ -218,15 +218,15 @@ mod tests {
     /// bound, and the solve errs beyond ten times the bound.
     #[test]
     fn runaway_and_unstable_thresholds() {
-        let bound = [1.0; MAX_BANDS];
-        let fine = [sample([1.5; MAX_BANDS])];
-        let high = [sample([3.0; MAX_BANDS])];
+        let bound = [1.0; BANDS];
+        let fine = [sample([1.5; BANDS])];
+        let high = [sample([3.0; BANDS])];
         assert!(!ran_away(false, false, &fine, &bound));
         assert!(!ran_away(true, true, &fine, &bound));
         assert!(ran_away(true, false, &fine, &bound));
         assert!(ran_away(false, false, &high, &bound));
         assert!(check_stable(&high, &bound, 1e-6, 1e-6).is_ok());
-        let wild = [sample([11.0; MAX_BANDS])];
+        let wild = [sample([11.0; BANDS])];
         assert!(matches!(
             check_stable(&wild, &bound, 1e-6, 1e-6),
             Err(SolveError::Unstable(_))

@@ -5,7 +5,7 @@
 use super::SolveError;
 use crate::config::SolveConfig;
 use crate::domain::Domain;
-use crate::element::MAX_BANDS;
+use crate::element::BANDS;
 use crate::fem::KernelCells;
 use crate::network::GrowingNetwork;
 use crate::shading::ShadingGeometry;
@@ -65,8 +65,8 @@ pub fn freeze_kernel(net: &impl GrowingNetwork, dim: usize, bands: usize) -> Ker
         k.wy.push(wy);
         k.width.push(net.width(i));
         let o = net.output(i);
-        let mut v = [0.0; MAX_BANDS];
-        for b in 0..MAX_BANDS {
+        let mut v = [0.0; BANDS];
+        for b in 0..BANDS {
             v[b] = o[b.min(bands - 1)];
         }
         k.v.push(v);

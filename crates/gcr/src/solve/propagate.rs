@@ -9,7 +9,7 @@ use super::guards::{
 use super::networks::freeze_kernel;
 use super::samples::{Sample, kernel_strength};
 use super::{Run, SolveError};
-use crate::element::{Bands, MAX_BANDS};
+use crate::element::{BANDS, Bands};
 use crate::fem::{KernelCells, receiver_integrals, sender_integrals};
 use crate::network::GrowingNetwork;
 use crate::projection::{
@@ -242,17 +242,17 @@ fn propagate_at(
 /// O(cells³), a bounce O(samples · cells)). Ordinary scenes (gain ≈ 0.5, 17 bounces) keep the
 /// plain iteration.
 fn slow_bounces(samples: &[Sample], reflectance: &(impl Fn(u32) -> Bands + Sync)) -> bool {
-    let (mut kept, mut carried) = ([0.0; MAX_BANDS], [0.0; MAX_BANDS]);
+    let (mut kept, mut carried) = ([0.0; BANDS], [0.0; BANDS]);
     for smp in samples.iter().filter(|s| s.inv_px != 0.0) {
         let rho = reflectance(smp.ray.face_y);
-        for k in 0..MAX_BANDS {
+        for k in 0..BANDS {
             if smp.ray.kernel[k] > 0.0 {
                 kept[k] += rho[k] * smp.s[k] * smp.inv_px;
                 carried[k] += smp.s[k] * smp.inv_px;
             }
         }
     }
-    let gain = (0..MAX_BANDS)
+    let gain = (0..BANDS)
         .filter(|&k| carried[k] > 0.0)
         .map(|k| kept[k] / carried[k])
         .fold(0.0, f64::max);
@@ -299,7 +299,7 @@ impl<R: Fn(u32) -> Bands + Sync> Fitter<'_, R> {
         };
         let model = kernel_reflected_power(frozen, sender, receiver);
         let (mut num, mut den) = (0.0, 0.0);
-        for k in 0..MAX_BANDS {
+        for k in 0..BANDS {
             num += model[k];
             den += sampled[k];
             let ratio = sampled[k] / model[k];
@@ -387,8 +387,8 @@ fn start_correction(
     projection.fit(frozen, samples, shots, reflectance);
     let sampled = sampled_reflected_power(samples, shots, reflectance);
     let model = kernel_reflected_power(frozen, sender, receiver);
-    let mut alpha = [1.0; MAX_BANDS];
-    for k in 0..MAX_BANDS {
+    let mut alpha = [1.0; BANDS];
+    for k in 0..BANDS {
         let r = sampled[k] / model[k];
         if sampled[k] > 0.0 && model[k] > 0.0 && r.is_finite() {
             alpha[k] = r;
@@ -421,8 +421,8 @@ fn direct_weights(
     start: Option<Bands>,
 ) -> Option<Vec<Bands>> {
     let m = op.me.len();
-    let mut v = vec![[0.0; MAX_BANDS]; m];
-    for k in 0..MAX_BANDS {
+    let mut v = vec![[0.0; BANDS]; m];
+    for k in 0..BANDS {
         let me: Vec<f64> = op.me.iter().map(|b| b[k]).collect();
         if me.iter().all(|x| *x == 0.0) {
             continue;

@@ -6,7 +6,7 @@ use super::Current;
 use super::Run;
 use crate::config::{OutputFit, SolveConfig, StrengthFrom};
 use crate::domain::Ray;
-use crate::element::{Bands, MAX_BANDS};
+use crate::element::{BANDS, Bands};
 use crate::fem::FemSolution;
 use crate::fem::{KernelCells, reflected_from_kernel};
 use crate::network::GrowingNetwork;
@@ -92,9 +92,10 @@ impl Run<'_> {
         if self.samples.is_empty() {
             return Err(super::SolveError::NoRays { shots: self.shots });
         }
-        let lit = self.samples.iter().any(|smp| {
-            (0..MAX_BANDS).any(|k| smp.ray.emission_x[k] > 0.0 && smp.ray.kernel[k] > 0.0)
-        });
+        let lit = self
+            .samples
+            .iter()
+            .any(|smp| (0..BANDS).any(|k| smp.ray.emission_x[k] > 0.0 && smp.ray.kernel[k] > 0.0));
         if !lit {
             self.metrics.warnings.push(format!(
                 "none of {} sampled rays carries light from an emitter to a surface: do the lights \
@@ -175,7 +176,7 @@ fn strength(ray: &Ray, fem: Option<&FemSolution>, scratch: &mut Vec<u32>) -> Ban
     let mut s = ray.emission_x;
     if let Some(f) = fem {
         let b = f.reflected_from_base(ray.x, ray.nx, scratch);
-        for k in 0..MAX_BANDS {
+        for k in 0..BANDS {
             s[k] += b[k].max(0.0);
         }
     }
@@ -186,7 +187,7 @@ fn strength(ray: &Ray, fem: Option<&FemSolution>, scratch: &mut Vec<u32>) -> Ban
 pub(super) fn kernel_strength(ray: &Ray, kernel: &KernelCells, sender: &[f64]) -> Bands {
     let b = reflected_from_kernel(kernel, sender, ray.x, ray.nx);
     let mut s = ray.emission_x;
-    for k in 0..MAX_BANDS {
+    for k in 0..BANDS {
         s[k] += b[k].max(0.0);
     }
     s

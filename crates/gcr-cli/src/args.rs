@@ -2,7 +2,9 @@
 
 use clap::{Args, Parser, Subcommand};
 use gcr::output::raster::PinholeCamera;
-use gcr::output::{CameraChoice, ImageMode, ImageSettings, OutputPaths, View};
+use gcr::output::{
+    CameraChoice, ImageMode, ImageSettings, OutputPaths, ProbeQuantity, ProbeSettings, View,
+};
 use gcr::{
     GatherMode, GatherSamples, NetworkTarget, OutputFit, PathSettings, SolveConfig, SurfaceClusters,
 };
@@ -200,9 +202,19 @@ pub struct SolveArgs {
     /// Probe points (`x y z nx ny nz` per line; Flatland `x y nx ny`).
     #[arg(long, requires = "probe_out")]
     pub probes: Option<PathBuf>,
-    /// Where to write radiosity at the probes (`r g b` per line).
+    /// Where to write the probes' values (`r g b` per line, in the probe file's order).
     #[arg(long, requires = "probes")]
     pub probe_out: Option<PathBuf>,
+    /// What the probes get: `radiosity` (B at surface points: each probe snaps onto the nearest
+    /// face its normal faces, within --probe-tolerance) or `irradiance` (E = ∫ L cos dω for the
+    /// hemisphere about the probe's normal, at the point as given: on a surface or in the air,
+    /// like Radiance's `rtrace -I`; needs the paths gather).
+    #[arg(long, default_value = "radiosity", requires = "probes")]
+    pub probe_quantity: ProbeQuantity,
+    /// Radiosity probes: the largest distance (scene units) from a probe to the surface it snaps
+    /// onto (default 1e-4 of the scene's diagonal).
+    #[arg(long, requires = "probes")]
+    pub probe_tolerance: Option<f64>,
     /// JSON metrics.
     #[arg(long)]
     pub metrics: Option<PathBuf>,
@@ -279,6 +291,15 @@ impl SolveArgs {
             views: self.view.clone(),
             mode: self.image_mode,
             pixel_samples: self.pixel_samples,
+        }
+    }
+
+    /// The probe settings (not yet validated: `ProbeSettings::validate`, through
+    /// `OutputPlan::with_options`).
+    pub fn probe_settings(&self) -> ProbeSettings {
+        ProbeSettings {
+            quantity: self.probe_quantity,
+            tolerance: self.probe_tolerance,
         }
     }
 

@@ -38,7 +38,9 @@ fn solve_and_write(
     config: &SolveConfig,
     started: Instant,
 ) -> Result<()> {
-    let plan = OutputPlan::with_images(domain, args.outputs(), args.images())
+    let outputs = (args.outputs(), args.images(), args.probe_settings());
+    let plan = OutputPlan::with_options(domain, outputs.0, outputs.1, outputs.2)
+        .and_then(|plan| plan.check_config(config).map(|()| plan))
         .with_context(|| format!("checking the outputs for `{}`", args.scene))?;
     let mut progress = ProgressLine::new(args.quiet);
     // ⟨Train the networks only when something reads them⟩

@@ -347,3 +347,127 @@ fn the_paths_gather_reports_its_estimated_error() {
         }
     }
 }
+
+/// Irradiance probes (`rtrace -I`): a work plane in the air of the Cornell box and one probe on
+/// its floor; each value independent of its line, the quantity in the metrics; the ray gather
+/// refuses them before the solve.
+#[test]
+fn solve_writes_irradiance_at_points_in_the_air() {
+    let (probes, moved, out, out2, metrics) = (
+        tmp("plane.txt"),
+        tmp("plane-moved.txt"),
+        tmp("irr.txt"),
+        tmp("irr2.txt"),
+        tmp("irr.json"),
+    );
+    // A 3×3 work plane 0.4 above the floor (y up; the ceiling is at 0.55, the tall block's top
+    // at 0.33), facing up, and a floor probe facing down into the floor's back (nothing there).
+    let mut lines: Vec<String> = (0..9)
+        .map(|i| {
+            let (x, z) = (0.1 + 0.15 * f64::from(i % 3), 0.1 + 0.15 * f64::from(i / 3));
+            format!("{x} 0.4 {z} 0 1 0")
+        })
+        .collect();
+    lines.push("0.25 0.0 0.25 0 -1 0".into());
+    std::fs::write(&probes, lines.join("\n")).unwrap();
+    lines.rotate_left(4);
+    std::fs::write(&moved, lines.join("\n")).unwrap();
+    let run = |file: &str, out: &str| {
+        gcr(&[
+            "solve",
+            "cornell-box",
+            "--quiet",
+            "--probes",
+            file,
+            "--probe-out",
+            out,
+            "--probe-quantity",
+            "irradiance",
+            "--metrics",
+            &metrics,
+        ])
+    };
+    let o = run(&probes, &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let values = |path: &str| -> Vec<Vec<f64>> {
+        std::fs::read_to_string(path)
+            .unwrap()
+            .lines()
+            .map(|l| l.split_whitespace().map(|x| x.parse().unwrap()).collect())
+            .collect()
+    };
+    let first = values(&out);
+    assert_eq!(first.len(), 10);
+    for v in &first[..9] {
+        assert!(v.len() == 3 && v.iter().all(|x| x.is_finite() && *x > 0.0), "{v:?}");
+    }
+    assert_eq!(first[9], vec![0.0; 3], "facing the floor's back");
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&metrics).unwrap()).unwrap();
+    assert_eq!(m["probe_quantity"], "irradiance");
+    // The same probes in another order: the same values.
+    let o = run(&moved, &out2);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut second = values(&out2);
+    second.rotate_right(4);
+    assert_eq!(first, second);
+    // The ray gather estimates radiosity only: an error before anything is solved or written.
+    let o = gcr(&[
+        "solve",
+        "cornell-box",
+        "--gather",
+        "rays",
+        "--probes",
+        &probes,
+        "--probe-out",
+        &out2,
+        "--probe-quantity",
+        "irradiance",
+    ]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("irradiance needs the paths gather"));
+}
+
+/// `--probe-tolerance`: a probe 5 mm off the floor is refused by default (0.1 mm on the Cornell
+/// box) and snaps onto the floor with a 1 cm tolerance, with the value of the probe on the floor.
+#[test]
+fn the_probe_tolerance_is_settable() {
+    let (off, on, out, out2) = (
+        tmp("off.txt"),
+        tmp("on.txt"),
+        tmp("off-out.txt"),
+        tmp("on-out.txt"),
+    );
+    std::fs::write(&off, "0.45 0.005 0.08 0 1 0\n").unwrap();
+    std::fs::write(&on, "0.45 0 0.08 0 1 0\n").unwrap();
+    let run = |file: &str, out: &str, tol: Option<&str>| {
+        let tol = tol.map(|t| format!("--probe-tolerance={t}"));
+        let mut args = vec![
+            "solve",
+            "cornell-box",
+            "--quiet",
+            "--probes",
+            file,
+            "--probe-out",
+            out,
+        ];
+        args.extend(tol.as_deref());
+        gcr(&args)
+    };
+    let o = run(&off, &out, None);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("tolerance"));
+    let o = run(&off, &out, Some("0.01"));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = run(&on, &out2, None);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        std::fs::read_to_string(&out).unwrap(),
+        std::fs::read_to_string(&out2).unwrap()
+    );
+    for bad in ["0", "-1", "nan"] {
+        let o = run(&on, &out2, Some(bad));
+        assert!(!o.status.success(), "--probe-tolerance {bad}");
+        assert!(String::from_utf8_lossy(&o.stderr).contains("probe tolerance"));
+    }
+}

@@ -60,7 +60,8 @@ pub use mesh::ShadedMesh;
 pub use metrics::{ImageRecord, Metrics, PhaseTimes, peak_memory_bytes};
 pub use network::GrowingNetwork;
 pub use pipeline::{
-    GatherError, GatherStats, output_mesh, point_seed, radiosity_at_points, relative_std_error,
+    GatherError, GatherStats, irradiance_at_points, output_mesh, point_seed, radiosity_at_points,
+    relative_std_error,
 };
 pub use retriangulate::RetriangulateLimits;
 pub use sample::Sample;

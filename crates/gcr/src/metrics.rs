@@ -118,6 +118,8 @@ pub struct Metrics {
     /// How [`Metrics::exposure`] was set: `given` (`--exposure`) or `auto` (the 95th percentile
     /// of the lit surfaces' luminance maps to 0.8); empty without an exposure.
     pub exposure_source: String,
+    /// What the probe output holds: `radiosity` or `irradiance`; empty without probes.
+    pub probe_quantity: String,
     /// The 3-D images written, with the cameras they were rendered from.
     pub images: Vec<ImageRecord>,
 }

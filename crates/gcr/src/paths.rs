@@ -30,7 +30,7 @@
 //! the cosine density p is small.
 
 use crate::config::{GatherSamples, PathSettings};
-use crate::domain::Domain;
+use crate::domain::{Domain, NO_FACE};
 use crate::element::{BANDS, Bands};
 use crate::emitters::Emitters;
 use crate::gather::{Gathered, Mis, cosine_ray, shadow_ray};
@@ -59,7 +59,7 @@ pub struct PathGather<'a, C> {
     settings: PathSettings,
 }
 
-/// A surface point: position, unit normal, face.
+/// A surface point: position, unit normal, face ([`NO_FACE`] for a point in the air).
 #[derive(Clone, Copy)]
 struct Vertex {
     p: DVec3,
@@ -171,14 +171,46 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         first: usize,
         samples: GatherSamples,
     ) -> PointEstimate {
+        let z = Vertex { p: y, n, face };
+        let (rho, e) = (self.domain.reflectance(face), self.domain.emission(face));
+        self.estimate_at(z, (rho, e), seed, first, samples)
+    }
+
+    /// One round of the irradiance E(y, n) = ∫ L cos θ dω at any point y (on a surface or in the
+    /// air) for the hemisphere about the unit normal n — what `rtrace -I` computes: the gather's
+    /// estimate of ρ·(D + ∫ L) with ρ = 1 and no emission, its rays leaving from y itself (no
+    /// face of the scene is skipped; a point on a surface sees the side n points to). Rounds and
+    /// seeds as [`PathGather::estimate`].
+    pub fn estimate_irradiance(
+        &self,
+        (y, n): (DVec3, DVec3),
+        seed: u64,
+        first: usize,
+        samples: GatherSamples,
+    ) -> PointEstimate {
+        let z = Vertex {
+            p: y,
+            n,
+            face: NO_FACE,
+        };
+        self.estimate_at(z, ([1.0; BANDS], [0.0; BANDS]), seed, first, samples)
+    }
+
+    /// [`PathGather::estimate`] at the vertex z with reflectance ρ and emission E.
+    fn estimate_at(
+        &self,
+        z: Vertex,
+        (rho, e): (Bands, Bands),
+        seed: u64,
+        first: usize,
+        samples: GatherSamples,
+    ) -> PointEstimate {
         // ⟨The paths' own random numbers: one stream per point and round⟩
         let mut rng = ChaCha8Rng::seed_from_u64(if first == 0 {
             seed
         } else {
             seed ^ (first as u64).wrapping_mul(0xD1B5_4A32_D192_ED03)
         });
-        let z = Vertex { p: y, n, face };
-        let (rho, e) = (self.domain.reflectance(face), self.domain.emission(face));
         let (n_e, n_c) = (samples.direct, samples.indirect);
         let replicates = REPLICATES.min(n_e.max(n_c)).max(1);
         let mut out = PointEstimate {

@@ -24,6 +24,12 @@ pub enum GatherError {
          true (gather = base, or skip_unused_base = false)"
     )]
     NoBase,
+    /// Irradiance asked of a gather other than [`GatherMode::Paths`].
+    #[error(
+        "irradiance needs the paths gather (the default); the {0} gather estimates radiosity at \
+         surface points only"
+    )]
+    IrradianceNeedsPaths(&'static str),
 }
 
 /// Radiosity at many surface points `(point, normal, face)` in parallel by the configured gather.
@@ -67,6 +73,54 @@ pub fn radiosity_at_points(
         })
         .collect())
 }
+
+/// Irradiance E(y, n) = ∫ L cos θ dω at any points `(point, unit normal)` — on a surface or in the
+/// air, as Radiance's `rtrace -I` — by the paths gather ([`PathGather::estimate_irradiance`]),
+/// to the configured target error when there is one. The values are in
+/// [`Gathered::radiosity`]: the radiosity a white (ρ = 1), non-emitting receiver there would have.
+/// Seeded like [`radiosity_at_points`] (from the point's coordinates, salted: an irradiance probe
+/// on a surface does not share its radiosity probe's rays).
+pub fn irradiance_at_points(
+    domain: &Domain,
+    trained: &Trained,
+    emitters: &Emitters,
+    config: &SolveConfig,
+    points: &[(DVec3, DVec3)],
+) -> Result<Vec<Gathered>, GatherError> {
+    if config.gather != GatherMode::Paths {
+        return Err(GatherError::IrradianceNeedsPaths(config.gather.name()));
+    }
+    let frame = domain.frame();
+    let paths = PathGather::new(
+        domain,
+        emitters,
+        |x, n| trained.reflected_kernel(x, n),
+        config.gather_samples,
+        config.paths,
+    );
+    let seeds: Vec<u64> = points
+        .iter()
+        .map(|&(y, _)| point_seed(config.seed ^ IRRADIANCE_SALT, y, frame))
+        .collect();
+    let estimate =
+        |i: usize, first, samples| paths.estimate_irradiance(points[i], seeds[i], first, samples);
+    Ok(match config.paths.target_error {
+        Some(target) => rounds_to_target(
+            points.len(),
+            estimate,
+            config.gather_samples,
+            target,
+            config.paths.max_rays,
+        ),
+        None => (0..points.len())
+            .into_par_iter()
+            .map(|i| estimate(i, 0, config.gather_samples).gathered())
+            .collect(),
+    })
+}
+
+/// Mixed into the solve's seed for irradiance probes ([`irradiance_at_points`]).
+const IRRADIANCE_SALT: u64 = 0x6972_7261_6469_616E;
 
 /// The paths gather in rounds until the points' estimated relative error ([`relative_std_error`])
 /// is at most `target`: a pilot round with the configured rays, then each round adds the rays its

@@ -11,12 +11,14 @@ pub mod glb;
 pub mod hdr;
 pub mod pixel;
 pub mod ply;
+pub mod probes;
 pub mod raster;
 pub mod staged;
 pub mod tonemap;
 pub mod write;
 
 pub use camera::{CameraChoice, CameraError, ImageMode, ImageSettings, View};
+pub use probes::{ProbeQuantity, ProbeSettings};
 pub use write::{OutputPaths, OutputPlan, write_outputs};
 
 /// Why outputs cannot be written (checked before the solve by [`OutputPlan::new`], or met
@@ -32,6 +34,9 @@ pub enum OutputError {
          3-D scene"
     )]
     KernelImageNeedsFlatland,
+    /// A probe tolerance out of range, or given for irradiance probes.
+    #[error("probe tolerance {0}")]
+    ProbeTolerance(String),
     /// Probes without a probe output, or the other way round.
     #[error("probes and a probe output go together: give both or neither")]
     ProbesWithoutOutput,

@@ -8,15 +8,16 @@
 use super::OutputError;
 use super::camera::{CameraChoice, ImageMode, ImageSettings};
 use super::flatland::{light_flow_image, scene_image};
+use super::probes::{ProbeQuantity, ProbeSettings, probe_values, read_probes};
 use super::raster::{Coverage, PinholeCamera, render_image, render_radiance};
 use super::staged::{StagedFiles, check_target};
 use super::tonemap::{Exposure, luminance};
-use crate::config::SolveConfig;
+use crate::config::{GatherMode, SolveConfig};
 use crate::domain::Domain;
 use crate::emitters::Emitters;
 use crate::mesh::ShadedMesh;
 use crate::metrics::{ImageRecord, Metrics, peak_memory_bytes};
-use crate::pipeline::{GatherStats, output_mesh, radiosity_at_points};
+use crate::pipeline::{GatherError, GatherStats, output_mesh};
 use crate::retriangulate::RetriangulateLimits;
 use crate::solve::Trained;
 use glam::DVec3;
@@ -78,6 +79,7 @@ pub struct OutputPlan {
     paths: OutputPaths,
     images: ImageSettings,
     probes: Vec<(DVec3, DVec3, u32)>,
+    probe_settings: ProbeSettings,
     /// The scene brings its own camera (a built-in's or a glTF camera node).
     scene_camera: bool,
     /// The scene is a Flatland scene.
@@ -125,7 +127,19 @@ impl OutputPlan {
         paths: OutputPaths,
         images: ImageSettings,
     ) -> Result<Self, OutputError> {
+        Self::with_options(domain, paths, images, ProbeSettings::default())
+    }
+
+    /// [`OutputPlan::with_images`] with probe settings, checked too
+    /// ([`ProbeSettings::validate`]; radiosity probes snap within its tolerance).
+    pub fn with_options(
+        domain: &Domain,
+        paths: OutputPaths,
+        images: ImageSettings,
+        probe_settings: ProbeSettings,
+    ) -> Result<Self, OutputError> {
         images.validate()?;
+        probe_settings.validate()?;
         if domain.scene_flat().is_some() {
             let default = ImageSettings::default();
             if images.views.len() + usize::from(images.camera != default.camera) > 0 {
@@ -175,16 +189,27 @@ impl OutputPlan {
             }
         }
         let probes = match &paths.probes_in {
-            Some(path) => read_probes(domain, path)?,
+            Some(path) => read_probes(domain, path, &probe_settings)?,
             None => Vec::new(),
         };
         Ok(Self {
             paths,
             images,
             probes,
+            probe_settings,
             scene_camera: domain.scene_3d().is_some_and(|s| s.camera_given),
             flatland: domain.scene_flat().is_some(),
         })
+    }
+
+    /// Checks that `config` can compute the planned outputs (irradiance probes need the paths
+    /// gather): call it before the solve.
+    pub fn check_config(&self, config: &SolveConfig) -> Result<(), OutputError> {
+        let irradiance = self.probe_settings.quantity == ProbeQuantity::Irradiance;
+        if irradiance && !self.probes.is_empty() && config.gather != GatherMode::Paths {
+            return Err(GatherError::IrradianceNeedsPaths(config.gather.name()).into());
+        }
+        Ok(())
     }
 
     /// The checked image settings.
@@ -213,29 +238,6 @@ fn same_file(a: &Path, b: &Path) -> bool {
     a == b || key(a) == key(b)
 }
 
-/// Reads the probe file and snaps every probe onto the domain's surfaces.
-fn read_probes(domain: &Domain, path: &Path) -> Result<Vec<(DVec3, DVec3, u32)>, OutputError> {
-    let source = path.display().to_string();
-    Ok(match domain {
-        Domain::ThreeD(k) => {
-            let probes = scene_sampler::read_probes(path)?;
-            k.scene
-                .snap_probes(&probes, &source)?
-                .iter()
-                .map(|p| (p.point, p.normal, p.face))
-                .collect()
-        }
-        Domain::Flat(k) => {
-            let probes = scene_sampler::read_flat_probes(path)?;
-            k.scene
-                .snap_probes(&probes, &source)?
-                .iter()
-                .map(|p| (p.point.extend(0.0), p.normal.extend(0.0), p.segment))
-                .collect()
-        }
-    })
-}
-
 /// Gathers, renders and writes every output of `plan` for a solution, and returns the run's
 /// metrics: `trained.metrics` completed with the scene name, the gather, the output mesh, the
 /// gather and output times, the total time since `started` and the peak memory (these are what
@@ -258,7 +260,9 @@ pub fn write_outputs(
     let emitters = Emitters::new(domain);
     if let Some(path) = &paths.probe_out {
         let tg = Instant::now();
-        let (text, stats) = probe_values(domain, trained, &emitters, config, plan.probes())?;
+        let probes = (plan.probes(), plan.probe_settings.quantity);
+        let (text, stats) = probe_values(domain, trained, &emitters, config, probes)?;
+        metrics.probe_quantity = plan.probe_settings.quantity.name().into();
         record_gather(&mut metrics, &stats, config);
         metrics.seconds.gather += tg.elapsed().as_secs_f64();
         staged.write_bytes(path, text.as_bytes())?;
@@ -286,31 +290,6 @@ pub fn write_outputs(
     }
     staged.commit()?;
     Ok(metrics)
-}
-
-/// Radiosity at the probes ([`radiosity_at_points`]), one line each: `r g b`, or `b` for a grey
-/// Flatland scene.
-pub fn probe_values(
-    domain: &Domain,
-    trained: &Trained,
-    emitters: &Emitters,
-    config: &SolveConfig,
-    probes: &[(DVec3, DVec3, u32)],
-) -> Result<(String, GatherStats), OutputError> {
-    let grey = domain.bands() == 1 && domain.dim() == 2;
-    let gathered = radiosity_at_points(domain, trained, emitters, config, probes)?;
-    let text = gathered
-        .iter()
-        .map(|g| {
-            let b = g.radiosity;
-            if grey {
-                format!("{}\n", b[0])
-            } else {
-                format!("{} {} {}\n", b[0], b[1], b[2])
-            }
-        })
-        .collect();
-    Ok((text, GatherStats::of(&gathered)))
 }
 
 /// The 3-D outputs: the re-triangulated output mesh (when glTF, PLY, a mesh-mode image or the

@@ -1,0 +1,162 @@
+//! Probe outputs: radiosity at surface points, or irradiance at any points (Radiance's
+//! `rtrace -I`), one line per probe in the input's order.
+//!
+//! A radiosity probe snaps onto the nearest face whose front faces the probe's normal, within a
+//! distance tolerance (default 10⁻⁴ of the scene's diagonal, `--probe-tolerance`): the closest
+//! point of that face (over its interior, the foot of the probe along the face's normal). An
+//! irradiance probe is used where it is, with its normal. Every probe's value comes from a seed
+//! of its own coordinates ([`crate::point_seed`]): it does not depend on its line or on the
+//! other probes.
+
+use super::OutputError;
+use crate::config::SolveConfig;
+use crate::domain::{Domain, NO_FACE};
+use crate::emitters::Emitters;
+use crate::pipeline::{GatherStats, irradiance_at_points, radiosity_at_points};
+use crate::solve::Trained;
+use glam::DVec3;
+use std::path::Path;
+
+/// What the probe output holds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ProbeQuantity {
+    /// Radiosity B (exitance, W/m²) at surface points.
+    #[default]
+    Radiosity,
+    /// Irradiance E = ∫ L cos θ dω (W/m²) at any points, for the hemisphere about the probe's
+    /// normal (`rtrace -I`); needs the paths gather.
+    Irradiance,
+}
+
+impl ProbeQuantity {
+    /// `radiosity` or `irradiance`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ProbeQuantity::Radiosity => "radiosity",
+            ProbeQuantity::Irradiance => "irradiance",
+        }
+    }
+}
+
+impl std::str::FromStr for ProbeQuantity {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "radiosity" => Ok(Self::Radiosity),
+            "irradiance" => Ok(Self::Irradiance),
+            _ => Err(format!(
+                "unknown probe quantity `{s}` (expected radiosity or irradiance)"
+            )),
+        }
+    }
+}
+
+/// How probes are read and what is computed at them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ProbeSettings {
+    /// The quantity.
+    pub quantity: ProbeQuantity,
+    /// Radiosity probes: the largest distance from a facing surface (scene units); `None`:
+    /// 10⁻⁴ of the scene's diagonal. Irradiance probes are not snapped.
+    pub tolerance: Option<f64>,
+}
+
+impl ProbeSettings {
+    /// Checks the tolerance: finite and positive, and only for radiosity probes.
+    pub fn validate(&self) -> Result<(), OutputError> {
+        match self.tolerance {
+            Some(t) if !(t.is_finite() && t > 0.0) => Err(OutputError::ProbeTolerance(format!(
+                "{t} (expected a positive distance in scene units)"
+            ))),
+            Some(_) if self.quantity == ProbeQuantity::Irradiance => {
+                Err(OutputError::ProbeTolerance(
+                    "irradiance probes are used where they are, not snapped: drop the tolerance"
+                        .into(),
+                ))
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+/// Reads the probe file: radiosity probes snapped onto the domain's surfaces `(point, normal,
+/// face)`, irradiance probes as given with face [`NO_FACE`]; Flatland with z = 0.
+pub(super) fn read_probes(
+    domain: &Domain,
+    path: &Path,
+    settings: &ProbeSettings,
+) -> Result<Vec<(DVec3, DVec3, u32)>, OutputError> {
+    let source = path.display().to_string();
+    let snap = settings.quantity == ProbeQuantity::Radiosity;
+    Ok(match domain {
+        Domain::ThreeD(k) => {
+            let probes = scene_sampler::read_probes(path)?;
+            if !snap {
+                return Ok(probes
+                    .iter()
+                    .map(|p| (p.point, p.normal, NO_FACE))
+                    .collect());
+            }
+            let tol = settings
+                .tolerance
+                .unwrap_or_else(|| scene_sampler::probe::default_tolerance(k.scene.diagonal()));
+            probes
+                .iter()
+                .map(|p| {
+                    let s = k.scene.snap_probe(p, tol, &source)?;
+                    Ok((s.point, s.normal, s.face))
+                })
+                .collect::<Result<_, scene_sampler::SceneError>>()?
+        }
+        Domain::Flat(k) => {
+            let probes = scene_sampler::read_flat_probes(path)?;
+            if !snap {
+                return Ok(probes
+                    .iter()
+                    .map(|p| (p.point.extend(0.0), p.normal.extend(0.0), NO_FACE))
+                    .collect());
+            }
+            let tol = settings
+                .tolerance
+                .unwrap_or_else(|| scene_sampler::probe::default_tolerance(k.scene.diagonal()));
+            probes
+                .iter()
+                .map(|p| {
+                    let s = k.scene.snap_probe(p, tol, &source)?;
+                    Ok((s.point.extend(0.0), s.normal.extend(0.0), s.segment))
+                })
+                .collect::<Result<_, scene_sampler::SceneError>>()?
+        }
+    })
+}
+
+/// The probes' values ([`radiosity_at_points`] or [`irradiance_at_points`]), one line each:
+/// `r g b`, or one value for a grey Flatland scene.
+pub fn probe_values(
+    domain: &Domain,
+    trained: &Trained,
+    emitters: &Emitters,
+    config: &SolveConfig,
+    (probes, quantity): (&[(DVec3, DVec3, u32)], ProbeQuantity),
+) -> Result<(String, GatherStats), OutputError> {
+    let grey = domain.bands() == 1 && domain.dim() == 2;
+    let gathered = match quantity {
+        ProbeQuantity::Radiosity => radiosity_at_points(domain, trained, emitters, config, probes)?,
+        ProbeQuantity::Irradiance => {
+            let at: Vec<(DVec3, DVec3)> = probes.iter().map(|&(y, n, _)| (y, n)).collect();
+            irradiance_at_points(domain, trained, emitters, config, &at)?
+        }
+    };
+    let text = gathered
+        .iter()
+        .map(|g| {
+            let b = g.radiosity;
+            if grey {
+                format!("{}\n", b[0])
+            } else {
+                format!("{} {} {}\n", b[0], b[1], b[2])
+            }
+        })
+        .collect();
+    Ok((text, GatherStats::of(&gathered)))
+}

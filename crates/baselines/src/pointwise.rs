@@ -70,12 +70,31 @@ fn path(
     p: SurfacePoint,
     rng: &mut ChaCha8Rng,
 ) -> [f64; 3] {
-    let mut out = scene.faces[p.face as usize].emission.0;
+    let f = &scene.faces[p.face as usize];
+    walk(scene, bvh, lights, p, (f.rho.0, f.emission.0), rng)
+}
+
+/// [`path`] from the vertex `p` with reflectance and emission `(rho, e)`: its face's for a
+/// surface point; (1, 0) and face [`NO_FACE`] for an irradiance point, whose path is that of a
+/// white receiver at p that blocks nothing.
+fn walk(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    lights: &EmitterTable,
+    p: SurfacePoint,
+    (rho, e): ([f64; 3], [f64; 3]),
+    rng: &mut ChaCha8Rng,
+) -> [f64; 3] {
+    let mut out = e;
     let mut throughput = [1.0; 3];
     let mut at = p;
     for depth in 0.. {
-        let f = &scene.faces[at.face as usize];
-        for (t, r) in throughput.iter_mut().zip(f.rho.0) {
+        let rho = if depth == 0 {
+            rho
+        } else {
+            scene.faces[at.face as usize].rho.0
+        };
+        for (t, r) in throughput.iter_mut().zip(rho) {
             *t *= r;
         }
         if !survives_roulette(&mut throughput, depth, rng) {
@@ -114,7 +133,13 @@ fn path(
         }
         // ⟨the cosine-weighted continuation; emission at its hit is the second technique⟩
         let dir = cosine_hemisphere(at.normal, [rng.random(), rng.random()]);
-        let Some(hit) = bvh.trace_from(&at, dir) else {
+        let hit = if at.face == NO_FACE {
+            let from = at.point + at.normal * bvh.epsilon();
+            bvh.closest_hit(from, dir, f64::INFINITY, NO_FACE)
+        } else {
+            bvh.trace_from(&at, dir)
+        };
+        let Some(hit) = hit else {
             break;
         };
         let next = bvh.surface_point(&hit);
@@ -158,7 +183,13 @@ fn path_cosine_only(
             break;
         }
         let dir = cosine_hemisphere(at.normal, [rng.random(), rng.random()]);
-        let Some(hit) = bvh.trace_from(&at, dir) else {
+        let hit = if at.face == NO_FACE {
+            let from = at.point + at.normal * bvh.epsilon();
+            bvh.closest_hit(from, dir, f64::INFINITY, NO_FACE)
+        } else {
+            bvh.trace_from(&at, dir)
+        };
+        let Some(hit) = hit else {
             break;
         };
         let next = bvh.surface_point(&hit);
@@ -256,6 +287,44 @@ pub fn reference_at(
         .collect())
 }
 
+/// The face of an irradiance point: none (its rays skip no face).
+pub const NO_FACE: u32 = u32::MAX;
+
+/// The irradiance reference: E(y, n) = ∫ L cos θ dω at any points `(point, unit normal)` — on a
+/// surface or in the air, as Radiance's `rtrace -I` — by adaptive path tracing from a white
+/// (ρ = 1), non-emitting receiver at the point that blocks nothing (the same paths as
+/// [`reference_at`] from there). `mean` holds E; streams keyed by the point and normal (salted).
+///
+/// # Errors
+/// Invalid [`Adaptive`] parameters.
+pub fn irradiance_reference_at(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    points: &[(DVec3, DVec3)],
+    adaptive: &Adaptive,
+) -> Result<Vec<AdaptiveEstimate>, BaselineError> {
+    adaptive.validate()?;
+    let lights = EmitterTable::of_scene(scene);
+    let live = [0, 1, 2].map(|b| scene.faces.iter().any(|f| f.emission.0[b] > 0.0));
+    Ok(points
+        .par_iter()
+        .map(|&(point, normal)| {
+            let p = SurfacePoint {
+                point,
+                normal: normal.normalize(),
+                face: NO_FACE,
+            };
+            let mut rng = rng_of(adaptive.seed ^ IRRADIANCE_SALT, &p);
+            adaptive.run(live, || {
+                walk(scene, bvh, &lights, p, ([1.0; 3], [0.0; 3]), &mut rng)
+            })
+        })
+        .collect())
+}
+
+/// Mixed into the seed of irradiance points ([`irradiance_reference_at`]).
+const IRRADIANCE_SALT: u64 = 0x6972_7261_6469_616E;
+
 /// Error unless every point's face exists.
 fn check_faces(scene: &Scene, points: &[SurfacePoint]) -> Result<(), BaselineError> {
     for (index, p) in points.iter().enumerate() {
@@ -284,6 +353,29 @@ pub fn surface_point(scene: &Scene, face: u32, position: DVec3) -> SurfacePoint 
 mod tests {
     use super::*;
     use scene_sampler::{AnyScene, builtin};
+
+    /// Inside the furnace the radiance is uniform: the irradiance at any point and normal is B.
+    #[test]
+    fn furnace_irradiance_is_the_radiosity_at_any_point() {
+        let AnyScene::ThreeD(scene) = builtin("furnace").unwrap() else {
+            panic!()
+        };
+        let (e, rho) = (scene.faces[0].emission.0[0], scene.faces[0].rho.0[0]);
+        let bvh = SceneBvh::new(&scene);
+        let at = [
+            (DVec3::splat(0.5), DVec3::X),
+            (DVec3::new(0.2, 0.7, 0.4), DVec3::new(1.0, -2.0, 0.5)),
+            (DVec3::new(0.9, 0.1, 0.3), DVec3::NEG_Z),
+        ];
+        let adaptive = Adaptive {
+            rel_error: 0.01,
+            ..Adaptive::default()
+        };
+        for r in irradiance_reference_at(&scene, &bvh, &at, &adaptive).unwrap() {
+            let (m, s) = (r.estimate.mean[0], r.estimate.std_error[0]);
+            assert!((m - e / (1.0 - rho)).abs() < 4.0 * s, "{m} ± {s}");
+        }
+    }
 
     #[test]
     fn furnace_gives_e_over_one_minus_rho_within_the_error_bar() {

@@ -328,6 +328,14 @@ pub struct ReferenceArgs {
     /// Where to write B at the probes (`r g b` per line; Flatland grey: `b`).
     #[arg(long)]
     pub probe_out: PathBuf,
+    /// `radiosity` (B at surface points, the probes snapped) or `irradiance` (E = ∫ L cos dω at
+    /// each point as given, for the hemisphere about its normal: `rtrace -I`; 3-D scenes).
+    #[arg(long, default_value = "radiosity")]
+    pub probe_quantity: ProbeQuantity,
+    /// Radiosity probes: the largest distance (scene units) from a probe to the surface it snaps
+    /// onto (default 1e-4 of the scene's diagonal).
+    #[arg(long)]
+    pub probe_tolerance: Option<f64>,
     /// Where to write each probe's standard error of B (same layout as `--probe-out`) and its
     /// path count and relative error bound (`inf` where no path found light).
     #[arg(long)]

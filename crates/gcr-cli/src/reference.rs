@@ -4,10 +4,12 @@
 use crate::args::ReferenceArgs;
 use anyhow::{Context, Result};
 use gcr::output::staged::{StagedFiles, check_target};
+use gcr::output::{ProbeQuantity, ProbeSettings};
+use scene_sampler::probe::default_tolerance;
 use scene_sampler::{AnyScene, SceneBvh};
 use std::time::Instant;
 
-/// Runs `gcr reference`: B per probe to `--probe-out`, a summary on stderr.
+/// Runs `gcr reference`: B (or irradiance) per probe to `--probe-out`, a summary on stderr.
 pub fn run(args: &ReferenceArgs) -> Result<()> {
     let start = Instant::now();
     let adaptive = baselines::Adaptive {
@@ -27,15 +29,41 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
     }
     let probes = &args.probes;
     let source = probes.display().to_string();
+    let settings = ProbeSettings {
+        quantity: args.probe_quantity,
+        tolerance: args.probe_tolerance,
+    };
+    settings.validate()?;
     let (estimates, grey) = match loaded {
+        AnyScene::ThreeD(s) if settings.quantity == ProbeQuantity::Irradiance => {
+            let at: Vec<_> = (scene_sampler::read_probes(probes)?.iter())
+                .map(|p| (p.point, p.normal))
+                .collect();
+            let bvh = SceneBvh::new(&s);
+            let est = baselines::pointwise::irradiance_reference_at(&s, &bvh, &at, &adaptive)?;
+            (est, false)
+        }
         AnyScene::ThreeD(s) => {
-            let points = s.snap_probes(&scene_sampler::read_probes(probes)?, &source)?;
+            let tol = settings
+                .tolerance
+                .unwrap_or(default_tolerance(s.diagonal()));
+            let points = (scene_sampler::read_probes(probes)?.iter())
+                .map(|p| s.snap_probe(p, tol, &source))
+                .collect::<Result<Vec<_>, _>>()?;
             let bvh = SceneBvh::new(&s);
             let est = baselines::pointwise::reference_at(&s, &bvh, &points, &adaptive)?;
             (est, false)
         }
+        AnyScene::Flatland(_) if settings.quantity == ProbeQuantity::Irradiance => {
+            anyhow::bail!("the irradiance reference is for 3-D scenes (`gcr solve` has Flatland's)")
+        }
         AnyScene::Flatland(s) => {
-            let points = s.snap_probes(&scene_sampler::read_flat_probes(probes)?, &source)?;
+            let tol = settings
+                .tolerance
+                .unwrap_or(default_tolerance(s.diagonal()));
+            let points = (scene_sampler::read_flat_probes(probes)?.iter())
+                .map(|p| s.snap_probe(p, tol, &source))
+                .collect::<Result<Vec<_>, _>>()?;
             let vis = scene_sampler::FlatVisibility::new(&s);
             let est = baselines::flatland::reference_at(&s, &vis, &points, &adaptive)?;
             (est, s.bands == 1)

@@ -399,7 +399,10 @@ fn solve_writes_irradiance_at_points_in_the_air() {
     let first = values(&out);
     assert_eq!(first.len(), 10);
     for v in &first[..9] {
-        assert!(v.len() == 3 && v.iter().all(|x| x.is_finite() && *x > 0.0), "{v:?}");
+        assert!(
+            v.len() == 3 && v.iter().all(|x| x.is_finite() && *x > 0.0),
+            "{v:?}"
+        );
     }
     assert_eq!(first[9], vec![0.0; 3], "facing the floor's back");
     let m: serde_json::Value =
@@ -470,4 +473,49 @@ fn the_probe_tolerance_is_settable() {
         assert!(!o.status.success(), "--probe-tolerance {bad}");
         assert!(String::from_utf8_lossy(&o.stderr).contains("probe tolerance"));
     }
+}
+
+/// `gcr reference --probe-quantity irradiance`: the path-traced irradiance at points in the air;
+/// Flatland has none (an error).
+#[test]
+fn reference_computes_irradiance_in_3d() {
+    let (probes, out) = (tmp("ref-plane.txt"), tmp("ref-irr.txt"));
+    std::fs::write(&probes, "0.2 0.4 0.2 0 1 0\n0.1 0.3 0.45 1 0 0\n").unwrap();
+    let o = gcr(&[
+        "reference",
+        "cornell-box",
+        "--probes",
+        &probes,
+        "--probe-out",
+        &out,
+        "--probe-quantity",
+        "irradiance",
+        "--rel-error",
+        "0.05",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(text.lines().count(), 2);
+    for line in text.lines() {
+        let v: Vec<f64> = line
+            .split_whitespace()
+            .map(|x| x.parse().unwrap())
+            .collect();
+        assert!(
+            v.len() == 3 && v.iter().all(|x| x.is_finite() && *x > 0.0),
+            "{v:?}"
+        );
+    }
+    let o = gcr(&[
+        "reference",
+        "flatland-corner",
+        "--probes",
+        "scenes/flatland-corner.probes.txt",
+        "--probe-out",
+        &out,
+        "--probe-quantity",
+        "irradiance",
+    ]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("3-D"));
 }

@@ -151,5 +151,8 @@ fn irradiance_needs_the_paths_gather() {
     let emitters = Emitters::new(&domain);
     let at = [(DVec3::new(0.0, 0.3, 0.0), DVec3::Y)];
     let got = gcr::irradiance_at_points(&domain, &trained, &emitters, &config, &at);
-    assert!(matches!(got, Err(GatherError::IrradianceNeedsPaths("rays"))));
+    assert!(matches!(
+        got,
+        Err(GatherError::IrradianceNeedsPaths("rays"))
+    ));
 }

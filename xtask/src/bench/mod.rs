@@ -7,6 +7,7 @@ mod field;
 mod gauss;
 mod gcr;
 mod images;
+mod irradiance;
 mod isgcs;
 mod isgcs_peers;
 mod scenes;
@@ -30,6 +31,7 @@ const GROUPS: &[Group] = &[
     ("compare", compare::run),
     ("field", field::run),
     ("images", images::run),
+    ("irradiance", irradiance::run),
 ];
 
 /// Runs every group whose name contains `only` (all when `None`).

@@ -389,3 +389,71 @@ fn bad_camera_values_are_errors_before_the_solve() {
     assert_eq!(flat.status.code(), Some(1));
     assert!(std::fs::read_dir(&d).unwrap().next().is_none());
 }
+
+/// A glTF camera node is the image's camera by default (issue 18 item 1): the node's translation
+/// is the eye, its local −Z the view direction, local +Y up, `yfov` the vertical field of view; the
+/// metrics record it with source `scene`.
+#[test]
+fn a_gltf_camera_node_is_the_default_camera() {
+    let d = dir("gltf-camera");
+    let scene = scene_sampler::builtin("cornell-box")
+        .unwrap()
+        .into_3d()
+        .unwrap();
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&scene_sampler::to_gltf(&scene)).unwrap();
+    // A camera 0.8 in front of the box, turned 180° about y (−Z → +Z: it looks into the box),
+    // with a 30° roll-free vertical field of view.
+    let yfov = 30f64.to_radians();
+    doc["cameras"] = serde_json::json!([{
+        "type": "perspective",
+        "perspective": {"yfov": yfov, "znear": 0.01, "aspectRatio": 1.0}
+    }]);
+    let nodes = doc["nodes"].as_array_mut().unwrap();
+    nodes.push(serde_json::json!({
+        "name": "cam", "camera": 0,
+        "translation": [0.278, 0.273, -0.8], "rotation": [0.0, 1.0, 0.0, 0.0]
+    }));
+    let cam_node = nodes.len() - 1;
+    doc["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(cam_node.into());
+    let path = d.join("box.gltf");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let (png, m) = (d.join("box.png"), d.join("m.json"));
+    ok(&gcr(&[
+        "solve",
+        &s(&path),
+        "--quiet",
+        "--quality",
+        "draft",
+        "--image-mode",
+        "pixel",
+        "--resolution",
+        "32x32",
+        "--image",
+        &s(&png),
+        "--metrics",
+        &s(&m),
+    ]));
+    let image = &metrics(&m)["images"][0];
+    assert_eq!(image["camera_source"], "scene");
+    let v = |k: &str| -> Vec<f64> {
+        (image[k].as_array().unwrap().iter())
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    let (eye, target, up) = (v("eye"), v("target"), v("up"));
+    for (got, want) in eye.iter().zip([0.278, 0.273, -0.8]) {
+        assert!((got - want).abs() < 1e-6, "eye {eye:?}");
+    }
+    let dir: Vec<f64> = target.iter().zip(&eye).map(|(t, e)| t - e).collect();
+    let len = dir.iter().map(|x| x * x).sum::<f64>().sqrt();
+    assert!((dir[2] / len - 1.0).abs() < 1e-6, "looks along +z: {dir:?}");
+    assert!((up[1] - 1.0).abs() < 1e-6, "up {up:?}");
+    let fov = image["fov_y_deg"].as_f64().unwrap();
+    assert!((fov - 30.0).abs() < 1e-4, "fov {fov}");
+    // Looking into the lit box: most of the image is lit.
+    assert!(lit_share(&png) > 0.5, "{}", lit_share(&png));
+}

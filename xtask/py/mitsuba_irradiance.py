@@ -1,20 +1,20 @@
 #!/usr/bin/env python3
 """Mitsuba 3 irradiance at points (Radiance's `rtrace -I`), for `cargo xtask bench --only irradiance`.
 
-Usage: mitsuba_irradiance.py FACES POINTS OUT DIRS SPP [SPP ...]
+Usage: mitsuba_irradiance.py FACES POINTS OUT SPP [SPP ...]
 
 FACES:  one triangle per line, as mitsuba_field.py.
-POINTS: one point per line, `x y z nx ny nz`: anywhere (in the air or on a surface), n the unit normal of
-        the hemisphere whose irradiance E = ∫ L cos θ dω is wanted.
+POINTS: one point per line, `x y z nx ny nz`: in the air, n the unit normal of the hemisphere whose
+        irradiance E = ∫ L cos θ dω is wanted.
 OUT:    for each SPP, OUT.<spp> gets one line `E_r E_g E_b se_r se_g se_b` per point (se: standard error),
-        and the script prints `spp=<spp> scene=<s> load=<s> render=<s>` per render to stdout.
+        and the script prints `spp=<spp> scene=<s> load=<s> render=<s>` per SPP to stdout.
 
-E is estimated by cosine-weighted directions: E = π · mean_i L(ω_i) with ω_i drawn from the density
-cos θ/π about n. Each point gets DIRS directions (DIRS even), one `radiancemeter` each looking along ω_i from
-the point (lifted 10⁻⁵ of the diagonal along n), all in one `batch` sensor, each measured with SPP samples by
-the `path` integrator (unbounded depth) and `ldsampler`. The directions are random (seeded): the two halves
-are independent estimates, and their difference gives the standard error. Exit code 3 when mitsuba is
-not importable.
+Each point gets a white (ρ = 1) diffuse square of half-size 10⁻⁴ of the scene's diagonal, facing n, and a
+`radiancemeter` 10⁻³ of the diagonal above it looking down at it (Mitsuba skips hits closer than ~10⁻⁴ to a
+ray origin): the square's exitance is πL = ρ·E = E, estimated by Mitsuba's own path tracer at the square
+(next-event estimation and BSDF sampling, unbounded depth, `ldsampler`). The squares block and reflect a
+negligible 10⁻⁸ of the diagonal² each. Two renders per SPP with different seeds: E is their mean, the
+standard error half their difference. Exit code 3 when mitsuba or numpy is not importable.
 """
 import sys
 import time
@@ -31,62 +31,61 @@ mi.set_variant("scalar_rgb")
 from mitsuba_scene import scene_dict  # noqa: E402  (after the variant)
 
 
-def cosine_directions(n, count, rng):
-    """`count` directions with density cos θ/π about the unit normal `n`."""
-    u1, u2 = rng.random(count), rng.random(count)
-    r, phi = np.sqrt(u1), 2 * np.pi * u2
-    local = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(np.maximum(0, 1 - u1))], 1)
+def frame(n):
+    """Two unit tangents completing the unit normal `n`."""
     a = np.array([1.0, 0, 0]) if abs(n[0]) < 0.9 else np.array([0, 1.0, 0])
     t = np.cross(n, a)
     t /= np.linalg.norm(t)
-    b = np.cross(n, t)
-    return local[:, :1] * t + local[:, 1:2] * b + local[:, 2:] * n
+    return t, np.cross(n, t)
 
 
 def main():
-    faces_path, points_path, out, dirs, *spps = sys.argv[1:]
-    dirs, spps = int(dirs), [int(s) for s in spps]
+    faces_path, points_path, out, *spps = sys.argv[1:]
+    spps = [int(s) for s in spps]
     t0 = time.perf_counter()
     tri = np.loadtxt(faces_path, ndmin=2)
     pts = np.loadtxt(points_path, ndmin=2)
     lo, hi = tri[:, :9].reshape(-1, 3).min(0), tri[:, :9].reshape(-1, 3).max(0)
-    lift = 1e-5 * float(np.linalg.norm(hi - lo))
-    scene = scene_dict(tri)
-    rng = np.random.default_rng(7)
-    rays = []
+    diag = float(np.linalg.norm(hi - lo))
+    half, above = 1e-4 * diag, 1e-3 * diag
+    squares = []
     for p in pts:
         n = p[3:] / np.linalg.norm(p[3:])
-        for d in cosine_directions(n, dirs, rng):
-            rays.append((p[:3] + lift * n, d))
-    m = len(rays)
+        t, b = frame(n)  # t × b = n: counter-clockwise about n
+        c = [p[:3] + half * (sx * t + sy * b) for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+        for i, j, k in ((0, 1, 2), (0, 2, 3)):
+            squares.append(np.concatenate([c[i], c[j], c[k], [1, 1, 1, 0, 0, 0]]))
+    scene = scene_dict(np.vstack([tri, np.asarray(squares)]))
+    n = len(pts)
+    film = {"type": "hdrfilm", "width": 1, "height": 1, "rfilter": {"type": "box"},
+            "pixel_format": "rgb"}
+    sensors = {}
+    for i, p in enumerate(pts):
+        nrm = p[3:] / np.linalg.norm(p[3:])
+        sensors[f"s{i:07d}"] = {"type": "radiancemeter", "origin": (p[:3] + above * nrm).tolist(),
+                                "direction": (-nrm).tolist(), "film": film}
     t_scene = time.perf_counter() - t0
     for spp in spps:
         t0 = time.perf_counter()
-        film = {"type": "hdrfilm", "width": 1, "height": 1, "rfilter": {"type": "box"},
-                "pixel_format": "rgb"}
-        sensors = {
-            f"s{i:08d}": {"type": "radiancemeter", "origin": o.tolist(), "direction": d.tolist(),
-                          "film": film}
-            for i, (o, d) in enumerate(rays)
-        }
-        sd = dict(scene)
-        sd["sensor"] = {
-            "type": "batch",
-            "sampler": {"type": "ldsampler", "sample_count": spp},
-            "film": {"type": "hdrfilm", "width": m, "height": 1, "rfilter": {"type": "box"},
-                     "pixel_format": "rgb"},
-            **sensors,
-        }
-        s = mi.load_dict(sd)
-        t_load = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        img = np.array(mi.render(s, spp=spp))
-        t_render = time.perf_counter() - t0
-        radiance = img.reshape(-1, img.shape[-1])[:m, :3].reshape(len(pts), dirs, 3)
-        half = dirs // 2
-        e1 = np.pi * radiance[:, :half].mean(1)
-        e2 = np.pi * radiance[:, half:].mean(1)
-        e, se = 0.5 * (e1 + e2), 0.5 * np.abs(e1 - e2)
+        renders = []
+        t_load = t_render = 0.0
+        for seed in (0, 1):
+            t0 = time.perf_counter()
+            sd = dict(scene)
+            sd["sensor"] = {
+                "type": "batch",
+                "sampler": {"type": "ldsampler", "sample_count": spp, "seed": seed},
+                "film": {"type": "hdrfilm", "width": n, "height": 1, "rfilter": {"type": "box"},
+                         "pixel_format": "rgb"},
+                **sensors,
+            }
+            s = mi.load_dict(sd)
+            t_load += time.perf_counter() - t0
+            t0 = time.perf_counter()
+            img = np.array(mi.render(s, spp=spp, seed=seed))
+            t_render += time.perf_counter() - t0
+            renders.append(np.pi * img.reshape(-1, img.shape[-1])[:n, :3])
+        e, se = 0.5 * (renders[0] + renders[1]), 0.5 * np.abs(renders[0] - renders[1])
         np.savetxt(f"{out}.{spp}", np.hstack([e, se]), fmt="%.9g")
         print(
             f"spp={spp} sampler=ldsampler scene={t_scene:.3f} load={t_load:.3f} render={t_render:.3f} "

@@ -70,8 +70,11 @@ fn path(
     p: SurfacePoint,
     rng: &mut ChaCha8Rng,
 ) -> [f64; 3] {
-    let f = &scene.faces[p.face as usize];
-    walk(scene, bvh, lights, p, (f.rho.0, f.emission.0), rng)
+    let (rho, e) = (
+        scene.rho_at(p.face, p.point),
+        scene.faces[p.face as usize].emission,
+    );
+    walk(scene, bvh, lights, p, (rho.0, e.0), rng)
 }
 
 /// [`path`] from the vertex `p` with reflectance and emission `(rho, e)`: its face's for a
@@ -92,7 +95,7 @@ fn walk(
         let rho = if depth == 0 {
             rho
         } else {
-            scene.faces[at.face as usize].rho.0
+            scene.rho_at(at.face, at.point).0
         };
         for (t, r) in throughput.iter_mut().zip(rho) {
             *t *= r;

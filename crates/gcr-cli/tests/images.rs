@@ -400,8 +400,7 @@ fn a_gltf_camera_node_is_the_default_camera() {
         .unwrap()
         .into_3d()
         .unwrap();
-    let mut doc: serde_json::Value =
-        serde_json::from_str(&scene_sampler::to_gltf(&scene)).unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&scene_sampler::to_gltf(&scene)).unwrap();
     // A camera 0.8 in front of the box, turned 180° about y (−Z → +Z: it looks into the box),
     // with a 30° roll-free vertical field of view.
     let yfov = 30f64.to_radians();

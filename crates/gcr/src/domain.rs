@@ -249,7 +249,16 @@ impl Domain<'_> {
         }
     }
 
-    /// Reflectance of face (segment) `face`.
+    /// Reflectance at `point` on face (segment) `face`: a textured face's texture there
+    /// ([`scene_sampler::Scene::rho_at`]), else the face's ρ.
+    pub fn reflectance_at(&self, face: u32, point: DVec3) -> Bands {
+        match self {
+            Domain::ThreeD(k) => k.scene.rho_at(face, point).0,
+            Domain::Flat(k) => k.scene.segments[face as usize].rho.0,
+        }
+    }
+
+    /// Reflectance of face (segment) `face` (a textured face's mean).
     pub fn reflectance(&self, face: u32) -> Bands {
         match self {
             Domain::ThreeD(k) => k.scene.faces[face as usize].rho.0,

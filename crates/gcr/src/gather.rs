@@ -103,7 +103,7 @@ pub fn gather(
         }
     }
     // ⟨B = E + ρ·(direct + indirect)⟩
-    let (rho, e) = (domain.reflectance(face), domain.emission(face));
+    let (rho, e) = (domain.reflectance_at(face, y), domain.emission(face));
     let mut out = Gathered {
         rays: samples.direct.max(samples.indirect),
         ..Gathered::default()

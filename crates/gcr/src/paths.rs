@@ -172,7 +172,10 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         samples: GatherSamples,
     ) -> PointEstimate {
         let z = Vertex { p: y, n, face };
-        let (rho, e) = (self.domain.reflectance(face), self.domain.emission(face));
+        let (rho, e) = (
+            self.domain.reflectance_at(face, y),
+            self.domain.emission(face),
+        );
         self.estimate_at(z, (rho, e), seed, first, samples)
     }
 
@@ -307,7 +310,10 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
                 continue;
             };
             let z = Vertex { p: y, n, face };
-            let (rho, e) = (self.domain.reflectance(face), self.domain.emission(face));
+            let (rho, e) = (
+                self.domain.reflectance_at(face, y),
+                self.domain.emission(face),
+            );
             let mut b = e;
             if rho.iter().any(|r| *r != 0.0) {
                 let mut light = self.next_event(&z, &mis, (qmc(i, 0), [qmc(i, 1), qmc(i, 2)]));
@@ -350,7 +356,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         let (mut out, mut beta) = ([0.0; BANDS], [1.0; BANDS]);
         let (mut x, mut first) = (*x, first);
         for depth in 1..=MAX_DEPTH {
-            let rho = self.domain.reflectance(x.face);
+            let rho = self.domain.reflectance_at(x.face, x.p);
             let top = rho.iter().fold(0.0f64, |m, r| m.max(*r));
             if top == 0.0 {
                 break;

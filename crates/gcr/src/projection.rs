@@ -165,7 +165,7 @@ pub fn kernel_moments(
     kernel: &KernelCells,
     samples: &[Sample],
     shots: u64,
-    reflectance: &(impl Fn(u32) -> Bands + Sync),
+    reflectance: &(impl Fn(u32, DVec3) -> Bands + Sync),
     (tol, excluded): (f64, &[bool]),
 ) -> Vec<Bands> {
     let n = kernel.len();
@@ -180,7 +180,7 @@ pub fn kernel_moments(
                 if smp.inv_px == 0.0 {
                     continue;
                 }
-                let rho = reflectance(smp.ray.face_y);
+                let rho = reflectance(smp.ray.face_y, smp.ray.y);
                 let mut w = [0.0; BANDS];
                 let mut any = false;
                 for k in 0..BANDS {
@@ -276,7 +276,7 @@ pub fn kernel_support(kernel: &KernelCells, samples: &[Sample], tol: f64) -> Vec
 pub fn sampled_reflected_power(
     samples: &[Sample],
     shots: u64,
-    reflectance: &(impl Fn(u32) -> Bands + Sync),
+    reflectance: &(impl Fn(u32, DVec3) -> Bands + Sync),
 ) -> Bands {
     // Fixed chunks summed in order: the result does not depend on the threads (a rayon
     // `reduce` would, in the last bits).
@@ -285,7 +285,7 @@ pub fn sampled_reflected_power(
         .map(|part| {
             let mut w = [0.0; BANDS];
             for smp in part.iter().filter(|smp| smp.inv_px != 0.0) {
-                let rho = reflectance(smp.ray.face_y);
+                let rho = reflectance(smp.ray.face_y, smp.ray.y);
                 for k in 0..BANDS {
                     if smp.ray.kernel[k] > 0.0 {
                         w[k] += rho[k] * smp.s[k] * smp.inv_px;
@@ -323,7 +323,7 @@ pub fn sampled_reflected_power(
 pub fn closed_reflected_power(
     samples: &[Sample],
     shots: u64,
-    reflectance: &(impl Fn(u32) -> Bands + Sync),
+    reflectance: &(impl Fn(u32, DVec3) -> Bands + Sync),
     generated: Bands,
 ) -> Bands {
     let partial: Vec<[Bands; 3]> = samples
@@ -331,7 +331,7 @@ pub fn closed_reflected_power(
         .map(|part| {
             let mut acc = [[0.0; BANDS]; 3];
             for smp in part.iter().filter(|smp| smp.inv_px != 0.0) {
-                let rho = reflectance(smp.ray.face_y);
+                let rho = reflectance(smp.ray.face_y, smp.ray.y);
                 for k in 0..BANDS {
                     if smp.ray.kernel[k] > 0.0 {
                         acc[0][k] += rho[k] * smp.s[k] * smp.inv_px;
@@ -441,7 +441,7 @@ pub fn bounce_operator(
     sender: &[f64],
     samples: &[Sample],
     shots: u64,
-    reflectance: &(impl Fn(u32) -> Bands + Sync),
+    reflectance: &(impl Fn(u32, DVec3) -> Bands + Sync),
     (tol, excluded): (f64, &[bool]),
 ) -> BounceOperator {
     let m = kernel.len();
@@ -457,7 +457,7 @@ pub fn bounce_operator(
         .par_iter()
         .map(|&i| {
             let smp = &samples[i];
-            let w = power_weights(smp, reflectance(smp.ray.face_y));
+            let w = power_weights(smp, reflectance(smp.ray.face_y, smp.ray.y));
             let mut at = Vec::new();
             for_each_cell_at(kernel, (&a, cut), excluded, smp, |o, g| {
                 at.push((o as u32, g))
@@ -587,7 +587,7 @@ impl KernelProjection {
         kernel: &mut KernelCells,
         samples: &[Sample],
         shots: u64,
-        reflectance: &(impl Fn(u32) -> Bands + Sync),
+        reflectance: &(impl Fn(u32, DVec3) -> Bands + Sync),
     ) {
         let b = kernel_moments(
             kernel,
@@ -700,7 +700,7 @@ mod tests {
         let surface = SceneSurface::of(&domain);
         let samples = shot_samples(&domain, 4000);
         let mut kernel = cells([3, 40, 90].map(|i| (samples[i].ray.x, samples[i].ray.y, 0.2)));
-        let reflectance = |f| domain.reflectance(f);
+        let reflectance = |f, y| domain.reflectance_at(f, y);
         let shots = samples.len() as u64;
         let all = KernelProjection::new(&kernel, &surface, 1e-6, 1e-6);
         all.fit(&mut kernel, &samples, shots, &reflectance);

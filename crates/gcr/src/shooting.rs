@@ -145,7 +145,9 @@ mod tests {
         for _ in 0..n {
             if let Some(s) = density.shoot(&domain, &mut rng) {
                 if s.ray.kernel[0] > 0.0 {
-                    shot += domain.reflectance(s.ray.face_y)[0] * s.ray.emission_x[0] * s.inv_px;
+                    shot += domain.reflectance_at(s.ray.face_y, s.ray.y)[0]
+                        * s.ray.emission_x[0]
+                        * s.inv_px;
                 }
             }
         }

@@ -18,6 +18,14 @@ pub enum SceneError {
         #[source]
         source: std::io::Error,
     },
+    /// An albedo texture that cannot be read or decoded.
+    #[error("texture {name}: {message}")]
+    Texture {
+        /// The texture's file or name.
+        name: String,
+        /// What is wrong.
+        message: String,
+    },
     /// The file is not well-formed in its format.
     #[error("{source_name}: malformed: {message}")]
     Parse {

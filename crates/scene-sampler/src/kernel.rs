@@ -125,7 +125,11 @@ impl<'a> KernelSampler<'a> {
     pub fn eval(&self, x: SurfacePoint, y: SurfacePoint) -> KernelSample {
         let d = y.point - x.point;
         let r = d.length();
-        let rho_y = self.sampler.rho(y.face);
+        let rho_y = if self.scene.textures.is_empty() {
+            self.sampler.rho(y.face)
+        } else {
+            self.scene.rho_at(y.face, y.point)
+        };
         let (cos_x, cos_y) = if r > 0.0 {
             (x.normal.dot(d) / r, -y.normal.dot(d) / r)
         } else {

@@ -40,6 +40,7 @@ pub mod probe;
 pub mod sample;
 pub mod scene;
 pub mod spectrum;
+pub mod texture;
 
 pub use builtin::{BUILTIN_NAMES, builtin, is_builtin, nearest_builtin, random_boxes};
 pub use bvh::{BuildQuality, FlatHit, FlatVisibility, Hit, SceneBvh};
@@ -59,6 +60,7 @@ pub use sample::{
 };
 pub use scene::{Camera, Face, RHO_MAX, Scene};
 pub use spectrum::{BANDS, Bands, Spectrum};
+pub use texture::{FaceTexture, Texture, Wrap, srgb_to_linear};
 
 /// A scene of either dimension, as returned by [`load`] and [`builtin`].
 #[derive(Clone, Debug)]

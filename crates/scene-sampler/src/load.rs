@@ -5,7 +5,10 @@
 //! radiosity B (exitance; `B = π·L` on a Lambertian surface). Flatland JSON gives E directly.
 
 use crate::scene::check_file_material;
-use crate::{AnyScene, Camera, Face, FlatlandScene, Result, Scene, SceneError, Spectrum};
+use crate::{
+    AnyScene, Camera, Face, FaceTexture, FlatlandScene, Result, Scene, SceneError, Spectrum,
+    Texture, Wrap,
+};
 use glam::{DMat4, DVec3};
 use std::f64::consts::PI;
 use std::path::Path;
@@ -97,7 +100,8 @@ fn read_text(path: &Path) -> Result<String> {
 /// their syntax.
 const MTL_COLOURS: [&str; 5] = ["Ka", "Kd", "Ks", "Ke", "Tf"];
 
-/// Rewrites MTL text into the subset tobj parses without trouble: only `newmtl`, `Kd` and `Ke` lines are kept,
+/// Rewrites MTL text into the subset tobj parses without trouble: only `newmtl`, `Kd`, `Ke` and `map_Kd` lines
+/// are kept (`map_Kd` with its file name alone: texture options are an error naming the line),
 /// and a colour with one number (`Kd 0.5`, grey in the MTL format) is written out as three. A colour
 /// keyword with no number, two numbers, or a word that is not a number is an error naming file and line
 /// (tobj 4 panics on the one-number form and names no line for the others).
@@ -147,6 +151,20 @@ fn sanitize_mtl(source: &str, text: &str) -> Result<String> {
             if key == "Kd" || key == "Ke" {
                 out.push_str(&format!("{key} {:?} {:?} {:?}\n", rgb[0], rgb[1], rgb[2]));
             }
+        } else if key == "map_Kd" {
+            // `map_Kd [options] file`: the options (scale, offset, …) are not supported; the file
+            // is the last word.
+            let args: Vec<&str> = words.collect();
+            let Some(file) = args.last() else {
+                return Err(err("`map_Kd` without a file name".into()));
+            };
+            if args.len() > 1 {
+                return Err(err(format!(
+                    "`map_Kd` options ({}) are not supported: give the file name alone",
+                    args[..args.len() - 1].join(" ")
+                )));
+            }
+            out.push_str(&format!("map_Kd {file}\n"));
         }
     }
     Ok(out)
@@ -275,6 +293,21 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene> {
         }
     }
     let mut warnings = Vec::new();
+    let mut textures: Vec<Texture> = Vec::new();
+    // per material: its texture's index once loaded
+    let mut texture_of: Vec<Option<u32>> = vec![None; materials.len()];
+    for (i, mat) in materials.iter().enumerate() {
+        if let Some(file) = &mat.diffuse_texture {
+            let full = dir.join(file);
+            let tex = Texture::load(&full, [Wrap::Repeat; 2]).map_err(|e| SceneError::Parse {
+                source_name: source.clone(),
+                message: format!("material `{}`: map_Kd: {e}", mat.name),
+            })?;
+            texture_of[i] = Some(textures.len() as u32);
+            textures.push(tex);
+        }
+    }
+    let mut untextured: Vec<String> = Vec::new();
     let mut checked: Vec<Option<(Spectrum, Spectrum)>> = vec![None; materials.len()];
     let mut faces = Vec::new();
     let mut objects: Vec<String> = Vec::new();
@@ -325,6 +358,19 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene> {
                 .map(|n| DVec3::new(n[0], n[1], n[2]))
         };
         let with_normals = mesh.normal_indices.len() == mesh.indices.len();
+        // ⟨The texture mapping of a textured material: vt per corner, v flipped (OBJ's v = 0 is the
+        // image's bottom row)⟩
+        let texture = mesh
+            .material_id
+            .and_then(|i| texture_of.get(i).copied().flatten());
+        let with_uv = mesh.texcoord_indices.len() == mesh.indices.len();
+        if texture.is_some() && !with_uv && !untextured.contains(&m.name) {
+            untextured.push(m.name.clone());
+        }
+        let uv = |i: u32| -> Option<glam::DVec2> {
+            let i = i as usize * 2;
+            (mesh.texcoords.get(i..i + 2)).map(|t| glam::DVec2::new(t[0], 1.0 - t[1]))
+        };
         let mut against = 0usize;
         // tobj gives face_arities only when not triangulating; with triangulation each polygon's fan shares a
         // surface id only if we track it, which tobj does not expose: one surface per triangle then.
@@ -339,7 +385,20 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene> {
                     }
                 }
             }
-            faces.push(Face::new(v, rho, e, oi as u32, surface));
+            let mut face = Face::new(v, rho, e, oi as u32, surface);
+            if let (Some(tex), true) = (texture, with_uv) {
+                let c = &mesh.texcoord_indices[3 * k..3 * k + 3];
+                if let (Some(a), Some(b), Some(d)) = (uv(c[0]), uv(c[1]), uv(c[2])) {
+                    let ft = FaceTexture {
+                        texture: tex,
+                        uv: [a, b, d],
+                        factor: rho,
+                    };
+                    face.rho = ft.mean_rho(&textures);
+                    face.texture = Some(ft);
+                }
+            }
+            faces.push(face);
             surface += 1;
         }
         if against > 0 {
@@ -349,7 +408,11 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene> {
             }
         }
     }
-    let mut scene = Scene::new(&stem(path), &source, faces, objects, None)?;
+    let mut scene =
+        Scene::new(&stem(path), &source, faces, objects, None)?.with_textures(textures)?;
+    warnings.extend(untextured.into_iter().map(|o| {
+        format!("{source}: object `{o}`: a textured material (map_Kd) but no `vt`: its Kd is used")
+    }));
     warnings.extend(against_normals.into_iter().map(|(o, n)| {
         format!(
             "{source}: object `{o}`: {n} face(s) whose `vn` normals point against their winding; the front \

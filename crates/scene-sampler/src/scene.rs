@@ -1,6 +1,6 @@
 //! The 3-D scene model: triangles with per-face reflectance and emission, validated on construction.
 
-use crate::{Result, SceneError, Spectrum};
+use crate::{FaceTexture, Result, SceneError, Spectrum, Texture};
 use glam::DVec3;
 use std::collections::HashMap;
 
@@ -53,6 +53,9 @@ pub struct Face {
     pub object: u32,
     /// Surface index: faces that form one flat polygon of the input (a triangulated quad shares one id).
     pub surface: u32,
+    /// The albedo texture mapping of a textured face ([`Scene::rho_at`]); [`Face::rho`] is then the
+    /// face's mean reflectance.
+    pub texture: Option<FaceTexture>,
 }
 
 impl Face {
@@ -76,7 +79,21 @@ impl Face {
             emission,
             object,
             surface,
+            texture: None,
         }
+    }
+
+    /// The barycentric weights `(b1, b2)` of `p` projected onto the face's plane
+    /// ([`Face::point`] inverts it for points on the face).
+    pub fn barycentric(&self, p: DVec3) -> (f64, f64) {
+        let (e1, e2, d) = (self.v[1] - self.v[0], self.v[2] - self.v[0], p - self.v[0]);
+        let (a, b, c) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let (p1, p2) = (d.dot(e1), d.dot(e2));
+        let det = a * c - b * b;
+        if det <= 0.0 {
+            return (0.0, 0.0);
+        }
+        ((c * p1 - b * p2) / det, (a * p2 - b * p1) / det)
     }
     /// The point with barycentric weights `(1 - b1 - b2, b1, b2)`.
     pub fn point(&self, b1: f64, b2: f64) -> DVec3 {
@@ -152,6 +169,8 @@ pub struct Scene {
     pub warnings: Vec<String>,
     /// Axis-aligned bounds `(lo, hi)` of all vertices.
     pub bounds: (DVec3, DVec3),
+    /// Albedo textures, indexed by [`FaceTexture::texture`] (empty for untextured scenes).
+    pub textures: Vec<Texture>,
 }
 
 impl Scene {
@@ -202,7 +221,10 @@ impl Scene {
         let mut kept: Vec<Face> = Vec::with_capacity(n_in);
         let mut dropped_ids = Vec::new();
         for (i, f) in faces.into_iter().enumerate() {
-            let f = Face::new(f.v, f.rho, f.emission, f.object, f.surface);
+            let f = Face {
+                texture: f.texture,
+                ..Face::new(f.v, f.rho, f.emission, f.object, f.surface)
+            };
             if f.area <= 1e-14 * diag2 || f.normal == DVec3::ZERO || !f.normal.is_finite() {
                 dropped_ids.push(i);
             } else {
@@ -275,7 +297,44 @@ impl Scene {
             camera_given,
             warnings,
             bounds: (lo, hi),
+            textures: Vec::new(),
         })
+    }
+
+    /// Attaches the textures the faces' [`Face::texture`] mappings index (a loader's last step):
+    /// a scene with a textured face reports all three bands.
+    ///
+    /// # Errors
+    /// A face that names a texture that is not in `textures`.
+    pub fn with_textures(mut self, textures: Vec<Texture>) -> Result<Self> {
+        if let Some(i) = self.faces.iter().position(|f| {
+            f.texture
+                .is_some_and(|t| t.texture as usize >= textures.len())
+        }) {
+            return Err(SceneError::Parse {
+                source_name: self.source.clone(),
+                message: format!("face {i} names a texture that was not loaded"),
+            });
+        }
+        if self.faces.iter().any(|f| f.texture.is_some()) {
+            self.bands = 3;
+        }
+        self.textures = textures;
+        Ok(self)
+    }
+
+    /// ρ at `point` on face `face`: the face's constant ρ, or for a textured face its texture
+    /// there ([`FaceTexture::rho`], the point projected onto the face's plane). This is the
+    /// reflectance every pointwise estimator uses: the kernel, the gathers and the path tracers.
+    pub fn rho_at(&self, face: u32, point: DVec3) -> Spectrum {
+        let f = &self.faces[face as usize];
+        match &f.texture {
+            None => f.rho,
+            Some(t) => {
+                let (b1, b2) = f.barycentric(point);
+                t.rho(&self.textures, b1, b2)
+            }
+        }
     }
 
     /// Total surface area.

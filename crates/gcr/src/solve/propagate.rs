@@ -16,6 +16,7 @@ use crate::projection::{
     BounceOperator, KernelProjection, bounce_operator, closed_reflected_power,
     kernel_gram_excluding, kernel_reflected_power, kernel_support, sampled_reflected_power,
 };
+use glam::DVec3;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
@@ -155,7 +156,7 @@ fn propagate_at(
 ) -> Propagated {
     let (domain, config, shots) = (run.domain, run.config, run.shots);
     let samples = &mut run.samples[..];
-    let reflectance = |f| domain.reflectance(f);
+    let reflectance = |f, y| domain.reflectance_at(f, y);
     let fitter = Fitter {
         projection: KernelProjection::from_gram(
             &prepared.gram,
@@ -241,10 +242,10 @@ fn propagate_at(
 /// ln(tolerance)/ln(gain) bounces; beyond [`SLOW_BOUNCES`] the direct solve pays (it costs
 /// O(cells³), a bounce O(samples · cells)). Ordinary scenes (gain ≈ 0.5, 17 bounces) keep the
 /// plain iteration.
-fn slow_bounces(samples: &[Sample], reflectance: &(impl Fn(u32) -> Bands + Sync)) -> bool {
+fn slow_bounces(samples: &[Sample], reflectance: &(impl Fn(u32, DVec3) -> Bands + Sync)) -> bool {
     let (mut kept, mut carried) = ([0.0; BANDS], [0.0; BANDS]);
     for smp in samples.iter().filter(|s| s.inv_px != 0.0) {
-        let rho = reflectance(smp.ray.face_y);
+        let rho = reflectance(smp.ray.face_y, smp.ray.y);
         for k in 0..BANDS {
             if smp.ray.kernel[k] > 0.0 {
                 kept[k] += rho[k] * smp.s[k] * smp.inv_px;
@@ -273,7 +274,7 @@ struct Fitter<'a, R> {
     reflectance: &'a R,
 }
 
-impl<R: Fn(u32) -> Bands + Sync> Fitter<'_, R> {
+impl<R: Fn(u32, DVec3) -> Bands + Sync> Fitter<'_, R> {
     /// Fits `frozen`'s weights to the strengths and applies the energy correction: the
     /// projection conserves energy only up to its fit error and the cells it rejects; with ρ near
     /// 1 the bounce iteration amplifies any excess (a ρ = 0.95 furnace ran away to 15× the exact
@@ -317,7 +318,7 @@ impl<R: Fn(u32) -> Bands + Sync> Fitter<'_, R> {
 /// ([`direct_weights`]). A projected kernel with a mode of gain above 1 has a fixed point the
 /// bounces never reach (measured: a ρ = 0.99 furnace, 100 cells, seed 4, 11× the bound): then, or
 /// when the system is singular, everything stays as it was and `false` is returned.
-fn jump_to_fixed_point<R: Fn(u32) -> Bands + Sync>(
+fn jump_to_fixed_point<R: Fn(u32, DVec3) -> Bands + Sync>(
     fitter: &Fitter<R>,
     frozen: &mut KernelCells,
     samples: &mut [Sample],
@@ -379,7 +380,7 @@ fn start_correction(
     frozen: &mut KernelCells,
     samples: &[Sample],
     (shots, sender, receiver): (u64, &[f64], &[f64]),
-    reflectance: &(impl Fn(u32) -> Bands + Sync),
+    reflectance: &(impl Fn(u32, DVec3) -> Bands + Sync),
 ) -> Option<Bands> {
     if receiver.is_empty() {
         return None;

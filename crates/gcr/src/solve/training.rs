@@ -98,7 +98,7 @@ fn kernel_target(smp: &Sample, config: &SolveConfig, domain: &Domain, out: &mut 
     out.clear();
     match config.network_target {
         NetworkTarget::SampleWeight if smp.inv_px != 0.0 => {
-            let rho = domain.reflectance(ray.face_y);
+            let rho = domain.reflectance_at(ray.face_y, ray.y);
             out.extend((0..bands).map(|b| {
                 if ray.kernel[b] > 0.0 {
                     rho[b] * s[b] * smp.inv_px

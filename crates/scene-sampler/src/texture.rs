@@ -1,0 +1,294 @@
+//! Albedo textures: spatially varying reflectance ρ(x) from an image (OBJ `map_Kd`, glTF
+//! `baseColorTexture`).
+//!
+//! Texels are stored linear: 8-bit images are sRGB-encoded colour (both formats say so), decoded with
+//! the sRGB transfer function. A lookup is bilinear between texel centres (texel (i, j) covers
+//! [i, i+1]/w × [j, j+1]/h, its centre at (i + ½)/w), with the wrap mode per axis — glTF's default
+//! sampler (LINEAR, REPEAT) and Mitsuba's `bitmap` default (bilinear, repeat). Texture coordinates
+//! here have (0, 0) at the image's **top-left** corner (glTF's convention); the OBJ loader flips `vt`'s
+//! v (OBJ puts v = 0 at the bottom).
+//!
+//! A textured face's ρ(x) = factor × texel(uv(x)), where uv interpolates the face's vertex
+//! coordinates barycentrically and factor is `Kd` or `baseColorFactor` (each band below 1 after the
+//! loaders' clamp, so ρ(x) < 1 too). [`crate::Face::rho`] holds the face's mean reflectance (for the
+//! solvers that work per element).
+
+use crate::{Result, SceneError, Spectrum};
+use glam::DVec2;
+
+/// How texture coordinates outside [0, 1] map into the image (glTF sampler `wrapS`/`wrapT`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Wrap {
+    /// Tile the image (the default of OBJ, glTF and Mitsuba).
+    #[default]
+    Repeat,
+    /// Hold the edge texels.
+    ClampToEdge,
+    /// Tile with every other copy mirrored.
+    MirroredRepeat,
+}
+
+impl Wrap {
+    /// Texel index `i` (any integer) of an axis with `n` texels.
+    fn index(self, i: i64, n: u32) -> usize {
+        let n = i64::from(n);
+        (match self {
+            Wrap::Repeat => i.rem_euclid(n),
+            Wrap::ClampToEdge => i.clamp(0, n - 1),
+            Wrap::MirroredRepeat => {
+                let k = i.rem_euclid(2 * n);
+                if k < n { k } else { 2 * n - 1 - k }
+            }
+        }) as usize
+    }
+}
+
+/// A linear-RGB albedo image with its wrap modes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    /// Name for messages (file path or glTF image name).
+    pub name: String,
+    width: u32,
+    height: u32,
+    /// Row-major from the top row, linear RGB.
+    texels: Vec<[f32; 3]>,
+    /// Wrap along u and along v.
+    pub wrap: [Wrap; 2],
+}
+
+/// The sRGB transfer function's inverse (IEC 61966-2-1): an encoded value in [0, 1] to linear.
+pub fn srgb_to_linear(c: f64) -> f64 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+impl Texture {
+    /// A texture from 8-bit sRGB texels, row-major from the top row (`rgb.len() == 3·w·h`).
+    ///
+    /// # Errors
+    /// A zero size or a buffer of the wrong length.
+    pub fn from_srgb8(
+        name: &str,
+        width: u32,
+        height: u32,
+        rgb: &[u8],
+        wrap: [Wrap; 2],
+    ) -> Result<Self> {
+        let n = width as usize * height as usize;
+        if n == 0 || rgb.len() != 3 * n {
+            return Err(SceneError::Texture {
+                name: name.into(),
+                message: format!("{width}×{height} texels but {} bytes of RGB", rgb.len()),
+            });
+        }
+        let lut: Vec<f32> = (0..=255u8)
+            .map(|v| srgb_to_linear(f64::from(v) / 255.0) as f32)
+            .collect();
+        let texels = rgb
+            .chunks_exact(3)
+            .map(|p| [lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]])
+            .collect();
+        Ok(Self {
+            name: name.into(),
+            width,
+            height,
+            texels,
+            wrap,
+        })
+    }
+
+    /// Reads a PNG or JPEG file (alpha dropped, grey expanded to RGB).
+    ///
+    /// # Errors
+    /// The file cannot be read or decoded.
+    pub fn load(path: &std::path::Path, wrap: [Wrap; 2]) -> Result<Self> {
+        let name = path.display().to_string();
+        let img = image::open(path).map_err(|e| SceneError::Texture {
+            name: name.clone(),
+            message: e.to_string(),
+        })?;
+        Self::decode(&name, img, wrap)
+    }
+
+    /// Decodes an encoded PNG or JPEG image in memory (a glTF buffer view).
+    ///
+    /// # Errors
+    /// The bytes are not an image this build decodes.
+    pub fn from_encoded(name: &str, bytes: &[u8], wrap: [Wrap; 2]) -> Result<Self> {
+        let img = image::load_from_memory(bytes).map_err(|e| SceneError::Texture {
+            name: name.into(),
+            message: e.to_string(),
+        })?;
+        Self::decode(name, img, wrap)
+    }
+
+    fn decode(name: &str, img: image::DynamicImage, wrap: [Wrap; 2]) -> Result<Self> {
+        let rgb = img.to_rgb8();
+        Self::from_srgb8(name, rgb.width(), rgb.height(), rgb.as_raw(), wrap)
+    }
+
+    /// Size in texels (width, height).
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// The linear colour at texture coordinates `uv` ((0, 0) the image's top-left corner),
+    /// bilinear between texel centres, wrapped per axis.
+    pub fn sample(&self, uv: DVec2) -> [f64; 3] {
+        let x = uv.x * f64::from(self.width) - 0.5;
+        let y = uv.y * f64::from(self.height) - 0.5;
+        if !(x.is_finite() && y.is_finite()) {
+            return [0.0; 3];
+        }
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let at = |i: i64, j: i64| {
+            let (i, j) = (
+                self.wrap[0].index(i, self.width),
+                self.wrap[1].index(j, self.height),
+            );
+            self.texels[j * self.width as usize + i]
+        };
+        let (a, b, c, d) = (
+            at(x0, y0),
+            at(x0 + 1, y0),
+            at(x0, y0 + 1),
+            at(x0 + 1, y0 + 1),
+        );
+        std::array::from_fn(|k| {
+            let top = f64::from(a[k]) * (1.0 - fx) + f64::from(b[k]) * fx;
+            let bottom = f64::from(c[k]) * (1.0 - fx) + f64::from(d[k]) * fx;
+            top * (1.0 - fy) + bottom * fy
+        })
+    }
+}
+
+/// A face's texture mapping: which texture, the texture coordinates of its three vertices, and the
+/// factor the texels are multiplied by.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FaceTexture {
+    /// Index into [`crate::Scene::textures`].
+    pub texture: u32,
+    /// Texture coordinates of `v[0]`, `v[1]`, `v[2]` ((0, 0) the image's top-left).
+    pub uv: [DVec2; 3],
+    /// `Kd` (OBJ) or `baseColorFactor` (glTF), after the loaders' clamp below 1.
+    pub factor: Spectrum,
+}
+
+impl FaceTexture {
+    /// ρ at the barycentric point (1 − b1 − b2, b1, b2) of the face.
+    pub fn rho(&self, textures: &[Texture], b1: f64, b2: f64) -> Spectrum {
+        let uv = self.uv[0] + b1 * (self.uv[1] - self.uv[0]) + b2 * (self.uv[2] - self.uv[0]);
+        let t = textures[self.texture as usize].sample(uv);
+        Spectrum(std::array::from_fn(|k| self.factor.0[k] * t[k]))
+    }
+
+    /// The mean of ρ over the face: the centroids of an N × N subdivision of the triangle, N at
+    /// least twice the number of texels an edge spans (so that a regular pattern is not aliased),
+    /// 4 to 256.
+    pub fn mean_rho(&self, textures: &[Texture]) -> Spectrum {
+        let (w, h) = textures[self.texture as usize].size();
+        let scale = glam::DVec2::new(f64::from(w), f64::from(h));
+        let span = [(0, 1), (1, 2), (2, 0)]
+            .iter()
+            .map(|&(a, b)| ((self.uv[b] - self.uv[a]) * scale).abs().max_element())
+            .fold(0.0, f64::max);
+        let n = (2.0 * span).ceil().clamp(4.0, 256.0) as usize;
+        let mut sum = [0.0; 3];
+        let mut count = 0.0;
+        for i in 0..n {
+            for j in 0..n - i {
+                // the upward sub-triangle (i, j)'s centroid, and the downward one's where it exists
+                let mut add = |b1: f64, b2: f64| {
+                    let r = self.rho(textures, b1, b2).0;
+                    for k in 0..3 {
+                        sum[k] += r[k];
+                    }
+                    count += 1.0;
+                };
+                let (fi, fj, nf) = (i as f64, j as f64, n as f64);
+                add((fi + 1.0 / 3.0) / nf, (fj + 1.0 / 3.0) / nf);
+                if i + j + 1 < n {
+                    add((fi + 2.0 / 3.0) / nf, (fj + 2.0 / 3.0) / nf);
+                }
+            }
+        }
+        Spectrum(sum.map(|s| s / count))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn checker(wrap: Wrap) -> Texture {
+        // 2×2: white, black / black, white (sRGB 255 and 0: linear 1 and 0)
+        let px = [255, 255, 255, 0, 0, 0, 0, 0, 0, 255, 255, 255];
+        Texture::from_srgb8("checker", 2, 2, &px, [wrap; 2]).unwrap()
+    }
+
+    #[test]
+    fn srgb_decoding_matches_the_standard() {
+        assert_eq!(srgb_to_linear(0.0), 0.0);
+        assert!((srgb_to_linear(1.0) - 1.0).abs() < 1e-15);
+        // sRGB 0.5 (128/255 ≈ 0.502) is linear 0.214
+        assert!((srgb_to_linear(0.5) - 0.214_041).abs() < 1e-6);
+    }
+
+    #[test]
+    fn lookups_hit_texel_centres_and_blend_between_them() {
+        let t = checker(Wrap::Repeat);
+        assert_eq!(t.sample(DVec2::new(0.25, 0.25)), [1.0; 3]);
+        assert_eq!(t.sample(DVec2::new(0.75, 0.25)), [0.0; 3]);
+        assert_eq!(t.sample(DVec2::new(0.25, 0.75)), [0.0; 3]);
+        // halfway between the two top texel centres
+        assert!((t.sample(DVec2::new(0.5, 0.25))[0] - 0.5).abs() < 1e-12);
+        // repeat: u + 1 is u
+        assert_eq!(
+            t.sample(DVec2::new(1.25, 0.25)),
+            t.sample(DVec2::new(0.25, 0.25))
+        );
+    }
+
+    #[test]
+    fn wrap_modes_differ_outside_the_unit_square() {
+        let u = DVec2::new(-0.25, 0.25);
+        assert_eq!(checker(Wrap::Repeat).sample(u), [0.0; 3]);
+        assert_eq!(checker(Wrap::ClampToEdge).sample(u), [1.0; 3]);
+        assert_eq!(checker(Wrap::MirroredRepeat).sample(u), [1.0; 3]);
+    }
+
+    #[test]
+    fn the_face_mean_of_a_fine_checker_is_half() {
+        let t = [Texture::from_srgb8(
+            "c",
+            8,
+            8,
+            &(0..64)
+                .flat_map(|i| {
+                    let v = if (i % 8 + i / 8) % 2 == 0 { 255 } else { 0 };
+                    [v, v, v]
+                })
+                .collect::<Vec<u8>>(),
+            [Wrap::Repeat; 2],
+        )
+        .unwrap()];
+        let ft = FaceTexture {
+            texture: 0,
+            uv: [DVec2::ZERO, DVec2::new(4.0, 0.0), DVec2::new(0.0, 4.0)],
+            factor: Spectrum::grey(0.8),
+        };
+        let m = ft.mean_rho(&t).0[0];
+        assert!((m - 0.4).abs() < 0.02, "{m}");
+    }
+
+    #[test]
+    fn bad_buffers_are_errors() {
+        assert!(Texture::from_srgb8("x", 2, 2, &[0; 5], [Wrap::Repeat; 2]).is_err());
+        assert!(Texture::from_srgb8("x", 0, 2, &[], [Wrap::Repeat; 2]).is_err());
+    }
+}

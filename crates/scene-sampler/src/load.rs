@@ -434,8 +434,9 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene> {
 /// Every triangle primitive of every mesh instance in the default scene (or the first) is loaded with its
 /// node's world transform applied (windings flipped under mirroring transforms). `baseColorFactor.rgb` → ρ,
 /// `emissiveFactor × KHR_materials_emissive_strength` → emitted radiance, E = π·that (ρ ≥ 1, such as the
-/// default material's white, is clamped to [`RHO_MAX`] with a warning naming the material). Textures are
-/// ignored. Triangle strips and fans are loaded as triangles; points and lines are skipped with a warning
+/// default material's white, is clamped to [`RHO_MAX`] with a warning naming the material);
+/// `baseColorTexture` (on its TEXCOORD set, with its sampler's wrap modes; sRGB) multiplies it per point
+/// ([`Scene::rho_at`]). Triangle strips and fans are loaded as triangles; points and lines are skipped with a warning
 /// naming their mesh, and a file with nothing else is an error saying so. The first node with a
 /// perspective camera (in traversal order) becomes [`Scene::camera`] (with
 /// [`Scene::camera_given`]); without one the image output places its automatic camera.
@@ -449,7 +450,7 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
             source_name: source.clone(),
             message: "the glTF parser failed on this file".into(),
         })?;
-    let (doc, buffers, _images) = imported.map_err(|e| SceneError::Parse {
+    let (doc, buffers, images) = imported.map_err(|e| SceneError::Parse {
         source_name: source.clone(),
         message: e.to_string(),
     })?;
@@ -465,6 +466,9 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
     let mut warnings = Vec::new();
     let mut skipped: Vec<String> = Vec::new();
     let mut checked: Vec<(Option<usize>, Spectrum)> = Vec::new();
+    let mut textures: Vec<Texture> = Vec::new();
+    // (image, wrap modes) → index into `textures`
+    let mut texture_of: Vec<((usize, [Wrap; 2]), u32)> = Vec::new();
     let mut surface = 0u32;
     let mut camera: Option<Camera> = None;
     let mut stack: Vec<(gltf::Node, DMat4, usize)> =
@@ -528,6 +532,52 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
                 }
             };
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            // ⟨baseColorTexture × baseColorFactor, on its TEXCOORD set⟩
+            let texture = match pbr.base_color_texture() {
+                Some(info) => {
+                    let tex = info.texture();
+                    let wrap = [tex.sampler().wrap_s(), tex.sampler().wrap_t()].map(|w| match w {
+                        gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+                        gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+                        gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+                    });
+                    let image = tex.source().index();
+                    let index = match texture_of.iter().find(|(k, _)| *k == (image, wrap)) {
+                        Some(&(_, i)) => i,
+                        None => {
+                            let name = tex.source().name().map_or_else(
+                                || format!("{source}: image {image}"),
+                                |n| format!("{source}: image `{n}`"),
+                            );
+                            let data = images.get(image).ok_or_else(|| SceneError::Texture {
+                                name: name.clone(),
+                                message: "not decoded by the glTF importer".into(),
+                            })?;
+                            textures.push(gltf_texture(&name, data, wrap)?);
+                            texture_of.push(((image, wrap), textures.len() as u32 - 1));
+                            textures.len() as u32 - 1
+                        }
+                    };
+                    let uv: Option<Vec<glam::DVec2>> =
+                        reader.read_tex_coords(info.tex_coord()).map(|c| {
+                            c.into_f32()
+                                .map(|[u, v]| glam::DVec2::new(f64::from(u), f64::from(v)))
+                                .collect()
+                        });
+                    match uv {
+                        Some(uv) => Some((index, uv)),
+                        None => {
+                            warnings.push(format!(
+                                "{source}: mesh `{obj_name}`: a baseColorTexture but no TEXCOORD_{}: \
+                                 its baseColorFactor is used",
+                                info.tex_coord()
+                            ));
+                            None
+                        }
+                    }
+                }
+                None => None,
+            };
             let Some(pos) = reader.read_positions() else {
                 return Err(SceneError::Parse {
                     source_name: source.clone(),
@@ -571,8 +621,25 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
                         })
                 };
                 let (a, b, c) = (get(t[0])?, get(t[1])?, get(t[2])?);
-                let v = if flip { [a, c, b] } else { [a, b, c] };
-                faces.push(Face::new(v, rho, e, obj, surface));
+                let (v, corners) = if flip {
+                    ([a, c, b], [t[0], t[2], t[1]])
+                } else {
+                    ([a, b, c], t)
+                };
+                let mut face = Face::new(v, rho, e, obj, surface);
+                if let Some((index, uv)) = &texture {
+                    let at = |i: u32| uv.get(i as usize).copied();
+                    if let [Some(a), Some(b), Some(c)] = corners.map(at) {
+                        let ft = FaceTexture {
+                            texture: *index,
+                            uv: [a, b, c],
+                            factor: rho,
+                        };
+                        face.rho = ft.mean_rho(&textures);
+                        face.texture = Some(ft);
+                    }
+                }
+                faces.push(face);
                 surface += 1;
             }
         }
@@ -586,7 +653,8 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
             ),
         });
     }
-    let mut scene = Scene::new(&stem(path), &source, faces, objects, camera)?;
+    let mut scene =
+        Scene::new(&stem(path), &source, faces, objects, camera)?.with_textures(textures)?;
     if !skipped.is_empty() {
         warnings.push(format!(
             "{source}: skipped {} point/line primitive(s): {}",
@@ -596,6 +664,50 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
     }
     scene.warnings.extend(warnings);
     Ok(scene)
+}
+
+/// A glTF image decoded by the importer as an albedo texture: 8-bit channels are sRGB (glTF 2.0
+/// §3.9.2: baseColorTexture is sRGB-encoded), 16-bit ones reduced to 8; alpha is dropped, grey (and
+/// grey + alpha) expanded to RGB.
+fn gltf_texture(name: &str, data: &gltf::image::Data, wrap: [Wrap; 2]) -> Result<Texture> {
+    use gltf::image::Format;
+    let (w, h) = (data.width, data.height);
+    let px = &data.pixels;
+    let rgb: Vec<u8> = match data.format {
+        Format::R8G8B8 => px.clone(),
+        Format::R8G8B8A8 => px
+            .chunks_exact(4)
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .collect(),
+        Format::R8 => px.iter().flat_map(|&g| [g, g, g]).collect(),
+        Format::R8G8 => px.chunks_exact(2).flat_map(|p| [p[0]; 3]).collect(),
+        Format::R16G16B16 | Format::R16G16B16A16 | Format::R16 | Format::R16G16 => {
+            let channels = match data.format {
+                Format::R16G16B16 => 3,
+                Format::R16G16B16A16 => 4,
+                Format::R16 => 1,
+                _ => 2,
+            };
+            // little-endian u16 per channel: the high byte is the 8-bit value
+            let hi: Vec<u8> = px.chunks_exact(2).map(|b| b[1]).collect();
+            hi.chunks_exact(channels)
+                .flat_map(|p| {
+                    if channels >= 3 {
+                        [p[0], p[1], p[2]]
+                    } else {
+                        [p[0]; 3]
+                    }
+                })
+                .collect()
+        }
+        other => {
+            return Err(SceneError::Texture {
+                name: name.into(),
+                message: format!("pixel format {other:?} is not supported (8- or 16-bit colour)"),
+            });
+        }
+    };
+    Texture::from_srgb8(name, w, h, &rgb, wrap)
 }
 
 /// The camera of a glTF node, if it has a perspective one (glTF 2.0 §3.10: the lens looks along the

@@ -60,7 +60,9 @@ fn the_back_wall_is_coloured() {
         .iter()
         .position(|f| scene.objects[f.object as usize] == "back")
         .unwrap() as u32;
-    let rho = scene.rho_at(back, DVec3::new(0.5 / 16.0, 0.5 / 16.0, 1.0)).0;
+    let rho = scene
+        .rho_at(back, DVec3::new(0.5 / 16.0, 0.5 / 16.0, 1.0))
+        .0;
     assert!(rho[0] != rho[2], "{rho:?}");
 }
 
@@ -73,11 +75,44 @@ fn bad_texture_statements_are_errors() {
                v 0 1 0\nv 0 1 1\nv 1 1 0\nusemtl l\nf 4 5 6\n";
     std::fs::write(dir.join("t.obj"), obj).unwrap();
     for (mtl, want) in [
-        ("newmtl m\nKd 0.5 0.5 0.5\nmap_Kd nothere.png\nnewmtl l\nKe 1 1 1\n", "nothere.png"),
-        ("newmtl m\nKd 0.5 0.5 0.5\nmap_Kd -s 2 2 1 t.png\nnewmtl l\nKe 1 1 1\n", "options"),
+        (
+            "newmtl m\nKd 0.5 0.5 0.5\nmap_Kd nothere.png\nnewmtl l\nKe 1 1 1\n",
+            "nothere.png",
+        ),
+        (
+            "newmtl m\nKd 0.5 0.5 0.5\nmap_Kd -s 2 2 1 t.png\nnewmtl l\nKe 1 1 1\n",
+            "options",
+        ),
     ] {
         std::fs::write(dir.join("t.mtl"), mtl).unwrap();
-        let err = scene_sampler::load_obj(dir.join("t.obj")).unwrap_err().to_string();
+        let err = scene_sampler::load_obj(dir.join("t.obj"))
+            .unwrap_err()
+            .to_string();
         assert!(err.contains(want), "{err}");
+    }
+}
+
+/// The same room as .glb with the PNGs embedded (`xtask/py/make_checker_room_glb.py`): the same
+/// reflectance at the same points as the OBJ.
+#[test]
+fn the_glb_reads_the_same_textures_as_the_obj() {
+    let obj = checker_room();
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/checker-room.glb");
+    let glb = scene_sampler::load_gltf(path).unwrap();
+    assert_eq!(glb.textures.len(), 2);
+    assert_eq!(glb.faces.len(), obj.faces.len());
+    for (fa, a) in obj.faces.iter().enumerate() {
+        // the same triangle in the .glb (f32 positions, node order may differ)
+        let fb = (glb.faces.iter())
+            .position(|b| (0..3).all(|k| a.v[k].distance(b.v[k]) < 1e-6))
+            .unwrap_or_else(|| panic!("face {fa} not in the .glb")) as u32;
+        assert_eq!(a.texture.is_some(), glb.faces[fb as usize].texture.is_some());
+        for (u, v) in [(0.2, 0.3), (0.6, 0.1), (0.05, 0.9)] {
+            let p = a.point(u, v * (1.0 - u));
+            let (ra, rb) = (obj.rho_at(fa as u32, p).0, glb.rho_at(fb, p).0);
+            for k in 0..3 {
+                assert!((ra[k] - rb[k]).abs() < 1e-5, "{p}: {ra:?} vs {rb:?}");
+            }
+        }
     }
 }

@@ -27,7 +27,7 @@ except ImportError as e:  # the bench skips Mitsuba with a note
 import numpy as np
 
 mi.set_variant("scalar_rgb")
-from mitsuba_scene import scene_dict  # noqa: E402  (after the variant)
+from mitsuba_scene import read_textures, scene_dict  # noqa: E402  (after the variant)
 
 
 def main():
@@ -38,7 +38,7 @@ def main():
     pts = np.loadtxt(points_path, ndmin=2)
     lo, hi = tri[:, :9].reshape(-1, 3).min(0), tri[:, :9].reshape(-1, 3).max(0)
     offset = 1e-3 * float(np.linalg.norm(hi - lo))
-    scene = scene_dict(tri)
+    scene = scene_dict(tri, read_textures(faces_path))
     n = len(pts)
     t_scene = time.perf_counter() - t0
     for spp in spps:

@@ -25,7 +25,7 @@ except ImportError as e:  # the bench skips Mitsuba with a note
 import numpy as np
 
 mi.set_variant("scalar_rgb")
-from mitsuba_scene import scene_dict  # noqa: E402  (after the variant)
+from mitsuba_scene import read_textures, scene_dict  # noqa: E402  (after the variant)
 
 
 def main():
@@ -35,7 +35,7 @@ def main():
     cam = np.loadtxt(camera_path)
     eye, target, up = cam[0:3].tolist(), cam[3:6].tolist(), cam[6:9].tolist()
     fov, width, height = float(cam[9]), int(cam[10]), int(cam[11])
-    scene = scene_dict(tri)
+    scene = scene_dict(tri, read_textures(faces_path))
     t_scene = time.perf_counter() - t0
     for spp in (int(s) for s in spps):
         t0 = time.perf_counter()

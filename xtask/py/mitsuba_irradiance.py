@@ -28,7 +28,7 @@ except ImportError as e:  # the bench skips Mitsuba with a note
     sys.exit(3)
 
 mi.set_variant("scalar_rgb")
-from mitsuba_scene import scene_dict  # noqa: E402  (after the variant)
+from mitsuba_scene import read_textures, scene_dict  # noqa: E402  (after the variant)
 
 
 def frame(n):
@@ -55,7 +55,10 @@ def main():
         c = [p[:3] + half * (sx * t + sy * b) for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
         for i, j, k in ((0, 1, 2), (0, 2, 3)):
             squares.append(np.concatenate([c[i], c[j], c[k], [1, 1, 1, 0, 0, 0]]))
-    scene = scene_dict(np.vstack([tri, np.asarray(squares)]))
+    squares = np.asarray(squares)
+    if tri.shape[1] > 15:  # a textured scene's rows: the squares have no texture
+        squares = np.hstack([squares, np.tile([-1, 0, 0, 0, 0, 0, 0], (len(squares), 1))])
+    scene = scene_dict(np.vstack([tri, squares]), read_textures(faces_path))
     n = len(pts)
     film = {"type": "hdrfilm", "width": 1, "height": 1, "rfilter": {"type": "box"},
             "pixel_format": "rgb"}

@@ -1,23 +1,50 @@
-"""The scene shared by mitsuba_field.py and mitsuba_image.py: triangles with a diffuse ρ and an
-emitted radiance Ke (`x0 y0 z0 x1 y1 z1 x2 y2 z2 rho_r rho_g rho_b Ke_r Ke_g Ke_b` per row) as one
-Mitsuba 3 mesh per material, in a scene dict with the `path` integrator at unbounded depth.
+"""The scene shared by the Mitsuba scripts: triangles with a diffuse ρ and an emitted radiance Ke
+(`x0 y0 z0 x1 y1 z1 x2 y2 z2 rho_r rho_g rho_b Ke_r Ke_g Ke_b` per row) as one Mitsuba 3 mesh per
+material, in a scene dict with the `path` integrator at unbounded depth.
+
+Textured scenes add seven columns per row, `T u0 v0 u1 v1 u2 v2`: the row's texture (−1: none) and its
+corners' texture coordinates ((0, 0) the image's top-left, Mitsuba's convention too), ρ then being the
+factor the texels are multiplied by; the textures are in `<faces>.textures`, one per line, `w h` and the
+linear RGB texels row-major from the top. A textured material becomes a `bitmap` (raw linear data: both
+renderers read the same texels; bilinear, repeat) of texels × factor.
 The caller imports mitsuba and sets the variant first."""
+import os
+
 import mitsuba as mi
 import numpy as np
 
 
-def scene_dict(tri):
-    """The rows of `tri` (N × 15) as a Mitsuba scene dict without a sensor."""
+def read_textures(faces_path):
+    """The textures next to a faces file (an empty list when there are none)."""
+    path = f"{faces_path}.textures"
+    if not os.path.exists(path):
+        return []
+    out = []
+    for line in open(path):
+        v = line.split()
+        w, h = int(v[0]), int(v[1])
+        out.append(np.asarray(v[2:], dtype=np.float32).reshape(h, w, 3))
+    return out
+
+
+def scene_dict(tri, textures=()):
+    """The rows of `tri` (N × 15, or N × 22 with textures) as a Mitsuba scene dict without a sensor."""
     groups = {}
     for row in tri:
-        groups.setdefault(tuple(row[9:15]), []).append(row[:9])
+        tex = int(row[15]) if len(row) > 15 else -1
+        groups.setdefault((tuple(row[9:15]), tex), []).append(row)
     scene = {"type": "scene", "integrator": {"type": "path", "max_depth": -1}}
-    for k, (mat, rows) in enumerate(groups.items()):
-        v = np.asarray(rows, dtype=np.float64).reshape(-1, 3)
+    for k, ((mat, tex), rows) in enumerate(groups.items()):
+        rows = np.asarray(rows, dtype=np.float64)
+        v = rows[:, :9].reshape(-1, 3)
         props = mi.Properties()
-        props["bsdf"] = mi.load_dict(
-            {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(mat[:3])}}
-        )
+        if tex >= 0:
+            texels = textures[tex] * np.asarray(mat[:3], dtype=np.float32)
+            reflectance = {"type": "bitmap", "bitmap": mi.Bitmap(texels), "raw": True,
+                           "filter_type": "bilinear", "wrap_mode": "repeat"}
+        else:
+            reflectance = {"type": "rgb", "value": list(mat[:3])}
+        props["bsdf"] = mi.load_dict({"type": "diffuse", "reflectance": reflectance})
         if max(mat[3:]) > 0:
             props["emitter"] = mi.load_dict(
                 {"type": "area", "radiance": {"type": "rgb", "value": list(mat[3:])}}
@@ -27,12 +54,14 @@ def scene_dict(tri):
             vertex_count=len(v),
             face_count=len(rows),
             has_vertex_normals=False,
-            has_vertex_texcoords=False,
+            has_vertex_texcoords=tex >= 0,
             props=props,
         )
         params = mi.traverse(mesh)
         params["vertex_positions"] = v.ravel().tolist()
         params["faces"] = list(range(len(v)))
+        if tex >= 0:
+            params["vertex_texcoords"] = rows[:, 16:22].ravel().tolist()
         params.update()
         scene[f"mesh{k}"] = mesh
     return scene

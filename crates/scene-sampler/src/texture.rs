@@ -130,6 +130,11 @@ impl Texture {
         Self::from_srgb8(name, rgb.width(), rgb.height(), rgb.as_raw(), wrap)
     }
 
+    /// The linear texels, row-major from the top row.
+    pub fn texels(&self) -> &[[f32; 3]] {
+        &self.texels
+    }
+
     /// Size in texels (width, height).
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)

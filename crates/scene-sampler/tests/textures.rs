@@ -106,7 +106,10 @@ fn the_glb_reads_the_same_textures_as_the_obj() {
         let fb = (glb.faces.iter())
             .position(|b| (0..3).all(|k| a.v[k].distance(b.v[k]) < 1e-6))
             .unwrap_or_else(|| panic!("face {fa} not in the .glb")) as u32;
-        assert_eq!(a.texture.is_some(), glb.faces[fb as usize].texture.is_some());
+        assert_eq!(
+            a.texture.is_some(),
+            glb.faces[fb as usize].texture.is_some()
+        );
         for (u, v) in [(0.2, 0.3), (0.6, 0.1), (0.05, 0.9)] {
             let p = a.point(u, v * (1.0 - u));
             let (ra, rb) = (obj.rho_at(fa as u32, p).0, glb.rho_at(fb, p).0);

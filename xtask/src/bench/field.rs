@@ -257,22 +257,50 @@ fn pick(values: &[[f64; 3]], subset: &[usize]) -> Vec<[f64; 3]> {
     subset.iter().map(|&i| values[i]).collect()
 }
 
-/// The scene's triangles for the Mitsuba scripts (`xtask/py/mitsuba_field.py` documents the format):
-/// corners, ρ, and the emitted radiance Ke = E/π.
-pub(super) fn mitsuba_faces(scene: &Scene) -> Result<String> {
+/// Writes the scene's triangles for the Mitsuba scripts to `path` (`xtask/py/mitsuba_scene.py`
+/// documents the format): corners, ρ, and the emitted radiance Ke = E/π; for a textured scene also
+/// each row's texture (−1: none) and its corners' texture coordinates, ρ then the texture's factor,
+/// and the textures' linear texels in `<path>.textures`.
+pub(super) fn write_mitsuba_faces(scene: &Scene, path: &Path) -> Result<()> {
+    let textured = !scene.textures.is_empty();
     let mut faces = String::new();
     for f in &scene.faces {
         for v in f.v {
             write!(faces, "{} {} {} ", v.x, v.y, v.z)?;
         }
-        let (r, e) = (f.rho.0, f.emission.0.map(|x| x / std::f64::consts::PI));
-        writeln!(
+        let r = f.texture.map_or(f.rho.0, |t| t.factor.0);
+        let e = f.emission.0.map(|x| x / std::f64::consts::PI);
+        write!(
             faces,
             "{} {} {} {} {} {}",
             r[0], r[1], r[2], e[0], e[1], e[2]
         )?;
+        match (textured, f.texture) {
+            (false, _) => {}
+            (true, None) => write!(faces, " -1 0 0 0 0 0 0")?,
+            (true, Some(t)) => {
+                write!(faces, " {}", t.texture)?;
+                for uv in t.uv {
+                    write!(faces, " {} {}", uv.x, uv.y)?;
+                }
+            }
+        }
+        faces.push('\n');
     }
-    Ok(faces)
+    std::fs::write(path, faces)?;
+    if textured {
+        let mut text = String::new();
+        for t in &scene.textures {
+            let (w, h) = t.size();
+            write!(text, "{w} {h}")?;
+            for px in t.texels() {
+                write!(text, " {} {} {}", px[0], px[1], px[2])?;
+            }
+            text.push('\n');
+        }
+        std::fs::write(format!("{}.textures", path.display()), text)?;
+    }
+    Ok(())
 }
 
 /// Runs `xtask/py/<script>` with `files` and the sample counts: its stdout, or why Mitsuba is
@@ -351,7 +379,6 @@ fn mitsuba(
         points.len()
     ));
     std::fs::create_dir_all(&dir)?;
-    let faces = mitsuba_faces(scene)?;
     let mut pts = String::new();
     for p in points {
         writeln!(
@@ -361,7 +388,7 @@ fn mitsuba(
         )?;
     }
     let (ff, pf, of) = (dir.join("faces.txt"), dir.join("points.txt"), dir.join("b"));
-    std::fs::write(&ff, faces)?;
+    write_mitsuba_faces(scene, &ff)?;
     std::fs::write(&pf, pts)?;
     let stdout = match run_mitsuba("mitsuba_field.py", &[&ff, &pf, &of], spp)? {
         Ok(o) => o,

@@ -12,9 +12,11 @@
 //!   The reference's own error is estimated from the 1024-spp render's (noise falls as 1/spp in MSE).
 //!
 //! Skipped with a note when `mitsuba` is not importable (the reference needs it).
-//! `IMAGE_SCENES=cornell-box` restricts the scenes.
+//! `IMAGE_SCENES=cornell-box` restricts the scenes. Besides the 3-D built-ins, `scenes/checker-room.obj`:
+//! checkerboard albedo textures (`map_Kd`), given to Mitsuba as the same linear texels (`bitmap`, raw,
+//! bilinear, repeat), from its bounding-box camera.
 
-use super::field::{mitsuba_faces, mitsuba_runs, read_values, run_mitsuba};
+use super::field::{mitsuba_runs, read_values, run_mitsuba, write_mitsuba_faces};
 use super::gcr::{Curve, plot_curves};
 use crate::Ctx;
 use anyhow::{Context, Result, bail};
@@ -58,9 +60,15 @@ fn plan(quick: bool) -> Plan {
     } else {
         Plan {
             scenes: scenes.unwrap_or_else(|| {
-                ["cornell-box", "two-blockers", "wall-floor", "closed-room"]
-                    .map(String::from)
-                    .to_vec()
+                [
+                    "cornell-box",
+                    "two-blockers",
+                    "wall-floor",
+                    "closed-room",
+                    "scenes/checker-room.obj",
+                ]
+                .map(String::from)
+                .to_vec()
             }),
             size: (96, 96),
             targets: &[0.1, 0.05, 0.02, 0.01],
@@ -96,7 +104,7 @@ fn mitsuba(
     let dir = std::env::temp_dir().join(format!("gcr-images-{}-{tag}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
     let (ff, cf, of) = (dir.join("faces.txt"), dir.join("camera.txt"), dir.join("l"));
-    std::fs::write(&ff, mitsuba_faces(scene)?)?;
+    write_mitsuba_faces(scene, &ff)?;
     let (e, t, u) = (camera.eye, camera.target, camera.up);
     std::fs::write(
         &cf,
@@ -157,8 +165,9 @@ fn reference(
 
 /// Every solver on one scene: the curves, and a note.
 fn one(name: &str, p: &Plan) -> Result<std::result::Result<(Vec<Curve>, String), String>> {
-    let scene = scene_sampler::builtin(name)?.into_3d()?;
+    let scene = scene_sampler::load_or_builtin(name)?.into_3d()?;
     let camera = PinholeCamera::of_scene(&scene);
+    let name = &slug(name);
     let r = match reference(name, &scene, &camera, p.size, p.ref_spp)? {
         Ok(r) => r,
         Err(why) => return Ok(Err(why)),
@@ -225,6 +234,13 @@ fn one(name: &str, p: &Plan) -> Result<std::result::Result<(Vec<Curve>, String),
     Ok(Ok((curves, note)))
 }
 
+/// A scene's name for files and tables: a built-in's name, a file's stem.
+fn slug(name: &str) -> String {
+    Path::new(name)
+        .file_stem()
+        .map_or_else(|| name.to_string(), |s| s.to_string_lossy().into_owned())
+}
+
 /// The other curve's error at `seconds`, interpolated log-log between its runs (None outside).
 fn error_at(c: &Curve, seconds: f64) -> Option<f64> {
     c.points.windows(2).find_map(|w| {
@@ -256,6 +272,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
                 return Ok(());
             }
         };
+        let name = &slug(name);
         let png = format!("images-{name}.png");
         plot_curves(
             &figs.join(&png),

@@ -15,7 +15,7 @@
 //! Each is compared with the reference: relative L2 difference, its own estimated noise ‖σ‖/‖E‖, and
 //! Σ d² / Σ (σ² + σ_ref²) (≈ 1 when two estimates differ by their noise alone).
 
-use super::field::{mitsuba_faces, mitsuba_runs, run_mitsuba};
+use super::field::{mitsuba_runs, run_mitsuba, write_mitsuba_faces};
 use crate::Ctx;
 use anyhow::{Result, bail};
 use baselines::Adaptive;
@@ -77,7 +77,7 @@ fn mitsuba(
     let dir = std::env::temp_dir().join(format!("gcr-irradiance-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
     let (ff, pf, of) = (dir.join("faces.txt"), dir.join("points.txt"), dir.join("e"));
-    std::fs::write(&ff, mitsuba_faces(scene)?)?;
+    write_mitsuba_faces(scene, &ff)?;
     let text: String = points
         .iter()
         .map(|(p, n)| format!("{} {} {} {} {} {}\n", p.x, p.y, p.z, n.x, n.y, n.z))

@@ -40,6 +40,9 @@
 //! Cost: growth O(steps · z · n); the output layer O(S · z² + z³) per candidate multiplier
 //! (S selection rows; dense matrix products on two threads) plus O(S · z) per candidate ridge.
 
+pub use crate::data::RegressorError;
+use crate::data::check_data;
+use crate::kmeans::kmeans;
 use crate::readout::{Basis, Readout, Standardizer, egop, fit_best, fit_gcv, nearest_widths};
 use crate::{GoalFunction, Isgcs, IsgcsError, Params, Termination};
 use ndarray::ArrayView2;
@@ -47,45 +50,6 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use std::ops::ControlFlow;
-
-/// Everything that can go wrong in [`Regressor::fit`] and [`Regressor::predict`].
-#[derive(Debug, thiserror::Error, PartialEq)]
-pub enum RegressorError {
-    /// Inputs or outputs of the wrong length, or no rows.
-    #[error("shape: {0}")]
-    Shape(String),
-    /// A NaN or infinite value in the training data.
-    #[error("non-finite value {value} in the {what} at row {row}, column {column}")]
-    NonFinite {
-        /// `"inputs"` or `"targets"`.
-        what: &'static str,
-        /// Row of the value.
-        row: usize,
-        /// Column of the value.
-        column: usize,
-        /// The value.
-        value: f64,
-    },
-    /// A hyperparameter out of range (the message names it).
-    #[error("invalid parameter: {0}")]
-    InvalidParams(String),
-    /// The cell budget is below the k + 1 cells of the initial simplex or above the rows.
-    #[error("cell budget {cells} is outside {min} (k + 1) … {max} (the number of rows)")]
-    CellBudget {
-        /// The requested budget.
-        cells: usize,
-        /// k + 1.
-        min: usize,
-        /// The number of rows.
-        max: usize,
-    },
-    /// The network rejected its parameters.
-    #[error(transparent)]
-    Network(#[from] IsgcsError),
-    /// The least-squares output layer could not be solved (no row activates any cell).
-    #[error("the output layer could not be fitted: {0}")]
-    Solve(String),
-}
 
 /// Hyperparameters of [`Regressor::fit`]; `None` means chosen from the data.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -202,45 +166,6 @@ fn shuffle(v: &mut [usize], rng: &mut ChaCha8Rng) {
         let j = rng.random_range(0..=i);
         v.swap(i, j);
     }
-}
-
-/// Checks N × n inputs and N × m targets; returns N.
-pub(crate) fn check_data(
-    inputs: &[f64],
-    targets: &[f64],
-    n: usize,
-    m: usize,
-) -> Result<usize, RegressorError> {
-    if n == 0 || m == 0 {
-        return Err(RegressorError::Shape(format!(
-            "n = {n} inputs and m = {m} outputs must be at least 1"
-        )));
-    }
-    if inputs.is_empty() || inputs.len() % n != 0 {
-        return Err(RegressorError::Shape(format!(
-            "{} input numbers are not N × {n} with N ≥ 1",
-            inputs.len()
-        )));
-    }
-    let rows = inputs.len() / n;
-    if targets.len() != rows * m {
-        return Err(RegressorError::Shape(format!(
-            "{rows} input rows need {} target numbers (× {m}), got {}",
-            rows * m,
-            targets.len()
-        )));
-    }
-    for (what, data, d) in [("inputs", inputs, n), ("targets", targets, m)] {
-        if let Some(i) = data.iter().position(|v| !v.is_finite()) {
-            return Err(RegressorError::NonFinite {
-                what,
-                row: i / d,
-                column: i % d,
-                value: data[i],
-            });
-        }
-    }
-    Ok(rows)
 }
 
 /// Eigenvalues (descending) and eigenvectors (columns of the returned row-major d × d matrix)
@@ -444,7 +369,7 @@ fn learn_metric(
         let tx = t
             .as_ref()
             .map_or_else(|| sx.to_vec(), |t| apply_transform(t, sx, n));
-        let centres = crate::rbf::kmeans(&tx, n, z0, 10, params.seed ^ 0x3e7a);
+        let centres = kmeans(&tx, n, z0, 10, params.seed ^ 0x3e7a);
         let basis = Basis {
             n,
             base: nearest_widths(&centres, n, n + 1),

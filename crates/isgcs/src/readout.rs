@@ -62,6 +62,18 @@ impl Standardizer {
     }
 }
 
+/// Basis values exp(−t) with t beyond this are 0 (see [`Basis::row`]).
+const FLUSH: f64 = 300.0;
+
+/// exp(−r²/w²), 0 when w = 0 or r²/w² > [`FLUSH`].
+fn gaussian(r2: f64, w2: f64) -> f64 {
+    if w2 > 0.0 && r2 <= FLUSH * w2 {
+        (-r2 / w2).exp()
+    } else {
+        0.0
+    }
+}
+
 /// Gaussians Ω_i(x) = exp(−|x − c_i|²/(μ d_i)²) on fixed centres with base widths d_i and a
 /// width multiplier μ (not cut off); normalized (divided
 /// by their sum) or plain, optionally followed by the affine columns 1, x₁ … xₙ.
@@ -98,9 +110,12 @@ impl Basis {
             }
             let w = mult * self.base[i];
             let w2 = w * w;
-            // No cut-off: with small ridges the weights can be large, and a cut-off's jump
-            // (e⁻¹⁶ × weight) would show; exp underflows to 0 on its own beyond ~27 widths.
-            out[i] = if w > 0.0 { (-r2 / w2).exp() } else { 0.0 };
+            // No visible cut-off: with small ridges the weights can be large, and a cut-off's
+            // jump (e⁻¹⁶ × weight) would show. Values below e^−FLUSH (~10⁻¹³⁰) are set to 0:
+            // exp's subnormal results (beyond ~26.6 widths) and products of tiny values
+            // landing in the subnormal range made the design and Gram matrices several times
+            // slower in 2-D, where most cells are far from most rows.
+            out[i] = gaussian(r2, w2);
             sum += out[i];
         }
         if self.normalized {
@@ -331,58 +346,68 @@ pub(crate) fn fit_best(
     let rows = ys.nrows();
     let sel = select_rows.min(rows).max(1);
     let sy = ys.slice_axis(Axis(0), Slice::from(..sel));
-    let walk = |&(basis, xs): &(&Basis, &[f64])| -> Option<(f64, Fit)> {
-        let sx = &xs[..sel * basis.n];
-        let mut kept: Option<(f64, Fit)> = None;
-        let mut score = |mult: f64| {
-            let Some(fit) = gcv_at(basis, mult, ridge, sx, sy, sel) else {
-                return f64::INFINITY;
-            };
-            let s = fit.0;
-            if kept.as_ref().is_none_or(|k| s < k.1.0) {
-                kept = Some((mult, fit));
-            }
-            s
-        };
-        match mult {
-            Some(m) => {
-                score(m);
-            }
-            None => {
-                let step = std::f64::consts::SQRT_2;
-                let first = start.clamp(MULT_RANGE.0, MULT_RANGE.1);
-                let mut at = (first, score(first));
-                for dir in [step, 1.0 / step] {
-                    let mut mult = at.0 * dir;
-                    let mut improved = false;
-                    while (MULT_RANGE.0..=MULT_RANGE.1).contains(&mult) {
-                        let s = score(mult);
-                        if s < at.1 {
-                            at = (mult, s);
-                            improved = true;
-                            mult *= dir;
-                        } else {
-                            break;
-                        }
+    let eval = |&(basis, xs): &(&Basis, &[f64]), mult: f64| -> Option<(f64, Fit)> {
+        gcv_at(basis, mult, ridge, &xs[..sel * basis.n], sy, sel).map(|fit| (mult, fit))
+    };
+    let first = mult.unwrap_or_else(|| start.clamp(MULT_RANGE.0, MULT_RANGE.1));
+    // Every candidate at the first multiplier (in parallel) …
+    let mut starts: Vec<Option<(f64, Fit)>> =
+        candidates.par_iter().map(|c| eval(c, first)).collect();
+    // … then the walk (module docs of `regressor`) only from the RACE_KEEP best of them: a
+    // candidate that starts behind the leaders rarely overtakes both of them.
+    let mut order: Vec<usize> = (0..candidates.len())
+        .filter(|&i| starts[i].is_some())
+        .collect();
+    let score_of = |i: usize| starts[i].as_ref().map_or(f64::INFINITY, |s| s.1.0);
+    order.sort_by(|&a, &b| score_of(a).total_cmp(&score_of(b)).then(a.cmp(&b)));
+    order.truncate(if mult.is_some() { 1 } else { RACE_KEEP });
+    let seeds: Vec<(usize, (f64, Fit))> = order
+        .iter()
+        .filter_map(|&i| starts[i].take().map(|s| (i, s)))
+        .collect();
+    let walk = |(i, at): (usize, (f64, Fit))| -> (usize, (f64, Fit)) {
+        if mult.is_some() {
+            return (i, at);
+        }
+        let c = &candidates[i];
+        let step = std::f64::consts::SQRT_2;
+        let mut at = at;
+        for dir in [step, 1.0 / step] {
+            let mut next = at.0 * dir;
+            let mut improved = false;
+            while (MULT_RANGE.0..=MULT_RANGE.1).contains(&next) {
+                match eval(c, next) {
+                    Some(fit) if fit.1.0 < at.1.0 => {
+                        at = fit;
+                        improved = true;
+                        next *= dir;
                     }
-                    if improved {
-                        break;
-                    }
+                    _ => break,
                 }
             }
+            if improved {
+                break;
+            }
         }
-        kept
+        (i, at)
     };
-    let walks: Vec<Option<(f64, Fit)>> = candidates.par_iter().map(walk).collect();
+    let walks: Vec<(usize, (f64, Fit))> = seeds.into_par_iter().map(walk).collect();
     let (index, (mult, fit)) = walks
         .into_iter()
-        .enumerate()
-        .filter_map(|(i, w)| w.map(|w| (i, w)))
         .min_by(|a, b| a.1.1.0.total_cmp(&b.1.1.0).then(a.0.cmp(&b.0)))?;
     // Refit on every row unless the selection rows were all rows.
     let (basis, xs) = candidates[index];
     let (score, weights, relative, dof) = if sel == rows {
         fit
+    } else if ridge.is_none() {
+        // The same absolute ridge ρ on every row: the relative ridge is ρ over the mean
+        // diagonal of G, which grows with the rows (floored as in the selection). One Cholesky
+        // solve; the eigendecomposition's ridge path only if it fails.
+        let r = (fit.2 * sel as f64 / rows as f64).max(RIDGE_FLOOR);
+        match gcv_at(basis, mult, Some(r), xs, ys, sel) {
+            Some(refit) => (fit.0, refit.1, refit.2, refit.3),
+            None => gcv_at(basis, mult, ridge, xs, ys, sel)?,
+        }
     } else {
         gcv_at(basis, mult, ridge, xs, ys, sel)?
     };
@@ -397,6 +422,13 @@ pub(crate) fn fit_best(
         },
     ))
 }
+
+/// Candidates of [`fit_best`] whose multiplier is walked: the best ones at the first
+/// multiplier.
+const RACE_KEEP: usize = 2;
+
+/// The smallest relative ridge of the selection ([`crate::linalg::RidgePath::best_ridge`]).
+const RIDGE_FLOOR: f64 = 1e-12;
 
 /// The range of the width multiplier walk.
 const MULT_RANGE: (f64, f64) = (0.2, 12.0);
@@ -470,7 +502,7 @@ pub(crate) fn egop(basis: &Basis, mult: f64, weights: &[f64], m: usize, xs: &[f6
                     let c = &basis.centres[i * n..(i + 1) * n];
                     let w = mult * basis.base[i];
                     let r2: f64 = c.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum();
-                    raw[i] = if w > 0.0 { (-r2 / (w * w)).exp() } else { 0.0 };
+                    raw[i] = gaussian(r2, w * w);
                     sum += raw[i];
                 }
                 for out in 0..m {

@@ -30,15 +30,21 @@
 //!    every row. Candidates (with `choose_basis`, the default): normalized and plain Gaussians,
 //!    each in the learned metric and, when a metric was learned, in the standardized metric at
 //!    the same centres mapped back (x = T⁻¹c; the pilots that chose T had fewer centres).
-//!    For each candidate μ walks by √2 from the pilot's multiplier on the first max(3z, 1500)
-//!    rows (candidates in parallel); for each μ the relative ridge (10⁻¹²…1, decades refined
-//!    to quarter decades) minimises the exact closed-form leave-one-out error
-//!    mean(e_i/(1 − h_ii))² over those rows, every ridge from one symmetric eigendecomposition
-//!    of AᵀA (`linalg::RidgePath`). The candidate with the lowest score is refitted on all rows
-//!    (its ridge re-chosen by the leave-one-out error of the same rows on the full fit).
+//!    The weights are fitted on the first S = max(3z, 1500) rows (the rows are shuffled) and
+//!    scored by their mean squared error on the next min(N − S, 2S) rows (a holdout; when
+//!    fewer than max(S/2, 200) rows are left, by the exact closed-form leave-one-out error
+//!    mean(e_i/(1 − h_ii))² over the S rows instead, every ridge from one symmetric
+//!    eigendecomposition of AᵀA, `linalg::RidgePath`). For each μ the relative ridge in
+//!    10⁻¹²…1 is the one with the lowest score (one Cholesky solve per ridge: every second
+//!    decade, then the best one's neighbours at ±1 and ±½ decade; at the next μ of a walk,
+//!    the previous ridge and ±½ decade, walking on while an end is best). Every candidate is
+//!    scored at the pilot's multiplier (in parallel); the two best then walk μ by √2 (in
+//!    parallel) while the score falls. The candidate with the lowest score is refitted on all
+//!    rows with the same absolute ridge (relative ridge × S/N, floored at 10⁻¹²).
 //!
-//! Cost: growth O(steps · z · n); the output layer O(S · z² + z³) per candidate multiplier
-//! (S selection rows; dense matrix products on two threads) plus O(S · z) per candidate ridge.
+//! Cost: growth O(steps · z · n); the output layer O(S · z²) per candidate multiplier (S
+//! selection rows; dense matrix products on two threads) plus O(z³/3 + H · z) per candidate
+//! ridge (H holdout rows).
 
 pub use crate::data::RegressorError;
 use crate::data::check_data;
@@ -64,17 +70,18 @@ pub struct RegressorParams {
     pub lambda: Option<usize>,
     /// Settling steps after growth, as a multiple of the growth steps (default ⅓).
     pub settle: f64,
-    /// Relative ridge (× mean diagonal of AᵀA); `None`: chosen by leave-one-out.
+    /// Relative ridge (× mean diagonal of AᵀA); `None`: chosen from the data (module docs).
     pub ridge: Option<f64>,
-    /// Width multiplier μ on the nearest-centre widths; `None`: chosen by leave-one-out.
+    /// Width multiplier μ on the nearest-centre widths; `None`: chosen from the data (module
+    /// docs).
     pub width_multiplier: Option<f64>,
     /// Normalized Gaussians (a partition of unity; bounded extrapolation). Default true.
     pub normalized: bool,
     /// Append the affine columns 1, x₁ … xₙ to the output layer. Default false.
     pub affine: bool,
     /// Fit the output layer with normalized and with plain Gaussians and keep the one with the
-    /// lower leave-one-out score (`normalized` then only applies to the growth rounds).
-    /// Default true.
+    /// lower selection score, module docs step 4 (`normalized` then only applies to the growth
+    /// rounds). Default true.
     #[serde(default = "yes")]
     pub choose_basis: bool,
     /// Learn an input metric from the data (module docs, step 1b); the output layer is then

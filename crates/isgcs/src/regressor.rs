@@ -15,8 +15,8 @@
 //!    standardized inputs that carry at least 10 % of the largest component's variance, at most
 //!    3 and at most n; the initial k-simplex sits at the mean, vertex i moved by one standard
 //!    deviation along principal axis i.
-//! 3. **Growth** in rounds, each: λ online ISGCS steps per cell (USL and delta rule,
-//!    [`Isgcs::fit`], rows in shuffled epochs; λ = 10 by default) and two batch USL steps
+//! 3. **Growth** in rounds, each: λ online ISGCS steps per cell (the unsupervised adaption
+//!    of the centres only, [`Isgcs::fit`], rows in shuffled epochs; λ = 10 by default) and two batch USL steps
 //!    ([`Isgcs::relax`]: every cell to the mean of the rows it wins) on a sample of 4z + 200 rows;
 //!    a least-squares output fit on that sample; each cell's resource τ^SL becomes the summed
 //!    squared residual of the rows it wins ([`Isgcs::set_resources`]); then 0.3 z insertions
@@ -498,6 +498,9 @@ impl Regressor {
         };
         let mut net = Isgcs::new(net_params, n, m, k, simplex)?;
         net.set_growing(false);
+        // Only the centres are trained: the output layer is fitted by least squares and the
+        // resources are set from its residuals (the delta rule's outputs were never used).
+        net.set_unsupervised_only(true);
         let mut goal = Epochs {
             xs: &xs,
             ys: &ys,
@@ -706,8 +709,9 @@ impl Regressor {
         self.len() == 0
     }
 
-    /// The grown network, in standardized input coordinates (its own outputs are those of the
-    /// delta rule in standardized output units; predictions use the least-squares layer).
+    /// The grown network, in standardized input coordinates (only its centres and topology
+    /// are trained: its own outputs stay at 0 and its resources are the last growth round's;
+    /// predictions use the least-squares layer).
     pub fn network(&self) -> &Isgcs {
         &self.net
     }

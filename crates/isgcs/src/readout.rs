@@ -412,7 +412,47 @@ pub(crate) fn fit_best(
         }
         (i, at)
     };
-    let walks: Vec<(usize, (f64, Fit))> = seeds.into_par_iter().map(walk).collect();
+    // A lone candidate scored by leave-one-out (no ridge hint: every score depends on its
+    // multiplier only) walks speculatively: the next two multipliers at once on the two
+    // threads (at the start up and down), the results taken in the order of the walk, so the
+    // choice is the one-by-one walk's.
+    let speculative = |(i, at): (usize, (f64, Fit))| -> (usize, (f64, Fit)) {
+        let c = &candidates[i];
+        let step = std::f64::consts::SQRT_2;
+        let in_range = |m: f64| (MULT_RANGE.0..=MULT_RANGE.1).contains(&m);
+        let try_at = |m: f64| if in_range(m) { eval(c, m, None) } else { None };
+        let better =
+            |f: &Option<(f64, Fit)>, at: &(f64, Fit)| f.as_ref().is_some_and(|f| f.1.0 < at.1.0);
+        let mut at = at;
+        let (up, down) = rayon::join(|| try_at(at.0 * step), || try_at(at.0 / step));
+        let dir = if better(&up, &at) {
+            at = up.expect("better implies some");
+            step
+        } else if better(&down, &at) {
+            at = down.expect("better implies some");
+            1.0 / step
+        } else {
+            return (i, at);
+        };
+        loop {
+            let (a, b) = (at.0 * dir, at.0 * dir * dir);
+            let (fa, fb) = rayon::join(|| try_at(a), || try_at(b));
+            if !better(&fa, &at) {
+                break;
+            }
+            at = fa.expect("better implies some");
+            if !better(&fb, &at) {
+                break;
+            }
+            at = fb.expect("better implies some");
+        }
+        (i, at)
+    };
+    let walks: Vec<(usize, (f64, Fit))> = if seeds.len() == 1 && !use_holdout && mult.is_none() {
+        seeds.into_iter().map(speculative).collect()
+    } else {
+        seeds.into_par_iter().map(walk).collect()
+    };
     let (index, (mult, fit)) = walks
         .into_iter()
         .min_by(|a, b| a.1.1.0.total_cmp(&b.1.1.0).then(a.0.cmp(&b.0)))?;

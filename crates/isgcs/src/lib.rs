@@ -32,7 +32,9 @@
 //! assert!((y[0] - 1.0).abs() < 0.1);
 //! ```
 
+mod data;
 mod driver;
+mod kmeans;
 mod linalg;
 #[cfg(feature = "linfa")]
 pub mod linfa;

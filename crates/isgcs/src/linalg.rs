@@ -90,40 +90,60 @@ pub(crate) fn gram_add(a: ArrayView2<'_, f64>, g: &mut Array2<f64>) {
 /// updates by matrix products on two threads. `false` at a non-positive or NaN pivot.
 pub(crate) fn cholesky_in_place(a: &mut Array2<f64>, rho: f64) -> bool {
     let z = a.nrows();
+    if a.as_slice().is_none() {
+        *a = a.as_standard_layout().into_owned();
+    }
     for i in 0..z {
         a[[i, i]] += rho;
     }
     let mut k0 = 0;
     while k0 < z {
         let k1 = (k0 + BLOCK).min(z);
-        // Diagonal block, unblocked.
-        for i in k0..k1 {
-            for j in k0..=i {
-                let mut s = a[[i, j]];
-                for p in k0..j {
-                    s -= a[[i, p]] * a[[j, p]];
-                }
-                if i == j {
-                    if s.is_nan() || s <= 0.0 {
-                        return false;
+        // Diagonal block, unblocked. Rows as slices (standard layout): the same operations in
+        // the same order as indexing, without the bounds checks.
+        {
+            let data = a.as_slice_mut().expect("standard layout");
+            for i in k0..k1 {
+                let (head, tail) = data.split_at_mut(i * z);
+                let ri = &mut tail[..z];
+                for j in k0..=i {
+                    let rj: &[f64] = if j == i {
+                        &[]
+                    } else {
+                        &head[j * z..(j + 1) * z]
+                    };
+                    let mut s = ri[j];
+                    for p in k0..j {
+                        s -= ri[p] * if j == i { ri[p] } else { rj[p] };
                     }
-                    a[[i, i]] = s.sqrt();
-                } else {
-                    a[[i, j]] = s / a[[j, j]];
+                    if i == j {
+                        if s.is_nan() || s <= 0.0 {
+                            return false;
+                        }
+                        ri[i] = s.sqrt();
+                    } else {
+                        ri[j] = s / rj[j];
+                    }
                 }
             }
         }
         if k1 == z {
             break;
         }
-        // Panel L21 = A21 L11⁻ᵀ.
-        for i in k1..z {
-            for j in k0..k1 {
-                let mut s = a[[i, j]];
-                for p in k0..j {
-                    s -= a[[i, p]] * a[[j, p]];
+        // Panel L21 = A21 L11⁻ᵀ (the rows of L11 are above every panel row).
+        {
+            let data = a.as_slice_mut().expect("standard layout");
+            let (top, bottom) = data.split_at_mut(k1 * z);
+            let l11 = &top[k0 * z..];
+            for ri in bottom.chunks_exact_mut(z) {
+                for j in k0..k1 {
+                    let rj = &l11[(j - k0) * z..(j - k0 + 1) * z];
+                    let mut s = ri[j];
+                    for p in k0..j {
+                        s -= ri[p] * rj[p];
+                    }
+                    ri[j] = s / rj[j];
                 }
-                a[[i, j]] = s / a[[j, j]];
             }
         }
         // Trailing update A22 −= L21 L21ᵀ.

@@ -42,6 +42,10 @@ pub struct Isgcs {
     /// Hits decayed with α (for the extended resource; empty unless it is on).
     #[serde(default)]
     hit_rate: Vec<f64>,
+    /// Training steps adapt only the centres (unsupervised part); outputs and resources stay
+    /// (the regressor fits its own output layer and sets the resources itself).
+    #[serde(default)]
+    unsupervised_only: bool,
     /// Scratch buffers of `train` (no state: contents are dead between steps).
     #[serde(skip)]
     scratch_d2: Vec<f64>,
@@ -129,6 +133,7 @@ impl Isgcs {
             } else {
                 Vec::new()
             },
+            unsupervised_only: false,
             scratch_d2: Vec::new(),
             scratch_nb: Vec::new(),
             scratch_support: Vec::new(),
@@ -227,6 +232,17 @@ impl Isgcs {
     /// Switches insertion on or off.
     pub fn set_growing(&mut self, on: bool) {
         self.growing = on;
+    }
+
+    /// With `on`, training steps only move the best-matching unit and its neighbours (the
+    /// unsupervised adaption, bit-identical centres and widths); the delta rule, the support
+    /// and the resources are skipped, so outputs and resources keep their values and the
+    /// squared error returned by `train_step` is 0. For callers that fit the outputs and set
+    /// the resources themselves ([`crate::regressor::Regressor`], which trains with growing
+    /// off); insertion during training and deletion (κ > 0) read the resources and are not
+    /// meant to run in this mode.
+    pub(crate) fn set_unsupervised_only(&mut self, on: bool) {
+        self.unsupervised_only = on;
     }
 
     /// Batch form of the unsupervised adaption (eq. 2.6 in the limit of presenting all of
@@ -538,6 +554,9 @@ impl Isgcs {
         // is reused for the support after the moved cells' distances are recomputed: the same
         // arithmetic as `bmu` + `support`, so the results are bit-identical to the reference
         // (`train_reference` in the tests) while the cells are scanned once instead of twice.
+        if self.unsupervised_only {
+            return (self.unsupervised_step(x), 0.0);
+        }
         let mut d2 = std::mem::take(&mut self.scratch_d2);
         d2.clear();
         let mut b = 0;
@@ -621,6 +640,34 @@ impl Isgcs {
         self.tau_usl[b] += q_err;
         self.after_step();
         (b, sq_err)
+    }
+
+    /// The step of [`Isgcs::set_unsupervised_only`]: BMU (as `bmu`), the moves of the BMU and
+    /// its neighbours and their widths exactly as in `train_step`, then `after_step`.
+    fn unsupervised_step(&mut self, x: &[f64]) -> usize {
+        let b = self.bmu(x, None);
+        self.steps += 1;
+        self.hits[b] += 1;
+        let (eb, en) = (self.params.eps_bmu, self.params.eps_neighbour);
+        for a in 0..self.n {
+            self.centres[b * self.n + a] += eb * (x[a] - self.centres[b * self.n + a]);
+        }
+        let mut nb = std::mem::take(&mut self.scratch_nb);
+        nb.clear();
+        nb.extend_from_slice(&self.neighbours[b]);
+        for &j in &nb {
+            let j = j as usize;
+            for a in 0..self.n {
+                self.centres[j * self.n + a] += en * (x[a] - self.centres[j * self.n + a]);
+            }
+        }
+        self.refresh_width(b);
+        for &j in &nb {
+            self.refresh_width(j as usize);
+        }
+        self.scratch_nb = nb;
+        self.after_step();
+        b
     }
 
     /// Insertion every λ steps and the deletion test every κ steps (fig. 2.9).
@@ -1246,6 +1293,39 @@ mod tests {
         // The network without deletion keeps all its cells (USL pulls them left instead).
         assert_eq!(net.len(), 60);
         assert!(net2.len() < net.len(), "{} cells left", net2.len());
+    }
+
+    #[test]
+    fn unsupervised_only_steps_move_the_centres_exactly_as_full_steps() {
+        // Without insertions during training (as the regressor trains): the same centres,
+        // widths, hits and topology bit for bit; outputs untouched.
+        for growing in [false] {
+            let params = Params {
+                lambda: 30,
+                ..Params::accurate()
+            };
+            let mut full = Isgcs::new(params, 3, 1, 2, simplex_points(3, 2)).unwrap();
+            full.set_growing(growing);
+            let mut lean = full.clone();
+            lean.set_unsupervised_only(true);
+            for step in 0..3000u64 {
+                let x: Vec<f64> = (0..3)
+                    .map(|a| {
+                        ((step as f64 + 0.37 * a as f64) * (0.618_034 + 0.1 * a as f64)).fract()
+                    })
+                    .collect();
+                let y = [x[0] * x[1] - x[2]];
+                full.train(&x, &y, None);
+                lean.train(&x, &y, None);
+            }
+            assert_eq!(full.centres, lean.centres);
+            assert_eq!(full.widths, lean.widths);
+            assert_eq!(full.hits, lean.hits);
+            assert_eq!(full.neighbours, lean.neighbours);
+            assert_eq!(full.steps(), lean.steps());
+            assert!(lean.outputs.iter().all(|&v| v == 0.0));
+            assert!(full.outputs.iter().any(|&v| v != 0.0));
+        }
     }
 
     #[test]

@@ -1,6 +1,8 @@
 //! A reference approximator to measure the network against (issue 2): a Gaussian radial basis
 //! function network with k-means centres and least-squares output weights.
 
+use crate::data::{RegressorError, check_data};
+pub use crate::kmeans::kmeans;
 use crate::network::IsgcsError;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -178,62 +180,6 @@ impl GaussianRbf {
     }
 }
 
-/// Lloyd's k-means: `k` centres (k × n) of the N × n points, from k distinct random points
-/// (seeded), at most `iterations` assignment/update rounds (assignment in parallel).
-pub fn kmeans(points: &[f64], n: usize, k: usize, iterations: usize, seed: u64) -> Vec<f64> {
-    use rayon::prelude::*;
-    let count = points.len() / n;
-    let k = k.min(count);
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut order: Vec<usize> = (0..count).collect();
-    for i in 0..k {
-        let j = rng.random_range(i..count);
-        order.swap(i, j);
-    }
-    let mut c: Vec<f64> = order[..k]
-        .iter()
-        .flat_map(|&s| points[s * n..(s + 1) * n].iter().copied())
-        .collect();
-    let mut assign = vec![usize::MAX; count];
-    for _ in 0..iterations {
-        let next: Vec<usize> = points
-            .par_chunks(n)
-            .with_min_len(64)
-            .map(|x| {
-                let mut best = (0, f64::INFINITY);
-                for j in 0..k {
-                    let d = dist2(x, &c[j * n..(j + 1) * n]);
-                    if d < best.1 {
-                        best = (j, d);
-                    }
-                }
-                best.0
-            })
-            .collect();
-        let changed = next != assign;
-        assign = next;
-        if !changed {
-            break;
-        }
-        let mut sum = vec![0.0; k * n];
-        let mut cnt = vec![0usize; k];
-        for (s, x) in points.chunks_exact(n).enumerate() {
-            cnt[assign[s]] += 1;
-            for a in 0..n {
-                sum[assign[s] * n + a] += x[a];
-            }
-        }
-        for j in 0..k {
-            if cnt[j] > 0 {
-                for a in 0..n {
-                    c[j * n + a] = sum[j * n + a] / cnt[j] as f64;
-                }
-            }
-        }
-    }
-    c
-}
-
 /// The reference of issue 19: a plain Gaussian RBF network on standardized inputs and outputs
 /// with k-means centres (30 Lloyd iterations at most), widths μ × the mean distance to the
 /// n + 1 nearest other centres, and ridge least-squares weights; μ ∈ {0.5, 0.7, 1, 1.4, 2, 2.8,
@@ -256,10 +202,9 @@ impl KMeansRbf {
         m: usize,
         centres: usize,
         seed: u64,
-    ) -> Result<Self, crate::regressor::RegressorError> {
+    ) -> Result<Self, RegressorError> {
         use crate::readout::{Basis, Readout, Standardizer, fit_holdout, nearest_widths};
-        use crate::regressor::RegressorError;
-        let rows = crate::regressor::check_data(inputs, targets, n, m)?;
+        let rows = check_data(inputs, targets, n, m)?;
         if centres < 2 || centres > rows {
             return Err(RegressorError::InvalidParams(format!(
                 "{centres} centres need 2 to {rows} (the number of rows)"
@@ -309,14 +254,10 @@ impl KMeansRbf {
     }
 
     /// Predictions for N inputs (N × n) into `out` (N × m), in parallel.
-    pub fn predict(
-        &self,
-        inputs: &[f64],
-        out: &mut [f64],
-    ) -> Result<(), crate::regressor::RegressorError> {
+    pub fn predict(&self, inputs: &[f64], out: &mut [f64]) -> Result<(), RegressorError> {
         let (n, m) = (self.readout.basis.n, self.readout.m);
         if inputs.len() % n != 0 || out.len() != inputs.len() / n * m {
-            return Err(crate::regressor::RegressorError::Shape(format!(
+            return Err(RegressorError::Shape(format!(
                 "predict: {} input numbers are not N × {n}, or {} outputs not N × {m}",
                 inputs.len(),
                 out.len()

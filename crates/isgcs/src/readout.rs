@@ -62,6 +62,18 @@ impl Standardizer {
     }
 }
 
+/// Basis values exp(−t) with t beyond this are 0 (see [`Basis::row`]).
+const FLUSH: f64 = 300.0;
+
+/// exp(−r²/w²), 0 when w = 0 or r²/w² > [`FLUSH`].
+fn gaussian(r2: f64, w2: f64) -> f64 {
+    if w2 > 0.0 && r2 <= FLUSH * w2 {
+        (-r2 / w2).exp()
+    } else {
+        0.0
+    }
+}
+
 /// Gaussians Ω_i(x) = exp(−|x − c_i|²/(μ d_i)²) on fixed centres with base widths d_i and a
 /// width multiplier μ (not cut off); normalized (divided
 /// by their sum) or plain, optionally followed by the affine columns 1, x₁ … xₙ.
@@ -98,9 +110,12 @@ impl Basis {
             }
             let w = mult * self.base[i];
             let w2 = w * w;
-            // No cut-off: with small ridges the weights can be large, and a cut-off's jump
-            // (e⁻¹⁶ × weight) would show; exp underflows to 0 on its own beyond ~27 widths.
-            out[i] = if w > 0.0 { (-r2 / w2).exp() } else { 0.0 };
+            // No visible cut-off: with small ridges the weights can be large, and a cut-off's
+            // jump (e⁻¹⁶ × weight) would show. Values below e^−FLUSH (~10⁻¹³⁰) are set to 0:
+            // exp's subnormal results (beyond ~26.6 widths) and products of tiny values
+            // landing in the subnormal range made the design and Gram matrices several times
+            // slower in 2-D, where most cells are far from most rows.
+            out[i] = gaussian(r2, w2);
             sum += out[i];
         }
         if self.normalized {
@@ -249,8 +264,8 @@ pub(crate) struct Selected {
     pub ridge: f64,
     /// Effective degrees of freedom tr H of the final fit.
     pub dof: f64,
-    /// The selection score (leave-one-out estimate of the mean squared error per row) of the
-    /// final fit.
+    /// The selection score (holdout or leave-one-out estimate of the mean squared error per
+    /// row, in standardized units) of the chosen multiplier and ridge.
     pub score: f64,
 }
 
@@ -315,10 +330,12 @@ pub(crate) fn fit_gcv(
 }
 
 /// [`fit_gcv`] for several candidate bases, each with its own copy of the rows (`xs` in
-/// that basis' coordinates; the targets are shared): every candidate gets its multiplier
-/// walk from `start` on the first `select_rows` rows (the walks in parallel), the one with
-/// the lowest selection score on those rows (the lowest index on ties) is refitted on every
-/// row. Returns its index in `candidates`, weights and choice.
+/// that basis' coordinates; the targets are shared), on the first `select_rows` rows: every
+/// candidate is scored at `start` (in parallel), the [`RACE_KEEP`] best walk their
+/// multiplier from there (in parallel), and the one with the lowest score (the lowest index
+/// on ties) is refitted on every row. The score is the error on the rows after the selection
+/// rows ([`holdout_at`]) when there are enough of them, else the leave-one-out error on the
+/// selection rows (`gcv_at`). Returns the winner's index in `candidates`, weights and choice.
 pub(crate) fn fit_best(
     candidates: &[(&Basis, &[f64])],
     ys: ArrayView2<'_, f64>,
@@ -331,58 +348,127 @@ pub(crate) fn fit_best(
     let rows = ys.nrows();
     let sel = select_rows.min(rows).max(1);
     let sy = ys.slice_axis(Axis(0), Slice::from(..sel));
-    let walk = |&(basis, xs): &(&Basis, &[f64])| -> Option<(f64, Fit)> {
-        let sx = &xs[..sel * basis.n];
-        let mut kept: Option<(f64, Fit)> = None;
-        let mut score = |mult: f64| {
-            let Some(fit) = gcv_at(basis, mult, ridge, sx, sy, sel) else {
-                return f64::INFINITY;
-            };
-            let s = fit.0;
-            if kept.as_ref().is_none_or(|k| s < k.1.0) {
-                kept = Some((mult, fit));
-            }
-            s
+    // With enough rows beyond the selection rows, the score is the error on (up to
+    // 2 × `sel` of) them instead of the leave-one-out error on the selection rows.
+    let hold = (rows - sel).min(2 * sel);
+    let use_holdout = ridge.is_none() && 2 * hold >= sel && hold >= HOLDOUT_MIN;
+    let hy = ys.slice_axis(Axis(0), Slice::from(sel..sel + hold));
+    let eval = |&(basis, xs): &(&Basis, &[f64]), mult: f64, hint: Option<f64>| {
+        let n = basis.n;
+        let fit = if use_holdout {
+            holdout_at(
+                basis,
+                mult,
+                (&xs[..sel * n], sy),
+                (&xs[sel * n..(sel + hold) * n], hy),
+                hint,
+            )
+        } else {
+            gcv_at(basis, mult, ridge, &xs[..sel * n], sy, sel)
         };
-        match mult {
-            Some(m) => {
-                score(m);
-            }
-            None => {
-                let step = std::f64::consts::SQRT_2;
-                let first = start.clamp(MULT_RANGE.0, MULT_RANGE.1);
-                let mut at = (first, score(first));
-                for dir in [step, 1.0 / step] {
-                    let mut mult = at.0 * dir;
-                    let mut improved = false;
-                    while (MULT_RANGE.0..=MULT_RANGE.1).contains(&mult) {
-                        let s = score(mult);
-                        if s < at.1 {
-                            at = (mult, s);
-                            improved = true;
-                            mult *= dir;
-                        } else {
-                            break;
-                        }
+        fit.map(|fit| (mult, fit))
+    };
+    let first = mult.unwrap_or_else(|| start.clamp(MULT_RANGE.0, MULT_RANGE.1));
+    // Every candidate at the first multiplier (in parallel) …
+    let mut starts: Vec<Option<(f64, Fit)>> = candidates
+        .par_iter()
+        .map(|c| eval(c, first, None))
+        .collect();
+    // … then the walk (module docs of `regressor`) only from the RACE_KEEP best of them: a
+    // candidate that starts behind the leaders rarely overtakes both of them.
+    let mut order: Vec<usize> = (0..candidates.len())
+        .filter(|&i| starts[i].is_some())
+        .collect();
+    let score_of = |i: usize| starts[i].as_ref().map_or(f64::INFINITY, |s| s.1.0);
+    order.sort_by(|&a, &b| score_of(a).total_cmp(&score_of(b)).then(a.cmp(&b)));
+    order.truncate(if mult.is_some() { 1 } else { RACE_KEEP });
+    let seeds: Vec<(usize, (f64, Fit))> = order
+        .iter()
+        .filter_map(|&i| starts[i].take().map(|s| (i, s)))
+        .collect();
+    let walk = |(i, at): (usize, (f64, Fit))| -> (usize, (f64, Fit)) {
+        if mult.is_some() {
+            return (i, at);
+        }
+        let c = &candidates[i];
+        let step = std::f64::consts::SQRT_2;
+        let mut at = at;
+        for dir in [step, 1.0 / step] {
+            let mut next = at.0 * dir;
+            let mut improved = false;
+            while (MULT_RANGE.0..=MULT_RANGE.1).contains(&next) {
+                match eval(c, next, Some(at.1.2)) {
+                    Some(fit) if fit.1.0 < at.1.0 => {
+                        at = fit;
+                        improved = true;
+                        next *= dir;
                     }
-                    if improved {
-                        break;
-                    }
+                    _ => break,
                 }
             }
+            if improved {
+                break;
+            }
         }
-        kept
+        (i, at)
     };
-    let walks: Vec<Option<(f64, Fit)>> = candidates.par_iter().map(walk).collect();
+    // A lone candidate scored by leave-one-out (no ridge hint: every score depends on its
+    // multiplier only) walks speculatively: the next two multipliers at once on the two
+    // threads (at the start up and down), the results taken in the order of the walk, so the
+    // choice is the one-by-one walk's.
+    let speculative = |(i, at): (usize, (f64, Fit))| -> (usize, (f64, Fit)) {
+        let c = &candidates[i];
+        let step = std::f64::consts::SQRT_2;
+        let in_range = |m: f64| (MULT_RANGE.0..=MULT_RANGE.1).contains(&m);
+        let try_at = |m: f64| if in_range(m) { eval(c, m, None) } else { None };
+        let better =
+            |f: &Option<(f64, Fit)>, at: &(f64, Fit)| f.as_ref().is_some_and(|f| f.1.0 < at.1.0);
+        let mut at = at;
+        let (up, down) = rayon::join(|| try_at(at.0 * step), || try_at(at.0 / step));
+        let dir = if better(&up, &at) {
+            at = up.expect("better implies some");
+            step
+        } else if better(&down, &at) {
+            at = down.expect("better implies some");
+            1.0 / step
+        } else {
+            return (i, at);
+        };
+        loop {
+            let (a, b) = (at.0 * dir, at.0 * dir * dir);
+            let (fa, fb) = rayon::join(|| try_at(a), || try_at(b));
+            if !better(&fa, &at) {
+                break;
+            }
+            at = fa.expect("better implies some");
+            if !better(&fb, &at) {
+                break;
+            }
+            at = fb.expect("better implies some");
+        }
+        (i, at)
+    };
+    let walks: Vec<(usize, (f64, Fit))> = if seeds.len() == 1 && !use_holdout && mult.is_none() {
+        seeds.into_iter().map(speculative).collect()
+    } else {
+        seeds.into_par_iter().map(walk).collect()
+    };
     let (index, (mult, fit)) = walks
         .into_iter()
-        .enumerate()
-        .filter_map(|(i, w)| w.map(|w| (i, w)))
         .min_by(|a, b| a.1.1.0.total_cmp(&b.1.1.0).then(a.0.cmp(&b.0)))?;
     // Refit on every row unless the selection rows were all rows.
     let (basis, xs) = candidates[index];
     let (score, weights, relative, dof) = if sel == rows {
         fit
+    } else if ridge.is_none() {
+        // The same absolute ridge ρ on every row: the relative ridge is ρ over the mean
+        // diagonal of G, which grows with the rows (floored as in the selection). One Cholesky
+        // solve; the eigendecomposition's ridge path only if it fails.
+        let r = (fit.2 * sel as f64 / rows as f64).max(RIDGE_FLOOR);
+        match gcv_at(basis, mult, Some(r), xs, ys, sel) {
+            Some(refit) => (fit.0, refit.1, refit.2, refit.3),
+            None => gcv_at(basis, mult, ridge, xs, ys, sel)?,
+        }
     } else {
         gcv_at(basis, mult, ridge, xs, ys, sel)?
     };
@@ -397,6 +483,95 @@ pub(crate) fn fit_best(
         },
     ))
 }
+
+/// Fewest rows beyond the selection rows for the holdout score of [`fit_best`].
+const HOLDOUT_MIN: usize = 200;
+
+/// One multiplier's output layer fitted on the rows `fit` (inputs, targets) and scored by
+/// the mean squared error per row on the rows `hold`: the weights, the relative ridge
+/// (10⁻¹²…1, the one with the lowest holdout error) and tr H (NaN: not computed). Each ridge
+/// is one Cholesky solve. Without a `hint`, the ridges 10⁻¹², 10⁻¹⁰, …, 1, then the best
+/// one's neighbours at ±1 and ±½ decade; with a `hint` (the ridge chosen at a neighbouring
+/// multiplier), the hint and ±½ decade, walking on by half decades while an end is best.
+fn holdout_at(
+    basis: &Basis,
+    mult: f64,
+    fit: (&[f64], ArrayView2<'_, f64>),
+    hold: (&[f64], ArrayView2<'_, f64>),
+    hint: Option<f64>,
+) -> Option<(f64, Array2<f64>, f64, f64)> {
+    let (g, b, yy, _) = basis.normal_equations(mult, fit.0, fit.1, false);
+    let a = basis.design(mult, hold.0);
+    let zero = Array2::zeros((basis.cols(), 0));
+    let rows = hold.1.nrows().max(1) as f64;
+    // (log10 ridge, error, weights) of the best ridge so far.
+    let mut best: Option<(f64, f64, Array2<f64>)> = None;
+    let mut tried: Vec<f64> = Vec::new();
+    let lo = RIDGE_FLOOR.log10();
+    type Best = Option<(f64, f64, Array2<f64>)>;
+    let try_one = |e: f64, best: &mut Best, tried: &mut Vec<f64>| {
+        let e = e.clamp(lo, 0.0);
+        if tried.iter().any(|t| (t - e).abs() < 1e-9) {
+            return;
+        }
+        tried.push(e);
+        let Some(f) = ridge_fit(&g, &b, yy, 10f64.powf(e), &zero) else {
+            return;
+        };
+        let err = (&a.dot(&f.weights) - &hold.1).mapv(|v| v * v).sum() / rows;
+        if err.is_finite() && best.as_ref().is_none_or(|(_, s, _)| err < *s) {
+            *best = Some((e, err, f.weights));
+        }
+    };
+    match hint {
+        None => {
+            for e in (0..=6).map(|i| lo + 2.0 * i as f64) {
+                try_one(e, &mut best, &mut tried);
+            }
+            for step in [1.0, 0.5] {
+                let centre = best.as_ref()?.0;
+                try_one(centre - step, &mut best, &mut tried);
+                try_one(centre + step, &mut best, &mut tried);
+            }
+        }
+        Some(h) => {
+            let e0 = h.log10().clamp(lo, 0.0);
+            for e in [e0, e0 - 0.5, e0 + 0.5] {
+                try_one(e, &mut best, &mut tried);
+            }
+            // Walk on by half decades while the best is at an end of the ridges tried.
+            loop {
+                let e = best.as_ref()?.0;
+                let (min, max) = tried
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &t| {
+                        (a.min(t), b.max(t))
+                    });
+                let next = if e <= min + 1e-9 && e > lo {
+                    e - 0.5
+                } else if e >= max - 1e-9 && e < 0.0 {
+                    e + 0.5
+                } else {
+                    break;
+                };
+                let before = tried.len();
+                try_one(next, &mut best, &mut tried);
+                if tried.len() == before {
+                    break;
+                }
+            }
+        }
+    }
+    let (e, err, w) = best?;
+    Some((err, w, 10f64.powf(e), f64::NAN))
+}
+
+/// Candidates of [`fit_best`] whose multiplier is walked: the best ones at the first
+/// multiplier.
+const RACE_KEEP: usize = 2;
+
+/// The smallest relative ridge of the selection ([`crate::linalg::RidgePath::best_ridge`]).
+const RIDGE_FLOOR: f64 = 1e-12;
 
 /// The range of the width multiplier walk.
 const MULT_RANGE: (f64, f64) = (0.2, 12.0);
@@ -470,7 +645,7 @@ pub(crate) fn egop(basis: &Basis, mult: f64, weights: &[f64], m: usize, xs: &[f6
                     let c = &basis.centres[i * n..(i + 1) * n];
                     let w = mult * basis.base[i];
                     let r2: f64 = c.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum();
-                    raw[i] = if w > 0.0 { (-r2 / (w * w)).exp() } else { 0.0 };
+                    raw[i] = gaussian(r2, w * w);
                     sum += raw[i];
                 }
                 for out in 0..m {
@@ -584,5 +759,42 @@ mod tests {
         // Equal candidates: the first one.
         let same = [(&basis, &xs[..]), (&basis, &xs[..])];
         assert_eq!(fit_best(&same, yv, None, None, 200, 1.0).unwrap().0, 0);
+    }
+
+    #[test]
+    fn holdout_ridge_grows_with_noise_and_the_walk_hint_finds_it_again() {
+        // y = sin 3x (+ noise) on 800 rows in [-1, 1], 40 centres; fit on the first 400 rows,
+        // score on the other 400. Noise must give a larger ridge than clean targets; started
+        // from a hint two decades off, the half-decade walk must reach a ridge at least as
+        // good as the full search's.
+        let rows = 800;
+        let xs: Vec<f64> = (0..rows)
+            .map(|i| -1.0 + 2.0 * ((i as f64 * 0.618_034) % 1.0))
+            .collect();
+        let clean: Vec<f64> = xs.iter().map(|x| (3.0 * x).sin()).collect();
+        let noisy: Vec<f64> = clean
+            .iter()
+            .enumerate()
+            .map(|(i, y)| y + 0.5 * (((i * 7919) % 1000) as f64 / 500.0 - 1.0))
+            .collect();
+        let centres: Vec<f64> = (0..40).map(|i| -1.0 + 2.0 * i as f64 / 39.0).collect();
+        let basis = Basis {
+            n: 1,
+            base: nearest_widths(&centres, 1, 2),
+            centres,
+            normalized: false,
+            affine: false,
+        };
+        let ridge = |ys: &[f64], hint: Option<f64>| {
+            let yv = ArrayView2::from_shape((rows, 1), ys).unwrap();
+            let (fy, hy) = yv.split_at(Axis(0), 400);
+            holdout_at(&basis, 2.0, (&xs[..400], fy), (&xs[400..], hy), hint).unwrap()
+        };
+        let (e_clean, _, r_clean, _) = ridge(&clean, None);
+        let (e_noisy, _, r_noisy, _) = ridge(&noisy, None);
+        assert!(r_noisy > 100.0 * r_clean, "{r_noisy} vs {r_clean}");
+        assert!(e_clean < 1e-4 && e_noisy < 0.15, "{e_clean} {e_noisy}");
+        let (e_hint, _, _, _) = ridge(&noisy, Some(r_noisy * 100.0));
+        assert!(e_hint <= e_noisy * 1.01, "{e_hint} vs {e_noisy}");
     }
 }

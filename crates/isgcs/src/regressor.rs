@@ -15,8 +15,8 @@
 //!    standardized inputs that carry at least 10 % of the largest component's variance, at most
 //!    3 and at most n; the initial k-simplex sits at the mean, vertex i moved by one standard
 //!    deviation along principal axis i.
-//! 3. **Growth** in rounds, each: λ online ISGCS steps per cell (USL and delta rule,
-//!    [`Isgcs::fit`], rows in shuffled epochs; λ = 10 by default) and two batch USL steps
+//! 3. **Growth** in rounds, each: λ online ISGCS steps per cell (the unsupervised adaption
+//!    of the centres only, [`Isgcs::fit`], rows in shuffled epochs; λ = 10 by default) and two batch USL steps
 //!    ([`Isgcs::relax`]: every cell to the mean of the rows it wins) on a sample of 4z + 200 rows;
 //!    a least-squares output fit on that sample; each cell's resource τ^SL becomes the summed
 //!    squared residual of the rows it wins ([`Isgcs::set_resources`]); then 0.3 z insertions
@@ -30,16 +30,25 @@
 //!    every row. Candidates (with `choose_basis`, the default): normalized and plain Gaussians,
 //!    each in the learned metric and, when a metric was learned, in the standardized metric at
 //!    the same centres mapped back (x = T⁻¹c; the pilots that chose T had fewer centres).
-//!    For each candidate μ walks by √2 from the pilot's multiplier on the first max(3z, 1500)
-//!    rows (candidates in parallel); for each μ the relative ridge (10⁻¹²…1, decades refined
-//!    to quarter decades) minimises the exact closed-form leave-one-out error
-//!    mean(e_i/(1 − h_ii))² over those rows, every ridge from one symmetric eigendecomposition
-//!    of AᵀA (`linalg::RidgePath`). The candidate with the lowest score is refitted on all rows
-//!    (its ridge re-chosen by the leave-one-out error of the same rows on the full fit).
+//!    The weights are fitted on the first S = max(3z, 1500) rows (the rows are shuffled) and
+//!    scored by their mean squared error on the next min(N − S, 2S) rows (a holdout; when
+//!    fewer than max(S/2, 200) rows are left, by the exact closed-form leave-one-out error
+//!    mean(e_i/(1 − h_ii))² over the S rows instead, every ridge from one symmetric
+//!    eigendecomposition of AᵀA, `linalg::RidgePath`). For each μ the relative ridge in
+//!    10⁻¹²…1 is the one with the lowest score (one Cholesky solve per ridge: every second
+//!    decade, then the best one's neighbours at ±1 and ±½ decade; at the next μ of a walk,
+//!    the previous ridge and ±½ decade, walking on while an end is best). Every candidate is
+//!    scored at the pilot's multiplier (in parallel); the two best then walk μ by √2 (in
+//!    parallel) while the score falls. The candidate with the lowest score is refitted on all
+//!    rows with the same absolute ridge (relative ridge × S/N, floored at 10⁻¹²).
 //!
-//! Cost: growth O(steps · z · n); the output layer O(S · z² + z³) per candidate multiplier
-//! (S selection rows; dense matrix products on two threads) plus O(S · z) per candidate ridge.
+//! Cost: growth O(steps · z · n); the output layer O(S · z²) per candidate multiplier (S
+//! selection rows; dense matrix products on two threads) plus O(z³/3 + H · z) per candidate
+//! ridge (H holdout rows).
 
+pub use crate::data::RegressorError;
+use crate::data::check_data;
+use crate::kmeans::kmeans;
 use crate::readout::{Basis, Readout, Standardizer, egop, fit_best, fit_gcv, nearest_widths};
 use crate::{GoalFunction, Isgcs, IsgcsError, Params, Termination};
 use ndarray::ArrayView2;
@@ -47,45 +56,6 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use std::ops::ControlFlow;
-
-/// Everything that can go wrong in [`Regressor::fit`] and [`Regressor::predict`].
-#[derive(Debug, thiserror::Error, PartialEq)]
-pub enum RegressorError {
-    /// Inputs or outputs of the wrong length, or no rows.
-    #[error("shape: {0}")]
-    Shape(String),
-    /// A NaN or infinite value in the training data.
-    #[error("non-finite value {value} in the {what} at row {row}, column {column}")]
-    NonFinite {
-        /// `"inputs"` or `"targets"`.
-        what: &'static str,
-        /// Row of the value.
-        row: usize,
-        /// Column of the value.
-        column: usize,
-        /// The value.
-        value: f64,
-    },
-    /// A hyperparameter out of range (the message names it).
-    #[error("invalid parameter: {0}")]
-    InvalidParams(String),
-    /// The cell budget is below the k + 1 cells of the initial simplex or above the rows.
-    #[error("cell budget {cells} is outside {min} (k + 1) … {max} (the number of rows)")]
-    CellBudget {
-        /// The requested budget.
-        cells: usize,
-        /// k + 1.
-        min: usize,
-        /// The number of rows.
-        max: usize,
-    },
-    /// The network rejected its parameters.
-    #[error(transparent)]
-    Network(#[from] IsgcsError),
-    /// The least-squares output layer could not be solved (no row activates any cell).
-    #[error("the output layer could not be fitted: {0}")]
-    Solve(String),
-}
 
 /// Hyperparameters of [`Regressor::fit`]; `None` means chosen from the data.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -100,17 +70,18 @@ pub struct RegressorParams {
     pub lambda: Option<usize>,
     /// Settling steps after growth, as a multiple of the growth steps (default ⅓).
     pub settle: f64,
-    /// Relative ridge (× mean diagonal of AᵀA); `None`: chosen by leave-one-out.
+    /// Relative ridge (× mean diagonal of AᵀA); `None`: chosen from the data (module docs).
     pub ridge: Option<f64>,
-    /// Width multiplier μ on the nearest-centre widths; `None`: chosen by leave-one-out.
+    /// Width multiplier μ on the nearest-centre widths; `None`: chosen from the data (module
+    /// docs).
     pub width_multiplier: Option<f64>,
     /// Normalized Gaussians (a partition of unity; bounded extrapolation). Default true.
     pub normalized: bool,
     /// Append the affine columns 1, x₁ … xₙ to the output layer. Default false.
     pub affine: bool,
     /// Fit the output layer with normalized and with plain Gaussians and keep the one with the
-    /// lower leave-one-out score (`normalized` then only applies to the growth rounds).
-    /// Default true.
+    /// lower selection score, module docs step 4 (`normalized` then only applies to the growth
+    /// rounds). Default true.
     #[serde(default = "yes")]
     pub choose_basis: bool,
     /// Learn an input metric from the data (module docs, step 1b); the output layer is then
@@ -202,45 +173,6 @@ fn shuffle(v: &mut [usize], rng: &mut ChaCha8Rng) {
         let j = rng.random_range(0..=i);
         v.swap(i, j);
     }
-}
-
-/// Checks N × n inputs and N × m targets; returns N.
-pub(crate) fn check_data(
-    inputs: &[f64],
-    targets: &[f64],
-    n: usize,
-    m: usize,
-) -> Result<usize, RegressorError> {
-    if n == 0 || m == 0 {
-        return Err(RegressorError::Shape(format!(
-            "n = {n} inputs and m = {m} outputs must be at least 1"
-        )));
-    }
-    if inputs.is_empty() || inputs.len() % n != 0 {
-        return Err(RegressorError::Shape(format!(
-            "{} input numbers are not N × {n} with N ≥ 1",
-            inputs.len()
-        )));
-    }
-    let rows = inputs.len() / n;
-    if targets.len() != rows * m {
-        return Err(RegressorError::Shape(format!(
-            "{rows} input rows need {} target numbers (× {m}), got {}",
-            rows * m,
-            targets.len()
-        )));
-    }
-    for (what, data, d) in [("inputs", inputs, n), ("targets", targets, m)] {
-        if let Some(i) = data.iter().position(|v| !v.is_finite()) {
-            return Err(RegressorError::NonFinite {
-                what,
-                row: i / d,
-                column: i % d,
-                value: data[i],
-            });
-        }
-    }
-    Ok(rows)
 }
 
 /// Eigenvalues (descending) and eigenvectors (columns of the returned row-major d × d matrix)
@@ -444,7 +376,7 @@ fn learn_metric(
         let tx = t
             .as_ref()
             .map_or_else(|| sx.to_vec(), |t| apply_transform(t, sx, n));
-        let centres = crate::rbf::kmeans(&tx, n, z0, 10, params.seed ^ 0x3e7a);
+        let centres = kmeans(&tx, n, z0, 10, params.seed ^ 0x3e7a);
         let basis = Basis {
             n,
             base: nearest_widths(&centres, n, n + 1),
@@ -566,6 +498,9 @@ impl Regressor {
         };
         let mut net = Isgcs::new(net_params, n, m, k, simplex)?;
         net.set_growing(false);
+        // Only the centres are trained: the output layer is fitted by least squares and the
+        // resources are set from its residuals (the delta rule's outputs were never used).
+        net.set_unsupervised_only(true);
         let mut goal = Epochs {
             xs: &xs,
             ys: &ys,
@@ -774,8 +709,9 @@ impl Regressor {
         self.len() == 0
     }
 
-    /// The grown network, in standardized input coordinates (its own outputs are those of the
-    /// delta rule in standardized output units; predictions use the least-squares layer).
+    /// The grown network, in standardized input coordinates (only its centres and topology
+    /// are trained: its own outputs stay at 0 and its resources are the last growth round's;
+    /// predictions use the least-squares layer).
     pub fn network(&self) -> &Isgcs {
         &self.net
     }

@@ -210,6 +210,14 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     pool.install(|| body(ctx))
 }
 
+/// The one-minute load average of the shared machine (Linux; "?" elsewhere).
+fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|l| l.split_whitespace().next().map(str::to_string))
+        .unwrap_or_else(|| "?".into())
+}
+
 fn body(ctx: &Ctx) -> Result<()> {
     let seed = 1;
     let all: &[(usize, usize)] = if ctx.quick {
@@ -237,6 +245,7 @@ fn body(ctx: &Ctx) -> Result<()> {
             cases.push((p, cells, rows));
         }
     }
+    let load_start = load_average();
     let mut rows = Vec::new();
     for (p, cells, n) in &cases {
         measure(p, *cells, *n, seed, &mut rows)?;
@@ -269,11 +278,13 @@ fn body(ctx: &Ctx) -> Result<()> {
     let big = sizes.last().map_or(0, |s| s.0);
     plot(&dir.join("isgcs-peers.png"), &rows, big)?;
 
+    let load_end = load_average();
     let mut md = format!(
         "# `isgcs` against its peers\n\n\
          Command: `{}cargo xtask bench --only isgcs-peers{}` (release, two rayon threads; the machine \
-         is shared, so compare times within one run; the k-means RBF uses one Cholesky per ridge of \
-         its 7-value grid, isgcs one eigendecomposition per width candidate). Problems from `isgcs::test_functions::suite` \
+         is shared, so compare times within one run; one-minute load average {load_start} before the fits, {load_end} after; both models \
+         solve one Cholesky per candidate ridge: the k-means RBF on its 7 × 7 grid, isgcs along \
+         its width and ridge walks on a holdout of the rows). Problems from `isgcs::test_functions::suite` \
          (uniform samples; noisy variants add Gaussian noise to the training targets only), seed {seed}. \
          rms/σ: RMS error on 20 000 noise-free test points over the test targets' standard \
          deviation (1 = predicting the mean). `isgcs`: `Regressor::fit` with only `max_cells` and \

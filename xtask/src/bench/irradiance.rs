@@ -68,12 +68,15 @@ fn compare(a: &Estimates, r: &Estimates) -> (f64, f64, f64) {
     ((d2 / norm).sqrt(), (own / norm).sqrt(), d2 / var)
 }
 
+/// One Mitsuba run: samples per point, seconds, estimates.
+type Run = (usize, f64, Estimates);
+
 /// Mitsuba's estimates at `points` per spp with their seconds, or why it was skipped.
 fn mitsuba(
     scene: &Scene,
     points: &[(DVec3, DVec3)],
     spp: &[usize],
-) -> Result<std::result::Result<Vec<(usize, f64, Estimates)>, String>> {
+) -> Result<std::result::Result<Vec<Run>, String>> {
     let dir = std::env::temp_dir().join(format!("gcr-irradiance-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
     let (ff, pf, of) = (dir.join("faces.txt"), dir.join("points.txt"), dir.join("e"));

@@ -15,7 +15,7 @@ use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use scene_sampler::{
-    EmitterTable, PowerHeuristic, Scene, SceneBvh, SurfacePoint, cosine_hemisphere,
+    EmitterTable, NO_FACE, PowerHeuristic, Scene, SceneBvh, SurfacePoint, cosine_hemisphere,
 };
 use std::f64::consts::PI;
 
@@ -136,13 +136,7 @@ fn walk(
         }
         // ⟨the cosine-weighted continuation; emission at its hit is the second technique⟩
         let dir = cosine_hemisphere(at.normal, [rng.random(), rng.random()]);
-        let hit = if at.face == NO_FACE {
-            let from = at.point + at.normal * bvh.epsilon();
-            bvh.closest_hit(from, dir, f64::INFINITY, NO_FACE)
-        } else {
-            bvh.trace_from(&at, dir)
-        };
-        let Some(hit) = hit else {
+        let Some(hit) = bvh.trace_from(&at, dir) else {
             break;
         };
         let next = bvh.surface_point(&hit);
@@ -186,13 +180,7 @@ fn path_cosine_only(
             break;
         }
         let dir = cosine_hemisphere(at.normal, [rng.random(), rng.random()]);
-        let hit = if at.face == NO_FACE {
-            let from = at.point + at.normal * bvh.epsilon();
-            bvh.closest_hit(from, dir, f64::INFINITY, NO_FACE)
-        } else {
-            bvh.trace_from(&at, dir)
-        };
-        let Some(hit) = hit else {
+        let Some(hit) = bvh.trace_from(&at, dir) else {
             break;
         };
         let next = bvh.surface_point(&hit);
@@ -289,9 +277,6 @@ pub fn reference_at(
         })
         .collect())
 }
-
-/// The face of an irradiance point: none (its rays skip no face).
-pub const NO_FACE: u32 = u32::MAX;
 
 /// The irradiance reference: E(y, n) = ∫ L cos θ dω at any points `(point, unit normal)` — on a
 /// surface or in the air, as Radiance's `rtrace -I` — by adaptive path tracing from a white

@@ -11,10 +11,6 @@ use scene_sampler::{
     FlatKernelSampler, FlatPoint, FlatlandScene, KernelSampler, Scene, SurfacePoint,
 };
 
-/// The face of a point that lies on no face of the scene (an irradiance probe in the air): no
-/// face is skipped by its rays.
-pub const NO_FACE: u32 = u32::MAX;
-
 /// One training sample of the kernel network: a ray from sender x to receiver y (sec. 3.4).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {

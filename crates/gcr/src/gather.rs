@@ -28,7 +28,7 @@
 //! furnace 1.32 / 1.44 %, `cornell-box` 9.3 / 9.4 % (balance / power).
 
 use crate::config::GatherSamples;
-use crate::domain::{Domain, NO_FACE};
+use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
 use crate::emitters::Emitters;
 use glam::{DVec2, DVec3};
@@ -274,15 +274,8 @@ fn trace_cosine(
     match domain {
         Domain::ThreeD(k) => {
             let dir = cosine_hemisphere(n, u);
-            let hit = if face == NO_FACE {
-                // A point in the air (irradiance): the ray leaves from y itself, lifted off any
-                // surface it lies on towards the side n points to.
-                let from = y + n * k.bvh.epsilon();
-                k.bvh.closest_hit(from, dir, f64::INFINITY, NO_FACE)
-            } else {
-                k.bvh.trace_from(&Domain::surface_point_3d(y, n, face), dir)
-            };
-            hit.map(|h| {
+            let from = Domain::surface_point_3d(y, n, face);
+            k.bvh.trace_from(&from, dir).map(|h| {
                 let p = k.bvh.surface_point(&h);
                 (p.point, p.normal, p.face)
             })

@@ -30,13 +30,14 @@
 //! the cosine density p is small.
 
 use crate::config::{GatherSamples, PathSettings};
-use crate::domain::{Domain, NO_FACE};
+use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
 use crate::emitters::Emitters;
 use crate::gather::{Gathered, Mis, cosine_ray, shadow_ray};
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use scene_sampler::NO_FACE;
 
 /// Path vertices beyond the output point at which a path stops whatever the roulette says: a
 /// guard, not a budget (a grey ρ = 0.99 furnace loses 0.99^100000 of its light to it; 64, the

@@ -45,13 +45,7 @@ pub fn radiosity_at_points(
 ) -> Result<Vec<Gathered>, GatherError> {
     check_base(trained, config)?;
     let frame = domain.frame();
-    let paths = PathGather::new(
-        domain,
-        emitters,
-        |x, n| trained.reflected_kernel(x, n),
-        config.gather_samples,
-        config.paths,
-    );
+    let paths = path_gather(domain, trained, emitters, config);
     if let (GatherMode::Paths, Some(target)) = (config.gather, config.paths.target_error) {
         let seeds: Vec<u64> = points
             .iter()
@@ -91,13 +85,7 @@ pub fn irradiance_at_points(
         return Err(GatherError::IrradianceNeedsPaths(config.gather.name()));
     }
     let frame = domain.frame();
-    let paths = PathGather::new(
-        domain,
-        emitters,
-        |x, n| trained.reflected_kernel(x, n),
-        config.gather_samples,
-        config.paths,
-    );
+    let paths = path_gather(domain, trained, emitters, config);
     let seeds: Vec<u64> = points
         .iter()
         .map(|&(y, _)| point_seed(config.seed ^ IRRADIANCE_SALT, y, frame))
@@ -117,6 +105,22 @@ pub fn irradiance_at_points(
             .map(|i| estimate(i, 0, config.gather_samples).gathered())
             .collect(),
     })
+}
+
+/// The paths gather of a solution, its networks' reflected radiosity as C.
+fn path_gather<'a>(
+    domain: &'a Domain<'a>,
+    trained: &'a Trained,
+    emitters: &'a Emitters,
+    config: &SolveConfig,
+) -> PathGather<'a, impl Fn(DVec3, DVec3) -> Bands + Sync + 'a> {
+    PathGather::new(
+        domain,
+        emitters,
+        |x, n| trained.reflected_kernel(x, n),
+        config.gather_samples,
+        config.paths,
+    )
 }
 
 /// Mixed into the solve's seed for irradiance probes ([`irradiance_at_points`]).

@@ -23,7 +23,7 @@
 //! 10⁶ the spacing of representable numbers is 0.06, a tenth of the box). Inputs and outputs ([`Hit::point`])
 //! stay in the scene's own coordinates.
 
-use crate::{FlatPoint, FlatlandScene, Scene, SurfacePoint};
+use crate::{FlatPoint, FlatlandScene, NO_FACE, Scene, SurfacePoint};
 use glam::{DVec2, DVec3, Vec3A};
 use obvhs::{
     BvhBuildParams, cwbvh::CwBvh, cwbvh::builder::build_cwbvh_from_tris, ray::Ray,
@@ -246,6 +246,11 @@ impl SceneBvh {
     /// otherwise start its ray at t ≈ 0 from that wall, where the f32 test can miss it and the ray escapes
     /// (test `furnace_is_watertight`).
     pub fn trace_from(&self, from: &SurfacePoint, dir: DVec3) -> Option<Hit> {
+        if from.face == NO_FACE {
+            // a point on no face: lifted off whatever surface it lies on, towards its normal's side
+            let o = from.point + from.normal * self.eps;
+            return self.closest_hit(o, dir, f64::INFINITY, NO_FACE);
+        }
         let to_c = self.centroids[from.face as usize] - from.point;
         let inward = to_c.normalize_or_zero() * self.eps.min(to_c.length());
         let o = from.point + inward + from.normal * (self.eps * dir.dot(from.normal).signum());

@@ -55,8 +55,8 @@ pub use load::{
 pub use mis::PowerHeuristic;
 pub use probe::{FlatProbe, Probe, parse_flat_probes, parse_probes, read_flat_probes, read_probes};
 pub use sample::{
-    FlatPoint, FlatSampler, SurfacePoint, SurfaceSampler, cosine_halfplane, cosine_hemisphere,
-    orthonormal_basis,
+    FlatPoint, FlatSampler, NO_FACE, SurfacePoint, SurfaceSampler, cosine_halfplane,
+    cosine_hemisphere, orthonormal_basis,
 };
 pub use scene::{Camera, Face, RHO_MAX, Scene};
 pub use spectrum::{BANDS, Bands, Spectrum};

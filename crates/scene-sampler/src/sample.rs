@@ -14,9 +14,14 @@ pub struct SurfacePoint {
     pub point: DVec3,
     /// Unit normal of the front side of `face`.
     pub normal: DVec3,
-    /// Face index into [`Scene::faces`].
+    /// Face index into [`Scene::faces`], or [`NO_FACE`] for a point on no face (a receiver in
+    /// the air: an irradiance probe).
     pub face: u32,
 }
+
+/// The face of a [`SurfacePoint`] that lies on no face of the scene: rays from it skip no face, and
+/// [`crate::SceneBvh::trace_from`] lifts them off along the point's normal.
+pub const NO_FACE: u32 = u32::MAX;
 
 /// A point on a Flatland scene's segments.
 #[derive(Clone, Copy, Debug, PartialEq)]

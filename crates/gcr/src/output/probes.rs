@@ -10,11 +10,12 @@
 
 use super::OutputError;
 use crate::config::SolveConfig;
-use crate::domain::{Domain, NO_FACE};
+use crate::domain::Domain;
 use crate::emitters::Emitters;
 use crate::pipeline::{GatherStats, irradiance_at_points, radiosity_at_points};
 use crate::solve::Trained;
 use glam::DVec3;
+use scene_sampler::NO_FACE;
 use std::path::Path;
 
 /// What the probe output holds.
@@ -88,6 +89,9 @@ pub(super) fn read_probes(
 ) -> Result<Vec<(DVec3, DVec3, u32)>, OutputError> {
     let source = path.display().to_string();
     let snap = settings.quantity == ProbeQuantity::Radiosity;
+    let tolerance = |diagonal: f64| {
+        (settings.tolerance).unwrap_or_else(|| scene_sampler::probe::default_tolerance(diagonal))
+    };
     Ok(match domain {
         Domain::ThreeD(k) => {
             let probes = scene_sampler::read_probes(path)?;
@@ -97,9 +101,7 @@ pub(super) fn read_probes(
                     .map(|p| (p.point, p.normal, NO_FACE))
                     .collect());
             }
-            let tol = settings
-                .tolerance
-                .unwrap_or_else(|| scene_sampler::probe::default_tolerance(k.scene.diagonal()));
+            let tol = tolerance(k.scene.diagonal());
             probes
                 .iter()
                 .map(|p| {
@@ -116,9 +118,7 @@ pub(super) fn read_probes(
                     .map(|p| (p.point.extend(0.0), p.normal.extend(0.0), NO_FACE))
                     .collect());
             }
-            let tol = settings
-                .tolerance
-                .unwrap_or_else(|| scene_sampler::probe::default_tolerance(k.scene.diagonal()));
+            let tol = tolerance(k.scene.diagonal());
             probes
                 .iter()
                 .map(|p| {

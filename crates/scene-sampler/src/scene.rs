@@ -1,5 +1,6 @@
 //! The 3-D scene model: triangles with per-face reflectance and emission, validated on construction.
 
+use crate::provenance::{GltfSource, Part};
 use crate::{Result, SceneError, Spectrum};
 use glam::DVec3;
 use std::collections::HashMap;
@@ -53,6 +54,9 @@ pub struct Face {
     pub object: u32,
     /// Surface index: faces that form one flat polygon of the input (a triangulated quad shares one id).
     pub surface: u32,
+    /// Part index (into [`Scene::parts`]): the input primitive of the node instance the face came
+    /// from (glTF), or its object ([`Face::new`] sets `part = object`).
+    pub part: u32,
 }
 
 impl Face {
@@ -76,6 +80,7 @@ impl Face {
             emission,
             object,
             surface,
+            part: object,
         }
     }
     /// The point with barycentric weights `(1 - b1 - b2, b1, b2)`.
@@ -152,6 +157,12 @@ pub struct Scene {
     pub warnings: Vec<String>,
     /// Axis-aligned bounds `(lo, hi)` of all vertices.
     pub bounds: (DVec3, DVec3),
+    /// The input parts ([`Face::part`] indexes this): one per object unless a loader knows more
+    /// (glTF: one per primitive of each node instance).
+    pub parts: Vec<Part>,
+    /// The glTF document the scene came from (node tree, mesh and material names), for writers
+    /// that give an output the input's structure; `None` for OBJ, built-ins and [`Scene::new`].
+    pub gltf: Option<Box<GltfSource>>,
 }
 
 impl Scene {
@@ -168,7 +179,10 @@ impl Scene {
     /// * Inconsistent windings (two faces of one object sharing an edge traversed in the same direction):
     ///   reported in `warnings` per object, never "fixed" (FORMATS.md: report, don't guess).
     ///
-    /// `camera = None` picks a camera framing the scene bounds.
+    /// `camera = None` picks a camera framing the scene bounds. Each face keeps its
+    /// [`Face::part`]; [`Scene::parts`] gets one [`Part::of_object`] per part index (the object
+    /// of that index: with [`Face::new`]'s `part = object` one part per object), and
+    /// [`Scene::gltf`] is `None`: a loader that knows more sets both afterwards.
     pub fn new(
         name: &str,
         source: &str,
@@ -202,7 +216,10 @@ impl Scene {
         let mut kept: Vec<Face> = Vec::with_capacity(n_in);
         let mut dropped_ids = Vec::new();
         for (i, f) in faces.into_iter().enumerate() {
-            let f = Face::new(f.v, f.rho, f.emission, f.object, f.surface);
+            let f = Face {
+                part: f.part,
+                ..Face::new(f.v, f.rho, f.emission, f.object, f.surface)
+            };
             if f.area <= 1e-14 * diag2 || f.normal == DVec3::ZERO || !f.normal.is_finite() {
                 dropped_ids.push(i);
             } else {
@@ -262,6 +279,13 @@ impl Scene {
                 objects[object as usize]
             ));
         }
+        let n_parts = kept
+            .iter()
+            .map(|f| f.part as usize + 1)
+            .max()
+            .unwrap_or(0)
+            .max(objects.len());
+        let parts = (0..n_parts as u32).map(Part::of_object).collect();
         let grey = kept.iter().all(|f| f.rho.is_grey() && f.emission.is_grey());
         let camera_given = camera.is_some();
         let camera = camera.unwrap_or_else(|| Camera::framing(lo, hi));
@@ -275,6 +299,8 @@ impl Scene {
             camera_given,
             warnings,
             bounds: (lo, hi),
+            parts,
+            gltf: None,
         })
     }
 

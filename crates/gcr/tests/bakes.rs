@@ -179,7 +179,7 @@ fn bake(scene: &Scene) -> (Vec<u8>, Vec<Vertex>, Exposure) {
         mesh.triangle_count() > scene.faces.len(),
         "not re-triangulated"
     );
-    // the vertices' B is the gather at those points
+    // the vertices' B is the gather at those points (just inside their faces)
     let points: Vec<(DVec3, DVec3, u32)> = (0..mesh.vertex_count())
         .map(|v| {
             let t = mesh
@@ -188,7 +188,12 @@ fn bake(scene: &Scene) -> (Vec<u8>, Vec<Vertex>, Exposure) {
                 .position(|t| t.contains(&(v as u32)))
                 .unwrap();
             let f = mesh.face_of_triangle[t];
-            (mesh.positions[v], scene.faces[f as usize].normal, f)
+            let face = &scene.faces[f as usize];
+            (
+                gcr::vertex_gather_point(face, mesh.positions[v]),
+                face.normal,
+                f,
+            )
         })
         .collect();
     let again =

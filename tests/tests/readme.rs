@@ -70,21 +70,28 @@ fn check_image(path: &Path) {
     assert!(share > 0.5, "only {:.0} % of the pixels lit", 100.0 * share);
 }
 
-/// Positions and COLOR_0 on every vertex, counts as in the metrics, colours finite and some lit.
+/// Positions and COLOR_0 on every vertex (over all the bake's primitives: one per input part),
+/// counts as in the metrics, colours finite and some lit.
 fn check_mesh(path: &Path, metrics: &serde_json::Value) {
     let (doc, buffers, _) = gltf::import(path).unwrap();
-    let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
-    let reader = prim.reader(|b| Some(&buffers[b.index()]));
-    let positions: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
-    let colours: Vec<[f32; 3]> = reader.read_colors(0).unwrap().into_rgb_f32().collect();
-    let indices: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
+    let (mut positions, mut colours, mut indices) = (0, Vec::new(), 0);
+    for prim in doc.meshes().flat_map(|m| m.primitives()) {
+        let reader = prim.reader(|b| Some(&buffers[b.index()]));
+        let n = reader.read_positions().unwrap().count();
+        let c: Vec<[f32; 3]> = reader.read_colors(0).unwrap().into_rgb_f32().collect();
+        let i: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
+        assert_eq!(c.len(), n);
+        assert!(i.iter().all(|&i| (i as usize) < n));
+        positions += n;
+        indices += i.len();
+        colours.extend(c);
+    }
     let vertices = metrics["output_vertices"].as_u64().unwrap() as usize;
     let triangles = metrics["output_triangles"].as_u64().unwrap() as usize;
     assert!(vertices > 0);
-    assert_eq!(positions.len(), vertices);
+    assert_eq!(positions, vertices);
     assert_eq!(colours.len(), vertices);
-    assert_eq!(indices.len(), 3 * triangles);
-    assert!(indices.iter().all(|&i| (i as usize) < vertices));
+    assert_eq!(indices, 3 * triangles);
     assert!(colours.iter().flatten().all(|c| c.is_finite() && *c >= 0.0));
     assert!(
         colours

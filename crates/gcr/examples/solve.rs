@@ -46,7 +46,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (mesh, _) = output_mesh(&domain, &trained, &config, RetriangulateLimits::default())?;
     let file = std::io::BufWriter::new(std::fs::File::create(&out)?);
     let lit = mesh.radiosity.clone();
-    write_glb(&mesh, &Exposure::auto(lit), file)?;
+    write_glb(&mesh, &scene, &Exposure::auto(lit), file)?;
     println!("{} vertices written to {out}", mesh.vertex_count());
     Ok(())
 }

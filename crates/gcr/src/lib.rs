@@ -61,7 +61,7 @@ pub use metrics::{ImageRecord, Metrics, PhaseTimes, peak_memory_bytes};
 pub use network::GrowingNetwork;
 pub use pipeline::{
     GatherError, GatherStats, irradiance_at_points, output_mesh, point_seed, radiosity_at_points,
-    relative_std_error,
+    relative_std_error, vertex_gather_point,
 };
 pub use retriangulate::RetriangulateLimits;
 pub use sample::Sample;

@@ -12,6 +12,9 @@
 //!   occlusion between surface points, batched in parallel, and closest-hit queries; [`FlatVisibility`].
 //! * **The kernel** — [`KernelSampler`] / [`FlatKernelSampler`] evaluate `K(x,y) = ρ(y)·G(x,y)·V(x,y)` (sec. 3.1,
 //!   MATH.md §4), with the `r → 0` singularity clamped as documented in [`kernel`].
+//! * **Provenance** — [`Face::part`], [`Scene::parts`] and [`Scene::gltf`] ([`provenance`]): which input
+//!   primitive of which node each face came from, and the glTF node tree, so that outputs can keep the
+//!   input's structure.
 //! * **Probes** — [`read_probes`] / [`Scene::snap_probe`]: the points where all solvers report radiosity.
 //!
 //! # Units
@@ -37,6 +40,7 @@ pub mod kernel;
 pub mod load;
 pub mod mis;
 pub mod probe;
+pub mod provenance;
 pub mod sample;
 pub mod scene;
 pub mod spectrum;
@@ -54,6 +58,7 @@ pub use load::{
 };
 pub use mis::PowerHeuristic;
 pub use probe::{FlatProbe, Probe, parse_flat_probes, parse_probes, read_flat_probes, read_probes};
+pub use provenance::{GltfMaterial, GltfMesh, GltfNode, GltfSource, NodeTransform, Part};
 pub use sample::{
     FlatPoint, FlatSampler, NO_FACE, SurfacePoint, SurfaceSampler, cosine_halfplane,
     cosine_hemisphere, orthonormal_basis,

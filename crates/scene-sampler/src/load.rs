@@ -4,6 +4,7 @@
 //! path tracer reads them; the scene stores emitted radiosity (exitance) `E = π·L_e`, and every solver reports
 //! radiosity B (exitance; `B = π·L` on a Lambertian surface). Flatland JSON gives E directly.
 
+use crate::provenance::{GltfSource, Part};
 use crate::scene::check_file_material;
 use crate::{
     AnyScene, Camera, Face, FaceTexture, FlatlandScene, Result, Scene, SceneError, Spectrum,
@@ -440,6 +441,11 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene> {
 /// naming their mesh, and a file with nothing else is an error saying so. The first node with a
 /// perspective camera (in traversal order) becomes [`Scene::camera`] (with
 /// [`Scene::camera_given`]); without one the image output places its automatic camera.
+///
+/// Provenance ([`crate::provenance`]): each node with a mesh is an object, each of its triangle
+/// primitives a [`Part`] (node, mesh, primitive) that its faces name in [`Face::part`]; the
+/// document's node tree, meshes and materials are kept in [`Scene::gltf`], with the world
+/// transform applied to each node of the loaded scene.
 pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
     let path = path.as_ref();
     let source = path.display().to_string();
@@ -471,6 +477,8 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
     let mut texture_of: Vec<((usize, [Wrap; 2]), u32)> = Vec::new();
     let mut surface = 0u32;
     let mut camera: Option<Camera> = None;
+    let mut provenance = GltfSource::of_document(&doc, &scene);
+    let mut parts: Vec<Part> = Vec::new();
     let mut stack: Vec<(gltf::Node, DMat4, usize)> =
         scene.nodes().map(|n| (n, DMat4::IDENTITY, 0)).collect();
     while let Some((node, parent, depth)) = stack.pop() {
@@ -487,6 +495,9 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
         // node transforms are composed in f64: only the mesh-local positions are f32 (glTF spec)
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
         let world = parent * local;
+        if let Some(n) = provenance.nodes.get_mut(node.index()) {
+            n.world = Some(world);
+        }
         for child in node.children() {
             stack.push((child, world, depth + 1));
         }
@@ -511,6 +522,13 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
                 skipped.push(format!("`{obj_name}` ({mode:?})"));
                 continue;
             }
+            let part = parts.len() as u32;
+            parts.push(Part {
+                object: obj,
+                node: Some(node.index() as u32),
+                mesh: Some(mesh.index() as u32),
+                primitive: prim.index() as u32,
+            });
             let mat = prim.material();
             let pbr = mat.pbr_metallic_roughness();
             let bc = pbr.base_color_factor();
@@ -626,7 +644,10 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
                 } else {
                     ([a, b, c], t)
                 };
-                let mut face = Face::new(v, rho, e, obj, surface);
+                let mut face = Face {
+                    part,
+                    ..Face::new(v, rho, e, obj, surface)
+                };
                 if let Some((index, uv)) = &texture {
                     let at = |i: u32| uv.get(i as usize).copied();
                     if let [Some(a), Some(b), Some(c)] = corners.map(at) {
@@ -655,6 +676,8 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
     }
     let mut scene =
         Scene::new(&stem(path), &source, faces, objects, camera)?.with_textures(textures)?;
+    scene.parts = parts;
+    scene.gltf = Some(Box::new(provenance));
     if !skipped.is_empty() {
         warnings.push(format!(
             "{source}: skipped {} point/line primitive(s): {}",

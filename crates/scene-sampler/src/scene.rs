@@ -1,5 +1,6 @@
 //! The 3-D scene model: triangles with per-face reflectance and emission, validated on construction.
 
+use crate::provenance::{GltfSource, Part};
 use crate::{FaceTexture, Result, SceneError, Spectrum, Texture};
 use glam::DVec3;
 use std::collections::HashMap;
@@ -56,6 +57,9 @@ pub struct Face {
     /// The albedo texture mapping of a textured face ([`Scene::rho_at`]); [`Face::rho`] is then the
     /// face's mean reflectance.
     pub texture: Option<FaceTexture>,
+    /// Part index (into [`Scene::parts`]): the input primitive of the node instance the face came
+    /// from (glTF), or its object ([`Face::new`] sets `part = object`).
+    pub part: u32,
 }
 
 impl Face {
@@ -80,6 +84,7 @@ impl Face {
             object,
             surface,
             texture: None,
+            part: object,
         }
     }
 
@@ -171,6 +176,12 @@ pub struct Scene {
     pub bounds: (DVec3, DVec3),
     /// Albedo textures, indexed by [`FaceTexture::texture`] (empty for untextured scenes).
     pub textures: Vec<Texture>,
+    /// The input parts ([`Face::part`] indexes this): one per object unless a loader knows more
+    /// (glTF: one per primitive of each node instance).
+    pub parts: Vec<Part>,
+    /// The glTF document the scene came from (node tree, mesh and material names), for writers
+    /// that give an output the input's structure; `None` for OBJ, built-ins and [`Scene::new`].
+    pub gltf: Option<Box<GltfSource>>,
 }
 
 impl Scene {
@@ -187,7 +198,10 @@ impl Scene {
     /// * Inconsistent windings (two faces of one object sharing an edge traversed in the same direction):
     ///   reported in `warnings` per object, never "fixed" (FORMATS.md: report, don't guess).
     ///
-    /// `camera = None` picks a camera framing the scene bounds.
+    /// `camera = None` picks a camera framing the scene bounds. Each face keeps its
+    /// [`Face::part`]; [`Scene::parts`] gets one [`Part::of_object`] per part index (the object
+    /// of that index: with [`Face::new`]'s `part = object` one part per object), and
+    /// [`Scene::gltf`] is `None`: a loader that knows more sets both afterwards.
     pub fn new(
         name: &str,
         source: &str,
@@ -223,6 +237,7 @@ impl Scene {
         for (i, f) in faces.into_iter().enumerate() {
             let f = Face {
                 texture: f.texture,
+                part: f.part,
                 ..Face::new(f.v, f.rho, f.emission, f.object, f.surface)
             };
             if f.area <= 1e-14 * diag2 || f.normal == DVec3::ZERO || !f.normal.is_finite() {
@@ -284,6 +299,13 @@ impl Scene {
                 objects[object as usize]
             ));
         }
+        let n_parts = kept
+            .iter()
+            .map(|f| f.part as usize + 1)
+            .max()
+            .unwrap_or(0)
+            .max(objects.len());
+        let parts = (0..n_parts as u32).map(Part::of_object).collect();
         let grey = kept.iter().all(|f| f.rho.is_grey() && f.emission.is_grey());
         let camera_given = camera.is_some();
         let camera = camera.unwrap_or_else(|| Camera::framing(lo, hi));
@@ -298,6 +320,8 @@ impl Scene {
             warnings,
             bounds: (lo, hi),
             textures: Vec::new(),
+            parts,
+            gltf: None,
         })
     }
 

@@ -1,83 +1,277 @@
-//! Binary glTF 2.0 (.glb) writer for a [`ShadedMesh`] with vertex colours.
+//! Binary glTF 2.0 (.glb) writer for the bake: a [`ShadedMesh`] in the shape of its input scene.
 //!
-//! One mesh, one primitive: `POSITION` (f32 VEC3), `COLOR_0` (f32 VEC3, display-linear: tone
-//! mapped but not sRGB-encoded, since glTF colours are linear) and u32 indices. The raw radiosity
-//! values are in the PLY output and the probe files. The material is `KHR_materials_unlit`, so viewers show the
-//! vertex colours as they are instead of lighting them again.
+//! The output mesh's triangles are grouped by the input part they were cut from
+//! ([`scene_sampler::Face::part`]), so the file overlays the original asset:
+//!
+//! * **From glTF** ([`Scene::gltf`]): every node of the input document, in the same order, with
+//!   the same name, local transform (matrix or TRS, as given) and children; the same scene roots.
+//!   Each node of the loaded scene that has a mesh gets a mesh of its own (a mesh used by two
+//!   nodes is lit differently at each, so the output has one per instance), named after the input
+//!   mesh (`<mesh>`, or `<mesh>@<node>` when the input mesh is used by more than one node), with
+//!   one primitive per input triangle primitive that kept triangles (extras `input_primitive`
+//!   give its index in the input mesh). Positions and normals are in the node's **local** frame:
+//!   the world positions mapped back by the inverse of the node's world transform (in f64), the
+//!   normal by the transpose of its linear part, and under a mirroring transform (determinant < 0)
+//!   the winding is reversed back, as glTF viewers reverse it again. Materials keep the input's
+//!   order and names (an extra `default` one stands for glTF's default material). Names the
+//!   input does not give are not given. Cameras,
+//!   textures, skins and animations are not written.
+//! * **Otherwise** (OBJ, built-ins): one root node per object, named after it, identity
+//!   transform, one mesh per object; one material.
+//!
+//! Attributes per primitive: `POSITION` (f32 VEC3, with min/max), `NORMAL` (f32 VEC3, unit, the
+//! face's geometric normal), `COLOR_0` (f32 VEC3, display-linear: `clamp(B/π · exposure)`, not
+//! sRGB-encoded since glTF colours are linear), `_RADIOSITY` (f32 VEC3, linear radiosity B, the
+//! exitance in scene units, emission included) and u32 indices. Materials are
+//! `KHR_materials_unlit` with a white base colour, so viewers show the vertex colours as they are
+//! instead of lighting them again. `asset.extras` records the exposure scale.
 
 use crate::mesh::ShadedMesh;
 use crate::output::tonemap::Exposure;
+use glam::{DMat4, DVec3};
+use scene_sampler::{GltfSource, NodeTransform, Scene};
+use serde_json::{Value, json};
+use std::collections::HashMap;
 use std::io::Write;
 
-/// Encodes `mesh` as a .glb byte vector.
-pub fn to_glb(mesh: &ShadedMesh, exposure: &Exposure) -> Vec<u8> {
-    let n = mesh.positions.len();
-    let mut bin: Vec<u8> = Vec::with_capacity(n * 36 + mesh.triangles.len() * 12);
-    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    for p in &mesh.positions {
-        let p = p.as_vec3().to_array();
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-            bin.extend_from_slice(&p[k].to_le_bytes());
+/// The accessors of one written primitive.
+struct Primitive {
+    /// Input primitive index (glTF), or the part's index within its object.
+    input: u32,
+    /// Output material.
+    material: usize,
+    attributes: Value,
+    indices: usize,
+}
+
+/// The binary chunk and its bufferViews and accessors, one view per accessor.
+#[derive(Default)]
+struct Bin {
+    bytes: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl Bin {
+    /// Appends one f32 VEC3 vertex attribute; returns its accessor.
+    fn vec3(&mut self, data: &[[f32; 3]], bounds: bool) -> usize {
+        let at = self.bytes.len();
+        for v in data {
+            for c in v {
+                self.bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        self.views.push(json!({"buffer": 0, "byteOffset": at,
+            "byteLength": self.bytes.len() - at, "target": 34962}));
+        let mut acc = json!({"bufferView": self.views.len() - 1, "componentType": 5126,
+            "count": data.len(), "type": "VEC3"});
+        if bounds {
+            let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+            for v in data {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(v[k]);
+                    hi[k] = hi[k].max(v[k]);
+                }
+            }
+            acc["min"] = json!(lo);
+            acc["max"] = json!(hi);
+        }
+        self.accessors.push(acc);
+        self.accessors.len() - 1
+    }
+
+    /// Appends u32 triangle indices; returns their accessor.
+    fn indices(&mut self, tris: &[[u32; 3]]) -> usize {
+        let at = self.bytes.len();
+        for t in tris {
+            for i in t {
+                self.bytes.extend_from_slice(&i.to_le_bytes());
+            }
+        }
+        self.views.push(json!({"buffer": 0, "byteOffset": at,
+            "byteLength": self.bytes.len() - at, "target": 34963}));
+        self.accessors
+            .push(json!({"bufferView": self.views.len() - 1,
+            "componentType": 5125, "count": tris.len() * 3, "type": "SCALAR"}));
+        self.accessors.len() - 1
+    }
+
+    /// Writes the triangles `tris` of `mesh` as one primitive in the frame whose world transform
+    /// is `world`; `None` when there are none.
+    fn primitive(
+        &mut self,
+        mesh: &ShadedMesh,
+        scene: &Scene,
+        tris: &[usize],
+        world: DMat4,
+        exposure: &Exposure,
+    ) -> Option<(Value, usize)> {
+        if tris.is_empty() {
+            return None;
+        }
+        let to_local = world.inverse();
+        let normal_to_local = world.transpose();
+        let mirrored = world.determinant() < 0.0;
+        let mut local_index: HashMap<u32, u32> = HashMap::new();
+        let (mut pos, mut nrm, mut col, mut rad) = (vec![], vec![], vec![], vec![]);
+        let mut out_tris = Vec::with_capacity(tris.len());
+        let f32x3 = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
+        for &t in tris {
+            let face = &scene.faces[mesh.face_of_triangle[t] as usize];
+            let n = normal_to_local
+                .transform_vector3(face.normal)
+                .normalize_or_zero();
+            let ids = mesh.triangles[t].map(|v| {
+                *local_index.entry(v).or_insert_with(|| {
+                    let b = mesh.radiosity[v as usize];
+                    pos.push(f32x3(to_local.transform_point3(mesh.positions[v as usize])));
+                    nrm.push(f32x3(n));
+                    col.push(exposure.linear(b).map(|c| c as f32));
+                    rad.push(b.map(|c| c as f32));
+                    (pos.len() - 1) as u32
+                })
+            });
+            out_tris.push(if mirrored {
+                [ids[0], ids[2], ids[1]]
+            } else {
+                ids
+            });
+        }
+        let attributes = json!({
+            "POSITION": self.vec3(&pos, true),
+            "NORMAL": self.vec3(&nrm, false),
+            "COLOR_0": self.vec3(&col, false),
+            "_RADIOSITY": self.vec3(&rad, false),
+        });
+        Some((attributes, self.indices(&out_tris)))
+    }
+}
+
+/// An unlit material (white base colour: the vertex colours are what is shown).
+fn unlit(name: Option<&str>) -> Value {
+    let mut m = json!({"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0],
+            "metallicFactor": 0.0, "roughnessFactor": 1.0},
+        "extensions": {"KHR_materials_unlit": {}}});
+    if let Some(name) = name {
+        m["name"] = json!(name);
+    }
+    m
+}
+
+/// A glTF mesh from written primitives; `None` when there are none (glTF meshes need one).
+fn mesh_json(name: Option<&str>, input_mesh: Option<u32>, prims: Vec<Primitive>) -> Option<Value> {
+    if prims.is_empty() {
+        return None;
+    }
+    let primitives: Vec<Value> = prims
+        .into_iter()
+        .map(|p| {
+            json!({"attributes": p.attributes, "indices": p.indices, "material": p.material,
+                "mode": 4, "extras": {"input_primitive": p.input}})
+        })
+        .collect();
+    let mut m = json!({"primitives": primitives});
+    if let Some(name) = name {
+        m["name"] = json!(name);
+    }
+    if let Some(i) = input_mesh {
+        m["extras"] = json!({"input_mesh": i});
+    }
+    Some(m)
+}
+
+/// The node's local transform as JSON members (nothing for the identity).
+fn transform_json(node: &mut Value, t: &NodeTransform) {
+    if t.is_identity() {
+        return;
+    }
+    match t {
+        NodeTransform::Matrix(m) => {
+            let flat: Vec<f32> = m.iter().flatten().copied().collect();
+            node["matrix"] = json!(flat);
+        }
+        NodeTransform::Trs {
+            translation,
+            rotation,
+            scale,
+        } => {
+            if *translation != [0.0; 3] {
+                node["translation"] = json!(translation);
+            }
+            if *rotation != [0.0, 0.0, 0.0, 1.0] {
+                node["rotation"] = json!(rotation);
+            }
+            if *scale != [1.0; 3] {
+                node["scale"] = json!(scale);
+            }
         }
     }
-    let colours_at = bin.len();
-    for b in &mesh.radiosity {
-        for c in exposure.linear(*b) {
-            bin.extend_from_slice(&(c as f32).to_le_bytes());
+}
+
+/// The output's node tree, meshes and materials, and its scene's roots and name.
+struct Tree {
+    nodes: Vec<Value>,
+    meshes: Vec<Value>,
+    materials: Vec<Value>,
+    roots: Vec<u32>,
+    scene_name: String,
+}
+
+/// Encodes the bake of `scene` (`mesh` is its output mesh) as a .glb byte vector (module docs).
+pub fn to_glb(mesh: &ShadedMesh, scene: &Scene, exposure: &Exposure) -> Vec<u8> {
+    // ⟨Triangles by input part⟩
+    let mut by_part: Vec<Vec<usize>> = vec![Vec::new(); scene.parts.len()];
+    for (t, &f) in mesh.face_of_triangle.iter().enumerate() {
+        let part = scene.faces[f as usize].part as usize;
+        if part >= by_part.len() {
+            by_part.resize(part + 1, Vec::new());
         }
+        by_part[part].push(t);
     }
-    let indices_at = bin.len();
-    for t in &mesh.triangles {
-        for i in t {
-            bin.extend_from_slice(&i.to_le_bytes());
-        }
+    let mut bin = Bin::default();
+    let Tree {
+        nodes,
+        meshes,
+        materials,
+        roots,
+        scene_name,
+    } = match scene.gltf.as_deref() {
+        // ⟨The input's node tree; a mesh per node instance, a primitive per input primitive⟩
+        Some(src) => gltf_tree(mesh, scene, src, &by_part, exposure, &mut bin),
+        // ⟨One node per object, identity transform⟩
+        None => object_tree(mesh, scene, &by_part, exposure, &mut bin),
+    };
+    let mut doc = json!({
+        "asset": {"version": "2.0", "generator": "gcr (Growing Cells Radiosity)",
+            "extras": {"exposure_scale": exposure.scale,
+                "radiosity": "_RADIOSITY: linear radiosity B per vertex (RGB); COLOR_0 = clamp(B / pi * exposure_scale)"}},
+        "extensionsUsed": ["KHR_materials_unlit"],
+        "scene": 0,
+        "scenes": [{"name": scene_name, "nodes": roots}],
+        "nodes": nodes,
+        "materials": materials,
+    });
+    if !meshes.is_empty() {
+        doc["meshes"] = json!(meshes);
+        doc["buffers"] = json!([{"byteLength": bin.bytes.len()}]);
+        doc["bufferViews"] = json!(bin.views);
+        doc["accessors"] = json!(bin.accessors);
     }
-    let indices_len = bin.len() - indices_at;
-    while bin.len() % 4 != 0 {
-        bin.push(0);
-    }
-    if n == 0 {
-        lo = [0.0; 3];
-        hi = [0.0; 3];
-    }
-    let vec3 = n * 12;
-    let json = format!(
-        concat!(
-            r#"{{"asset":{{"version":"2.0","generator":"gcr (Growing Cells Radiosity)"}},"#,
-            r#""extensionsUsed":["KHR_materials_unlit"],"scene":0,"scenes":[{{"nodes":[0]}}],"#,
-            r#""nodes":[{{"mesh":0,"name":"radiosity"}}],"#,
-            r#""materials":[{{"pbrMetallicRoughness":{{"baseColorFactor":[1,1,1,1],"metallicFactor":0,"roughnessFactor":1}},"#,
-            r#""extensions":{{"KHR_materials_unlit":{{}}}},"doubleSided":false}}],"#,
-            r#""meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"COLOR_0":1}},"indices":2,"material":0,"mode":4}}]}}],"#,
-            r#""buffers":[{{"byteLength":{total}}}],"#,
-            r#""bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":{vec3},"target":34962}},"#,
-            r#"{{"buffer":0,"byteOffset":{c_at},"byteLength":{vec3},"target":34962}},"#,
-            r#"{{"buffer":0,"byteOffset":{i_at},"byteLength":{i_len},"target":34963}}],"#,
-            r#""accessors":[{{"bufferView":0,"componentType":5126,"count":{n},"type":"VEC3","min":[{lo0},{lo1},{lo2}],"max":[{hi0},{hi1},{hi2}]}},"#,
-            r#"{{"bufferView":1,"componentType":5126,"count":{n},"type":"VEC3"}},"#,
-            r#"{{"bufferView":2,"componentType":5125,"count":{ni},"type":"SCALAR"}}]}}"#
-        ),
-        total = bin.len(),
-        vec3 = vec3,
-        c_at = colours_at,
-        i_at = indices_at,
-        i_len = indices_len,
-        n = n,
-        ni = mesh.triangles.len() * 3,
-        lo0 = lo[0],
-        lo1 = lo[1],
-        lo2 = lo[2],
-        hi0 = hi[0],
-        hi1 = hi[1],
-        hi2 = hi[2],
-    );
-    let mut json = json.into_bytes();
+    glb_bytes(&doc, bin.bytes)
+}
+
+/// The binary container: the JSON chunk padded with spaces, then the buffer's chunk (glTF 2.0 §4.4).
+fn glb_bytes(doc: &Value, data: Vec<u8>) -> Vec<u8> {
+    let mut json = serde_json::to_vec(doc).unwrap_or_default();
     while json.len() % 4 != 0 {
         json.push(b' ');
     }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut data = data;
+    while data.len() % 4 != 0 {
+        data.push(0);
+    }
+    let with_bin = !data.is_empty();
+    let total = 12 + 8 + json.len() + if with_bin { 8 + data.len() } else { 0 };
     let mut out = Vec::with_capacity(total);
     out.extend_from_slice(b"glTF");
     out.extend_from_slice(&2u32.to_le_bytes());
@@ -85,39 +279,201 @@ pub fn to_glb(mesh: &ShadedMesh, exposure: &Exposure) -> Vec<u8> {
     out.extend_from_slice(&(json.len() as u32).to_le_bytes());
     out.extend_from_slice(b"JSON");
     out.extend_from_slice(&json);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&bin);
+    if with_bin {
+        out.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&data);
+    }
     out
 }
 
-/// Writes `mesh` as .glb to `w`.
-pub fn write_glb(mesh: &ShadedMesh, exposure: &Exposure, mut w: impl Write) -> std::io::Result<()> {
-    w.write_all(&to_glb(mesh, exposure))
+/// [`to_glb`]'s tree for a scene loaded from glTF.
+fn gltf_tree(
+    mesh: &ShadedMesh,
+    scene: &Scene,
+    src: &GltfSource,
+    by_part: &[Vec<usize>],
+    exposure: &Exposure,
+    bin: &mut Bin,
+) -> Tree {
+    let part_of: HashMap<(u32, u32), usize> = scene
+        .parts
+        .iter()
+        .enumerate()
+        .filter_map(|(k, p)| Some(((p.node?, p.primitive), k)))
+        .collect();
+    let mut materials = src
+        .materials
+        .iter()
+        .map(|m| unlit(m.name.as_deref()))
+        .collect::<Vec<_>>();
+    let default_material = materials.len();
+    let mut uses_default = false;
+    let mut meshes = Vec::new();
+    let mut nodes = Vec::new();
+    for (i, node) in src.nodes.iter().enumerate() {
+        let mut out = json!({});
+        if let Some(name) = &node.name {
+            out["name"] = json!(name);
+        }
+        transform_json(&mut out, &node.transform);
+        if !node.children.is_empty() {
+            out["children"] = json!(node.children);
+        }
+        if let (Some(m), Some(world)) = (node.mesh, node.world) {
+            let input = &src.meshes[m as usize];
+            let mut prims = Vec::new();
+            for (k, material) in input.primitives.iter().enumerate() {
+                let Some(&part) = part_of.get(&(i as u32, k as u32)) else {
+                    continue;
+                };
+                let Some((attributes, indices)) =
+                    bin.primitive(mesh, scene, &by_part[part], world, exposure)
+                else {
+                    continue;
+                };
+                let material = match material {
+                    Some(j) => *j as usize,
+                    None => {
+                        uses_default = true;
+                        default_material
+                    }
+                };
+                prims.push(Primitive {
+                    input: k as u32,
+                    material,
+                    attributes,
+                    indices,
+                });
+            }
+            let name = if src.instances(m) > 1 {
+                Some(format!(
+                    "{}@{}",
+                    input.name.clone().unwrap_or_else(|| format!("mesh{m}")),
+                    node.name.clone().unwrap_or_else(|| format!("node{i}"))
+                ))
+            } else {
+                input.name.clone()
+            };
+            if let Some(json) = mesh_json(name.as_deref(), Some(m), prims) {
+                meshes.push(json);
+                out["mesh"] = json!(meshes.len() - 1);
+            }
+        }
+        nodes.push(out);
+    }
+    if uses_default {
+        materials.push(unlit(Some("default")));
+    }
+    let roots = src.roots.clone();
+    let scene_name = src.scene_name.clone().unwrap_or_else(|| scene.name.clone());
+    Tree {
+        nodes,
+        meshes,
+        materials,
+        roots,
+        scene_name,
+    }
+}
+
+/// [`to_glb`]'s tree for a scene without a node tree (OBJ, built-ins).
+fn object_tree(
+    mesh: &ShadedMesh,
+    scene: &Scene,
+    by_part: &[Vec<usize>],
+    exposure: &Exposure,
+    bin: &mut Bin,
+) -> Tree {
+    let materials = vec![unlit(Some("radiosity"))];
+    let mut meshes = Vec::new();
+    let mut nodes = Vec::new();
+    for (o, name) in scene.objects.iter().enumerate() {
+        let mut prims = Vec::new();
+        for (k, _) in scene
+            .parts
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.object as usize == o)
+        {
+            let Some((attributes, indices)) =
+                bin.primitive(mesh, scene, &by_part[k], DMat4::IDENTITY, exposure)
+            else {
+                continue;
+            };
+            prims.push(Primitive {
+                input: prims.len() as u32,
+                material: 0,
+                attributes,
+                indices,
+            });
+        }
+        let mut out = json!({"name": name});
+        if let Some(json) = mesh_json(Some(name), None, prims) {
+            meshes.push(json);
+            out["mesh"] = json!(meshes.len() - 1);
+        }
+        nodes.push(out);
+    }
+    let roots = (0..nodes.len() as u32).collect();
+    let scene_name = scene.name.clone();
+    Tree {
+        nodes,
+        meshes,
+        materials,
+        roots,
+        scene_name,
+    }
+}
+
+/// Writes the bake of `scene` (`mesh` is its output mesh) as .glb to `w` ([`to_glb`]).
+pub fn write_glb(
+    mesh: &ShadedMesh,
+    scene: &Scene,
+    exposure: &Exposure,
+    mut w: impl Write,
+) -> std::io::Result<()> {
+    w.write_all(&to_glb(mesh, scene, exposure))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::DVec3;
+    use scene_sampler::{Face, Spectrum};
 
+    /// One object with one triangle, lit: the gltf crate reads back positions, normals, colours,
+    /// radiosity and indices, and the node is named after the object.
     #[test]
-    fn the_gltf_crate_reads_back_positions_colours_and_indices() {
+    fn the_gltf_crate_reads_back_positions_normals_colours_radiosity_and_indices() {
+        let v = [DVec3::ZERO, DVec3::X, DVec3::new(0.0, 2.0, 0.5)];
+        let face = Face::new(v, Spectrum::grey(0.5), Spectrum::grey(1.0), 0, 0);
+        let scene = Scene::new("t", "test", vec![face], vec!["thing".into()], None).unwrap();
         let mesh = ShadedMesh {
-            positions: vec![DVec3::ZERO, DVec3::X, DVec3::new(0.0, 2.0, 0.5)],
+            positions: v.to_vec(),
             triangles: vec![[0, 1, 2]],
             face_of_triangle: vec![0],
             radiosity: vec![[0.0; 3], [1.0, 2.0, 3.0], [3.0; 3]],
         };
-        let bytes = to_glb(&mesh, &Exposure { scale: 1.0 });
+        let bytes = to_glb(&mesh, &scene, &Exposure { scale: 1.0 });
         let (doc, buffers, _) = gltf::import_slice(&bytes).expect("valid glb");
-        let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
+        let node = doc.nodes().next().unwrap();
+        assert_eq!(node.name(), Some("thing"));
+        let prim = node.mesh().unwrap().primitives().next().unwrap();
         let reader = prim.reader(|b| Some(&buffers[b.index()]));
         let pos: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
         assert_eq!(pos[2], [0.0, 2.0, 0.5]);
+        let n: Vec<[f32; 3]> = reader.read_normals().unwrap().collect();
+        let expect = face.normal;
+        assert!(
+            (DVec3::new(n[0][0] as f64, n[0][1] as f64, n[0][2] as f64) - expect).length() < 1e-6
+        );
         let col: Vec<[f32; 3]> = reader.read_colors(0).unwrap().into_rgb_f32().collect();
         assert!((col[1][1] as f64 - 2.0 / std::f64::consts::PI).abs() < 1e-6);
         let idx: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
         assert_eq!(idx, vec![0, 1, 2]);
+        let rad = prim
+            .attributes()
+            .find(|(s, _)| matches!(s, gltf::Semantic::Extras(n) if n == "RADIOSITY"))
+            .expect("_RADIOSITY");
+        assert_eq!(rad.1.count(), 3);
     }
 }

@@ -387,7 +387,7 @@ fn write_3d(
     }
     if let Some(mesh) = &mesh {
         if let Some(path) = &paths.mesh {
-            staged.write(path, |w| super::glb::write_glb(mesh, &exposure, w))?;
+            staged.write(path, |w| super::glb::write_glb(mesh, scene, &exposure, w))?;
         }
         if let Some(path) = &paths.ply {
             staged.write(path, |w| super::ply::write_ply(mesh, &exposure, w))?;

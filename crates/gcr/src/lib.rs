@@ -41,6 +41,7 @@ pub mod output;
 mod paths;
 mod pipeline;
 mod projection;
+mod refine;
 mod retriangulate;
 mod sample;
 mod shading;

@@ -9,6 +9,7 @@ use crate::emitters::Emitters;
 use crate::gather::{Gathered, gather};
 use crate::mesh::ShadedMesh;
 use crate::paths::{PathGather, PointEstimate, REPLICATES};
+use crate::refine::{RefineLimits, refine};
 use crate::retriangulate::{RetriangulateLimits, retriangulate};
 use crate::solve::Trained;
 use crate::spatial::BoxGrid;
@@ -401,8 +402,9 @@ pub fn vertex_gather_point(face: &scene_sampler::Face, p: DVec3) -> DVec3 {
 }
 
 /// Re-triangulates the scene to the shading network's resolution (sec. 4.3.1) and gathers B at
-/// every vertex ([`radiosity_at_points`], at [`vertex_gather_point`]). Returns the mesh and what
-/// the gather measured.
+/// every vertex ([`radiosity_at_points`], at [`vertex_gather_point`]); with the paths gather the
+/// mesh is then refined where B varies faster than linear interpolation follows
+/// ([`crate::refine`]: shadow edges). Returns the mesh and what the gather measured.
 pub fn output_mesh(
     domain: &Domain,
     trained: &Trained,
@@ -421,17 +423,27 @@ pub fn output_mesh(
             vertex_face[v as usize] = *f;
         }
     }
-    let points: Vec<(DVec3, DVec3, u32)> = (0..tri.positions.len())
-        .map(|v| {
-            let face = &scene.faces[vertex_face[v] as usize];
-            (
-                vertex_gather_point(face, tri.positions[v]),
-                face.normal,
-                vertex_face[v],
-            )
-        })
-        .collect();
-    let gathered = radiosity_at_points(domain, trained, &Emitters::new(domain), config, &points)?;
+    let emitters = Emitters::new(domain);
+    let gather_at = |at: &mut dyn Iterator<Item = (DVec3, u32)>| {
+        let points: Vec<(DVec3, DVec3, u32)> = at
+            .map(|(p, f)| {
+                let face = &scene.faces[f as usize];
+                (vertex_gather_point(face, p), face.normal, f)
+            })
+            .collect();
+        radiosity_at_points(domain, trained, &emitters, config, &points)
+    };
+    let gathered =
+        gather_at(&mut (0..tri.positions.len()).map(|v| (tri.positions[v], vertex_face[v])))?;
+    // ⟨Refine where B varies faster than linear interpolation follows (shadow edges)⟩
+    let (tri, gathered) = if config.gather == GatherMode::Paths {
+        let refine_limits = RefineLimits::for_diagonal(scene.diagonal());
+        refine(tri, gathered, refine_limits, |new| {
+            gather_at(&mut new.iter().copied())
+        })?
+    } else {
+        (tri, gathered)
+    };
     // Network share: area-weighted over triangles, all bands.
     let (mut total, mut net) = (0.0, 0.0);
     for t in &tri.triangles {

@@ -17,3 +17,16 @@ pub fn fresh_dir(name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).expect("the temporary directory is writable");
     dir
 }
+
+/// The default gather of `gcr solve` (paths, every ray corrected) run to `target` relative
+/// standard error.
+pub fn paths_to(target: f64) -> gcr::SolveConfig {
+    gcr::SolveConfig {
+        gather: gcr::GatherMode::Paths,
+        paths: gcr::PathSettings {
+            target_error: Some(target),
+            ..gcr::PathSettings::default()
+        },
+        ..gcr::SolveConfig::default()
+    }
+}

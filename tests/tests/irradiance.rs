@@ -3,7 +3,7 @@
 //! E = ∫ L cos dω (the gather's Sobol rounds to a target; adaptive path tracing).
 
 use baselines::Adaptive;
-use gcr::{Domain, Emitters, GatherMode, PathSettings, SolveConfig, Trained};
+use gcr::{Domain, Emitters, Trained};
 use glam::DVec3;
 use scene_sampler::{KernelSampler, SceneBvh};
 
@@ -40,14 +40,7 @@ fn gcr_irradiance_agrees_with_the_path_traced_reference() {
     )
     .unwrap();
     let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
-    let config = SolveConfig {
-        gather: GatherMode::Paths,
-        paths: PathSettings {
-            target_error: Some(0.005),
-            ..PathSettings::default()
-        },
-        ..SolveConfig::default()
-    };
+    let config = gcr_tests::paths_to(0.005);
     let trained = Trained::without_networks(&domain, &config);
     let emitters = Emitters::new(&domain);
     let got = gcr::irradiance_at_points(&domain, &trained, &emitters, &config, &at).unwrap();

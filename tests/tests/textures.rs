@@ -3,7 +3,7 @@
 //! on light and dark checks, and the checks show: B follows ρ(x) where the light is smooth.
 
 use baselines::Adaptive;
-use gcr::{Domain, Emitters, GatherMode, PathSettings, SolveConfig, Trained};
+use gcr::{Domain, Emitters, Trained};
 use glam::DVec3;
 use scene_sampler::{KernelSampler, SceneBvh, SurfacePoint};
 
@@ -41,14 +41,7 @@ fn a_checkerboard_floor_agrees_with_the_path_tracer() {
     )
     .unwrap();
     let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
-    let config = SolveConfig {
-        gather: GatherMode::Paths,
-        paths: PathSettings {
-            target_error: Some(0.005),
-            ..PathSettings::default()
-        },
-        ..SolveConfig::default()
-    };
+    let config = gcr_tests::paths_to(0.005);
     let trained = Trained::without_networks(&domain, &config);
     let at: Vec<_> = points.iter().map(|p| (p.point, p.normal, p.face)).collect();
     let got =

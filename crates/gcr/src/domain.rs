@@ -254,14 +254,6 @@ impl Domain<'_> {
         }
     }
 
-    /// Reflectance of face (segment) `face` (a textured face's mean).
-    pub fn reflectance(&self, face: u32) -> Bands {
-        match self {
-            Domain::ThreeD(k) => k.scene.faces[face as usize].rho.0,
-            Domain::Flat(k) => k.scene.segments[face as usize].rho.0,
-        }
-    }
-
     /// Per band, the maximum principle's bound `E_max / (1 − ρ_max)` on any radiosity (and any
     /// sample strength): `B = E + ρ ∫ G B` with `∫_S G(x, y) dy ≤ 1` gives
     /// `B_max ≤ E_max + ρ_max B_max`. Infinite when ρ_max ≥ 1 (the loaders reject that).

@@ -424,23 +424,21 @@ pub fn output_mesh(
         }
     }
     let emitters = Emitters::new(domain);
-    let gather_at = |at: &mut dyn Iterator<Item = (DVec3, u32)>| {
-        let points: Vec<(DVec3, DVec3, u32)> = at
-            .map(|(p, f)| {
+    let gather_at = |at: &[(DVec3, u32)]| {
+        let points: Vec<(DVec3, DVec3, u32)> = (at.iter())
+            .map(|&(p, f)| {
                 let face = &scene.faces[f as usize];
                 (vertex_gather_point(face, p), face.normal, f)
             })
             .collect();
         radiosity_at_points(domain, trained, &emitters, config, &points)
     };
-    let gathered =
-        gather_at(&mut (0..tri.positions.len()).map(|v| (tri.positions[v], vertex_face[v])))?;
+    let vertices: Vec<(DVec3, u32)> = tri.positions.iter().copied().zip(vertex_face).collect();
+    let gathered = gather_at(&vertices)?;
     // ⟨Refine where B varies faster than linear interpolation follows (shadow edges)⟩
     let (tri, gathered) = if config.gather == GatherMode::Paths {
         let refine_limits = RefineLimits::for_diagonal(scene.diagonal());
-        refine(tri, gathered, refine_limits, |new| {
-            gather_at(&mut new.iter().copied())
-        })?
+        refine(tri, gathered, refine_limits, gather_at)?
     } else {
         (tri, gathered)
     };

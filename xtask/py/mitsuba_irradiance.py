@@ -13,7 +13,7 @@ Each point gets a white (ρ = 1) diffuse square of half-size 10⁻⁴ of the sce
 `radiancemeter` 10⁻³ of the diagonal above it looking down at it (Mitsuba skips hits closer than ~10⁻⁴ to a
 ray origin): the square's exitance is πL = ρ·E = E, estimated by Mitsuba's own path tracer at the square
 (next-event estimation and BSDF sampling, unbounded depth, `ldsampler`). The squares block and reflect a
-negligible 10⁻⁸ of the diagonal² each. Two renders per SPP with different seeds: E is their mean, the
+negligible 10⁻⁸ of the diagonal² each. The scene is loaded once per SPP and rendered with two seeds: E is their mean, the
 standard error half their difference. Exit code 3 when mitsuba or numpy is not importable.
 """
 import sys
@@ -70,24 +70,22 @@ def main():
     t_scene = time.perf_counter() - t0
     for spp in spps:
         t0 = time.perf_counter()
+        sd = dict(scene)
+        sd["sensor"] = {
+            "type": "batch",
+            "sampler": {"type": "ldsampler", "sample_count": spp},
+            "film": {"type": "hdrfilm", "width": n, "height": 1, "rfilter": {"type": "box"},
+                     "pixel_format": "rgb"},
+            **sensors,
+        }
+        s = mi.load_dict(sd)
+        t_load = time.perf_counter() - t0
+        t0 = time.perf_counter()
         renders = []
-        t_load = t_render = 0.0
         for seed in (0, 1):
-            t0 = time.perf_counter()
-            sd = dict(scene)
-            sd["sensor"] = {
-                "type": "batch",
-                "sampler": {"type": "ldsampler", "sample_count": spp, "seed": seed},
-                "film": {"type": "hdrfilm", "width": n, "height": 1, "rfilter": {"type": "box"},
-                         "pixel_format": "rgb"},
-                **sensors,
-            }
-            s = mi.load_dict(sd)
-            t_load += time.perf_counter() - t0
-            t0 = time.perf_counter()
             img = np.array(mi.render(s, spp=spp, seed=seed))
-            t_render += time.perf_counter() - t0
             renders.append(np.pi * img.reshape(-1, img.shape[-1])[:n, :3])
+        t_render = time.perf_counter() - t0
         e, se = 0.5 * (renders[0] + renders[1]), 0.5 * np.abs(renders[0] - renders[1])
         np.savetxt(f"{out}.{spp}", np.hstack([e, se]), fmt="%.9g")
         print(

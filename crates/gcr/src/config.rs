@@ -524,6 +524,10 @@ pub struct PathSettings {
     pub target_error: Option<f64>,
     /// With a target error, the most shadow and cosine rays (each) per point over all rounds.
     pub max_rays: usize,
+    /// With a target error and every ray corrected: at most this many neighbouring output points
+    /// share each other's cosine rays and paths (`--share-paths`; 1 = every point alone; the
+    /// estimator and the grouping in `neighbours.rs`).
+    pub neighbours: usize,
 }
 
 impl Default for PathSettings {
@@ -533,6 +537,7 @@ impl Default for PathSettings {
             roulette_depth: 3,
             target_error: None,
             max_rays: 1 << 16,
+            neighbours: 8,
         }
     }
 }

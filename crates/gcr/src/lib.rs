@@ -36,6 +36,7 @@ mod fem;
 mod gather;
 mod mesh;
 mod metrics;
+mod neighbours;
 mod network;
 pub mod output;
 mod paths;

@@ -52,20 +52,20 @@ pub(crate) const REPLICATES: usize = 2;
 
 /// Everything the consistent gather needs, built once per set of output points.
 pub struct PathGather<'a, C> {
-    domain: &'a Domain<'a>,
-    emitters: &'a Emitters,
+    pub(crate) domain: &'a Domain<'a>,
+    pub(crate) emitters: &'a Emitters,
     /// The networks' reflected radiosity C(x, n_x).
     networks: C,
     samples: GatherSamples,
-    settings: PathSettings,
+    pub(crate) settings: PathSettings,
 }
 
 /// A surface point: position, unit normal, face ([`NO_FACE`] for a point in the air).
 #[derive(Clone, Copy)]
-struct Vertex {
-    p: DVec3,
-    n: DVec3,
-    face: u32,
+pub(crate) struct Vertex {
+    pub(crate) p: DVec3,
+    pub(crate) n: DVec3,
+    pub(crate) face: u32,
 }
 
 /// The paths gather's estimate at one point, per replicate, from one or more rounds of rays
@@ -73,18 +73,18 @@ struct Vertex {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PointEstimate {
     /// E at the point.
-    emission: Bands,
+    pub(crate) emission: Bands,
     /// Per replicate, its estimate of the reflected part ρ·(D + ∫L), divided by the number of
     /// replicates (their sum is the estimate); rounds combined by their ray counts.
-    share: [Bands; REPLICATES],
+    pub(crate) share: [Bands; REPLICATES],
     /// The part of the sum that came from the networks.
-    from_networks: Bands,
+    pub(crate) from_networks: Bands,
     /// Replicates used.
-    replicates: usize,
+    pub(crate) replicates: usize,
     /// Shadow and cosine rays per point so far (the larger count of a round, summed over rounds).
-    rays: usize,
+    pub(crate) rays: usize,
     /// Whether the point reflects (else B = E exactly and the shares are 0).
-    reflects: bool,
+    pub(crate) reflects: bool,
 }
 
 impl PointEstimate {
@@ -353,7 +353,12 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
     ///
     /// `L̂(x) = Σ_v β_v ρ_v (NEE_v + emitter hit_v)`, `β` the product of ρ/q over the earlier
     /// vertices: the recursion `L̂(x) = ρ·(NEE + hit + L̂(next)/q)` unrolled.
-    fn reflected(&self, x: &Vertex, first: Option<[f64; 5]>, rng: &mut ChaCha8Rng) -> Bands {
+    pub(crate) fn reflected(
+        &self,
+        x: &Vertex,
+        first: Option<[f64; 5]>,
+        rng: &mut ChaCha8Rng,
+    ) -> Bands {
         let (mut out, mut beta) = ([0.0; BANDS], [1.0; BANDS]);
         let (mut x, mut first) = (*x, first);
         for depth in 1..=MAX_DEPTH {
@@ -401,7 +406,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
 
     /// One shadow ray from z to an emitter point drawn by power from `u0` and on it from `u`: its
     /// direct light per unit ρ, MIS-weighted ([`shadow_ray`]).
-    fn next_event(&self, z: &Vertex, mis: &Mis, (u0, u): (f64, [f64; 2])) -> Bands {
+    pub(crate) fn next_event(&self, z: &Vertex, mis: &Mis, (u0, u): (f64, [f64; 2])) -> Bands {
         match self.emitters.table().pick_by_power(u0) {
             Some(ef) if ef != z.face => {
                 shadow_ray(self.domain, mis, ef, u, (z.p, z.n, z.face)).unwrap_or_default()
@@ -412,7 +417,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
 
     /// One cosine-weighted ray from z ([`cosine_ray`]): (the networks' C at its hit, 0 unless
     /// `networks`; the direct light the hit carries, per one of `mis.n_c` rays; the hit).
-    fn cosine_ray(
+    pub(crate) fn cosine_ray(
         &self,
         z: &Vertex,
         mis: &Mis,

@@ -52,7 +52,9 @@ pub fn radiosity_at_points(
             .iter()
             .map(|&(y, _, _)| point_seed(config.seed, y, frame))
             .collect();
-        return Ok(paths_to_target(&paths, points, &seeds, target, config));
+        return Ok(paths_to_target(
+            domain, &paths, points, &seeds, target, config,
+        ));
     }
     Ok(points
         .par_iter()
@@ -96,7 +98,8 @@ pub fn irradiance_at_points(
     Ok(match config.paths.target_error {
         Some(target) => rounds_to_target(
             points.len(),
-            estimate,
+            &singletons(points.len()),
+            |g: &[usize], first, samples| vec![estimate(g[0], first, samples)],
             config.gather_samples,
             target,
             config.paths.max_rays,
@@ -139,36 +142,53 @@ const IRRADIANCE_SALT: u64 = 0x6972_7261_6469_616E;
 /// do not stop on a lucky small spread (1.06 in variance at 1000 points, ×190 at one point, whose
 /// rays are cheap).
 fn paths_to_target(
+    domain: &Domain,
     paths: &PathGather<impl Fn(DVec3, DVec3) -> Bands + Sync>,
     points: &[(DVec3, DVec3, u32)],
     seeds: &[u64],
     target: f64,
     config: &SolveConfig,
 ) -> Vec<Gathered> {
+    let groups = crate::neighbours::groups(domain, points, config.paths.neighbours);
     rounds_to_target(
         points.len(),
-        |i, first, samples| paths.estimate(points[i], seeds[i], first, samples),
+        &groups,
+        |group: &[usize], first, samples| {
+            let members: Vec<_> = group.iter().map(|&i| points[i]).collect();
+            let member_seeds: Vec<u64> = group.iter().map(|&i| seeds[i]).collect();
+            paths.estimate_group(&members, &member_seeds, first, samples)
+        },
         config.gather_samples,
         target,
         config.paths.max_rays,
     )
 }
 
-/// The rounds of [`paths_to_target`] for any `count` estimates, `estimate(i, first, samples)`
-/// being estimate i's round with `samples` rays from Sobol index `first` on (a point's gather,
-/// or a pixel's footprint, [`PathGather::estimate_footprint`]).
+/// The rounds of [`paths_to_target`] for `count` estimates gathered in `groups` (each index in
+/// exactly one), `estimate(group, first, samples)` being the group's round with `samples` rays per
+/// member from Sobol index `first` on, one estimate per member (a point's gather, a group of
+/// neighbours sharing paths, [`PathGather::estimate_group`], or a pixel's footprint,
+/// [`PathGather::estimate_footprint`]).
 pub(crate) fn rounds_to_target(
     count: usize,
-    estimate: impl Fn(usize, usize, GatherSamples) -> PointEstimate + Sync,
+    groups: &[Vec<usize>],
+    estimate: impl Fn(&[usize], usize, GatherSamples) -> Vec<PointEstimate> + Sync,
     pilot: GatherSamples,
     target: f64,
     max_rays: usize,
 ) -> Vec<Gathered> {
     let round = |first: usize, samples: GatherSamples| -> Vec<PointEstimate> {
-        (0..count)
-            .into_par_iter()
-            .map(|i| estimate(i, first, samples))
-            .collect()
+        let per_group: Vec<Vec<PointEstimate>> = groups
+            .par_iter()
+            .map(|g| estimate(g, first, samples))
+            .collect();
+        let mut out = vec![PointEstimate::default(); count];
+        for (g, e) in groups.iter().zip(per_group) {
+            for (&i, e) in g.iter().zip(e) {
+                out[i] = e;
+            }
+        }
+        out
     };
     // ⟨Pilot round: the configured rays⟩
     let mut estimates = round(0, pilot);
@@ -213,6 +233,11 @@ pub(crate) fn rounds_to_target(
         }
         rays += more;
     }
+}
+
+/// Every estimate its own group ([`rounds_to_target`]).
+pub(crate) fn singletons(count: usize) -> Vec<Vec<usize>> {
+    (0..count).map(|i| vec![i]).collect()
 }
 
 /// The lower 10 % quantile of χ² with `k` degrees of freedom (Wilson–Hilferty:

@@ -39,6 +39,7 @@ pub mod flatland;
 pub mod kernel;
 pub mod load;
 pub mod mis;
+pub mod nearest;
 pub mod probe;
 pub mod provenance;
 pub mod sample;
@@ -57,7 +58,10 @@ pub use load::{
     write_gltf, write_obj,
 };
 pub use mis::PowerHeuristic;
-pub use probe::{FlatProbe, Probe, parse_flat_probes, parse_probes, read_flat_probes, read_probes};
+pub use nearest::{Nearest, NearestFaces};
+pub use probe::{
+    FlatProbe, Probe, ProbeSnapper, parse_flat_probes, parse_probes, read_flat_probes, read_probes,
+};
 pub use provenance::{GltfMaterial, GltfMesh, GltfNode, GltfSource, NodeTransform, Part};
 pub use sample::{
     FlatPoint, FlatSampler, NO_FACE, SurfacePoint, SurfaceSampler, cosine_halfplane,

@@ -5,6 +5,7 @@
 //! front normal points the same way (`n_face · n_probe > 0`), and a probe farther than the tolerance from every
 //! such face is an error.
 
+use crate::nearest::NearestFaces;
 use crate::{FlatPoint, FlatlandScene, Result, Scene, SceneError, SurfacePoint};
 use glam::{DVec2, DVec3};
 use std::path::Path;
@@ -161,42 +162,61 @@ pub fn default_tolerance(diagonal: f64) -> f64 {
     1e-4 * diagonal
 }
 
-impl Scene {
-    /// Snaps a probe to the nearest point of a face whose front side faces the probe's normal
-    /// (`n_face · n_probe > 0`), if within `tolerance` (brute force over the faces: O(faces) per probe).
-    /// `source` names the probe file in the error.
-    pub fn snap_probe(&self, probe: &Probe, tolerance: f64, source: &str) -> Result<SurfacePoint> {
-        let mut best: Option<(f64, usize, DVec3)> = None;
-        for (i, f) in self.faces.iter().enumerate() {
-            if f.normal.dot(probe.normal) <= 0.0 {
-                continue;
-            }
-            let c = f.closest_point(probe.point);
-            let d = (c - probe.point).length();
-            if best.is_none_or(|(bd, _, _)| d < bd) {
-                best = Some((d, i, c));
-            }
+/// Snaps many probes against one scene: the nearest-face tree ([`NearestFaces`]) is built once, each
+/// probe then costs O(log faces) instead of a scan of every face.
+#[derive(Clone, Debug)]
+pub struct ProbeSnapper<'a> {
+    scene: &'a Scene,
+    tree: NearestFaces,
+}
+
+impl<'a> ProbeSnapper<'a> {
+    /// Builds the snapper's tree over `scene`'s faces.
+    pub fn new(scene: &'a Scene) -> Self {
+        Self {
+            scene,
+            tree: NearestFaces::new(scene),
         }
-        match best {
-            Some((d, i, c)) if d <= tolerance => Ok(SurfacePoint {
-                point: c,
-                normal: self.faces[i].normal,
-                face: i as u32,
+    }
+
+    /// Snaps a probe to the nearest point of a face whose front side faces the probe's normal
+    /// (`n_face · n_probe > 0`), if within `tolerance`; among equally near faces the lowest index.
+    /// `source` names the probe file in the error, which gives the distance to the nearest such face.
+    pub fn snap(&self, probe: &Probe, tolerance: f64, source: &str) -> Result<SurfacePoint> {
+        let faces = &self.scene.faces;
+        let admit = |f: u32| faces[f as usize].normal.dot(probe.normal) > 0.0;
+        match self.tree.nearest(self.scene, probe.point, tolerance, admit) {
+            Some(n) => Ok(SurfacePoint {
+                point: n.point,
+                normal: faces[n.face as usize].normal,
+                face: n.face,
             }),
-            other => Err(SceneError::ProbeOffSurface {
+            None => Err(SceneError::ProbeOffSurface {
                 source_name: source.into(),
                 line: probe.line,
-                distance: other.map_or(f64::INFINITY, |b| b.0),
+                distance: self
+                    .tree
+                    .nearest(self.scene, probe.point, f64::INFINITY, admit)
+                    .map_or(f64::INFINITY, |n| n.distance),
                 tolerance,
             }),
         }
     }
+}
+
+impl Scene {
+    /// Snaps one probe ([`ProbeSnapper::snap`]; many probes: build one [`ProbeSnapper`]).
+    pub fn snap_probe(&self, probe: &Probe, tolerance: f64, source: &str) -> Result<SurfacePoint> {
+        ProbeSnapper::new(self).snap(probe, tolerance, source)
+    }
+
     /// Snaps every probe with the default tolerance (error on the first that fails).
     pub fn snap_probes(&self, probes: &[Probe], source: &str) -> Result<Vec<SurfacePoint>> {
         let tol = default_tolerance(self.diagonal());
+        let snapper = ProbeSnapper::new(self);
         probes
             .iter()
-            .map(|p| self.snap_probe(p, tol, source))
+            .map(|p| snapper.snap(p, tol, source))
             .collect()
     }
 }

@@ -547,6 +547,10 @@ fn one(name: &str, n: usize, p: &Plan) -> Result<(Vec<Curve>, String)> {
             },
             paths: PathSettings {
                 target_error: Some(target),
+                neighbours: std::env::var("FIELD_SHARE")
+                    .ok()
+                    .and_then(|v| v.parse().ok())
+                    .unwrap_or(PathSettings::default().neighbours),
                 ..PathSettings::default()
             },
             ..SolveConfig::default()

@@ -27,7 +27,9 @@ use crate::domain::Domain;
 use crate::emitters::Emitters;
 use crate::gather::Gathered;
 use crate::paths::PathGather;
-use crate::pipeline::{GatherError, GatherStats, radiosity_at_points, rounds_to_target};
+use crate::pipeline::{
+    GatherError, GatherStats, radiosity_at_points, rounds_to_target, singletons,
+};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -233,7 +235,8 @@ fn render_footprints(
     let gathered: Vec<Gathered> = match config.paths.target_error {
         Some(target) => rounds_to_target(
             n,
-            estimate,
+            &singletons(n),
+            |g: &[usize], first, samples| vec![estimate(g[0], first, samples)],
             config.gather_samples,
             target,
             config.paths.max_rays,

@@ -15,6 +15,7 @@ use crate::emitters::Emitters;
 use crate::pipeline::{GatherStats, irradiance_at_points, radiosity_at_points};
 use crate::solve::Trained;
 use glam::DVec3;
+use rayon::prelude::*;
 use scene_sampler::NO_FACE;
 use std::path::Path;
 
@@ -102,12 +103,15 @@ pub(super) fn read_probes(
                     .collect());
             }
             let tol = tolerance(k.scene.diagonal());
-            probes
-                .iter()
-                .map(|p| {
-                    let s = k.scene.snap_probe(p, tol, &source)?;
-                    Ok((s.point, s.normal, s.face))
-                })
+            let snapper = scene_sampler::ProbeSnapper::new(k.scene);
+            // in parallel, the first failing line reported (as a scan in file order would)
+            let snapped: Vec<_> = probes
+                .par_iter()
+                .map(|p| snapper.snap(p, tol, &source))
+                .collect();
+            snapped
+                .into_iter()
+                .map(|s| s.map(|s| (s.point, s.normal, s.face)))
                 .collect::<Result<_, scene_sampler::SceneError>>()?
         }
         Domain::Flat(k) => {

@@ -1,0 +1,403 @@
+//! Paths shared between neighbouring output points (beyond the dissertation; issue "Fast and
+//! accurate": "reuse of the smooth indirect part between neighbouring output points").
+//!
+//! The paths gather spends most of its rays on the path continued from each cosine ray's hit x,
+//! L̂(x). Neighbouring points y₁ … y_m see nearly the same hemisphere, so one path can serve them
+//! all: every member casts its own cosine rays (its own Sobol points), and each hit x with its
+//! path L̂(x) is used by every member k through a visibility ray y_k → x. With c cosine rays per
+//! member, the hits are drawn from the mixture of the members' cosine densities in area measure,
+//! p_a(x) = G(y_a, x)·V(y_a, x) (G = cos θ_a cos θ_x/(π r²)), and member k's estimate of its
+//! reflected-light integral ∫ L(x) G(y_k, x) V(y_k, x) dA is the multi-sample balance heuristic
+//! (Veach 1997, eq. 9.4 with the balance weights)
+//!
+//! ```text
+//! Î_k = Σ_hits L̂(x)·G(y_k, x)·V(y_k, x) / (c · Σ_a G(y_a, x)·V(y_a, x)),
+//! ```
+//!
+//! unbiased for every member (its own rays are in the mixture, so the density is positive
+//! wherever its integrand is), with weights at most 1/c (the member's own term bounds the sum):
+//! near a corner, where one member's G grows as 1/r², the others' weights stay small. For m = 1 it
+//! is the single-point gather. The visibility rays to x are the ones needed for the sum anyway.
+//!
+//! Direct light: each member keeps its own shadow rays; the cosine hits on an emitter count for
+//! member k with the power heuristic between its n_e emitter samples (a = n_e·p_e(x)) and the
+//! shared technique (b = c·Σ_a G(y_a, x), visibility left out: MIS weights need only sum to one),
+//! so shadow-ray and shared-hit weights partition unity at every emitter point.
+//!
+//! Cost per member and cosine sample: a visibility ray plus 1/m of a cosine ray and its path,
+//! against a cosine ray and a whole path alone; the price is a mixture that fits a member's own
+//! cosine density less well the farther apart the members are. Members are grouped
+//! ([`groups`]) by position (a Morton order of the points, runs within
+//! [`GROUP_RADIUS`] of the scene's diagonal) and facing (normals within 25°), at most
+//! `PathSettings::neighbours` per group, deterministically from the point set (not from the input
+//! order). Flatland, points in the air and points that do not reflect are gathered alone.
+
+use crate::config::GatherSamples;
+use crate::domain::Domain;
+use crate::element::{BANDS, Bands};
+use crate::paths::{PathGather, PointEstimate, REPLICATES, Vertex};
+use glam::DVec3;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use scene_sampler::{NO_FACE, cosine_hemisphere, uniform_triangle};
+use std::f64::consts::PI;
+
+/// A group's members lie within this fraction of the scene's diagonal of its first member.
+pub(crate) const GROUP_RADIUS: f64 = 0.03;
+/// Members' normals within this cosine of the first member's (25°).
+const GROUP_FACING: f64 = 0.9;
+
+/// Groups of neighbouring output points (indices into `points`), each at most `max` points of
+/// similar normal within [`GROUP_RADIUS`]·diagonal of its first point; every point in exactly one
+/// group. The grouping depends only on the set of points: they are walked in a Morton order of
+/// their positions (ties by coordinates), a group closed when the next point is too far or faces
+/// away. Points that cannot share (Flatland, no face, ρ = 0, `max` ≤ 1) are singletons.
+pub(crate) fn groups(
+    domain: &Domain,
+    points: &[(DVec3, DVec3, u32)],
+    max: usize,
+) -> Vec<Vec<usize>> {
+    let shareable = |&(y, _, face): &(DVec3, DVec3, u32)| {
+        max > 1
+            && matches!(domain, Domain::ThreeD(_))
+            && face != NO_FACE
+            && domain.reflectance_at(face, y).iter().any(|r| *r > 0.0)
+    };
+    let (origin, diagonal) = domain.frame();
+    let key = |y: DVec3| {
+        let q = ((y - origin) / diagonal.max(f64::MIN_POSITIVE)).clamp(DVec3::ZERO, DVec3::ONE);
+        let scale = ((1u64 << 21) - 1) as f64;
+        morton([q.x, q.y, q.z].map(|c| (c * scale) as u64))
+    };
+    let mut order: Vec<usize> = (0..points.len())
+        .filter(|&i| shareable(&points[i]))
+        .collect();
+    let bits = |i: usize| {
+        let (y, n, _) = points[i];
+        [y.x, y.y, y.z, n.x, n.y, n.z].map(f64::to_bits)
+    };
+    order.sort_by(|&i, &j| {
+        key(points[i].0)
+            .cmp(&key(points[j].0))
+            .then_with(|| bits(i).cmp(&bits(j)))
+    });
+    let radius = GROUP_RADIUS * diagonal;
+    let mut out: Vec<Vec<usize>> = Vec::new();
+    for i in order {
+        let (y, n, _) = points[i];
+        match out.last_mut() {
+            Some(g)
+                if g.len() < max && {
+                    let (y0, n0, _) = points[g[0]];
+                    y.distance(y0) <= radius && n.dot(n0) >= GROUP_FACING
+                } =>
+            {
+                g.push(i)
+            }
+            _ => out.push(vec![i]),
+        }
+    }
+    out.extend(
+        (0..points.len())
+            .filter(|&i| !shareable(&points[i]))
+            .map(|i| vec![i]),
+    );
+    out
+}
+
+/// Interleaves the low 21 bits of three coordinates.
+fn morton(c: [u64; 3]) -> u64 {
+    let spread = |mut v: u64| {
+        v &= 0x1f_ffff;
+        v = (v | v << 32) & 0x1f_0000_0000_ffff;
+        v = (v | v << 16) & 0x1f_0000_ff00_00ff;
+        v = (v | v << 8) & 0x100f_00f0_0f00_f00f;
+        v = (v | v << 4) & 0x10c3_0c30_c30c_30c3;
+        (v | v << 2) & 0x1249_2492_4924_9249
+    };
+    spread(c[0]) | spread(c[1]) << 1 | spread(c[2]) << 2
+}
+
+/// G(y, x) = cos θ_y cos θ_x/(π r²) of the receiver (y, n) and the surface point (x, n_x), 0
+/// unless they face each other.
+fn geometry(y: DVec3, n: DVec3, x: DVec3, nx: DVec3) -> f64 {
+    let d = x - y;
+    let (cy, cx, r2) = (n.dot(d), -nx.dot(d), d.length_squared());
+    if cy <= 0.0 || cx <= 0.0 || r2 == 0.0 {
+        return 0.0;
+    }
+    let g = cy * cx / (PI * r2 * r2);
+    if g.is_finite() { g } else { 0.0 }
+}
+
+impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
+    /// One round of the shared gather (module docs) at the group `members` (each `(y, n, face)`,
+    /// all on faces of a 3-D scene, all reflecting), seeded per member by `seeds`: `samples.direct`
+    /// shadow rays and `samples.indirect` cosine rays per member, each cosine ray's hit continued
+    /// as a path shared by all members. One estimate per member, in order; a group of one is
+    /// [`PathGather::estimate`].
+    pub(crate) fn estimate_group(
+        &self,
+        members: &[(DVec3, DVec3, u32)],
+        seeds: &[u64],
+        first: usize,
+        samples: GatherSamples,
+    ) -> Vec<PointEstimate> {
+        let Domain::ThreeD(kernel) = self.domain else {
+            return vec![self.estimate(members[0], seeds[0], first, samples)];
+        };
+        if members.len() == 1 || self.settings.corrections < samples.indirect {
+            return (members.iter().zip(seeds))
+                .map(|(&p, &s)| self.estimate(p, s, first, samples))
+                .collect();
+        }
+        let (scene, bvh) = (kernel.scene, kernel.bvh);
+        let m = members.len();
+        let (n_e, n_c) = (samples.direct, samples.indirect);
+        let replicates = REPLICATES.min(n_e.max(n_c)).max(1);
+        // ⟨The group's paths: one random stream per group and round⟩
+        let group_seed = seeds.iter().fold(0x243F_6A88_85A3_08D3u64, |h, s| {
+            (h ^ s).wrapping_mul(0x9E37_79B9_7F4A_7C15).rotate_left(29)
+        });
+        let mut rng = ChaCha8Rng::seed_from_u64(
+            group_seed ^ (first as u64).wrapping_mul(0xD1B5_4A32_D192_ED03),
+        );
+        let qmc = |k: usize, i: usize, dim: u32| {
+            let (r, j) = (i % replicates, first + i / replicates);
+            let scramble = (seeds[k] ^ (r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) as u32;
+            f64::from(sobol_burley::sample(j as u32, dim, scramble)).min(1.0 - f64::EPSILON)
+        };
+        let rho: Vec<Bands> = (members.iter())
+            .map(|&(y, _, f)| self.domain.reflectance_at(f, y))
+            .collect();
+        let mut out: Vec<PointEstimate> = (members.iter())
+            .map(|&(_, _, f)| PointEstimate {
+                emission: self.domain.emission(f),
+                replicates,
+                rays: n_e.max(n_c),
+                reflects: true,
+                ..PointEstimate::default()
+            })
+            .collect();
+        let mut add = |k: usize, r: usize, t: Bands, scale: f64| {
+            for b in 0..BANDS {
+                out[k].share[r][b] += rho[k][b] * t[b] * scale;
+            }
+        };
+        // b̃(x) = n_c·Σ_a G(y_a, x): the shared cosine technique's count density, unoccluded
+        let shared_density = |x: DVec3, nx: DVec3| -> f64 {
+            n_c as f64
+                * (members.iter())
+                    .map(|&(y, n, _)| geometry(y, n, x, nx))
+                    .sum::<f64>()
+        };
+        let power = |a: f64, b: f64| {
+            if b > 0.0 {
+                1.0 / (1.0 + (a / b).powi(2))
+            } else {
+                0.0
+            }
+        };
+        let table = self.emitters.table();
+        // ⟨Direct light: each member's shadow rays, MIS against the shared cosine hits⟩
+        for (k, &(y, n, face)) in members.iter().enumerate() {
+            for i in 0..n_e {
+                let Some(ef) = table.pick_by_power(qmc(k, i, 0)) else {
+                    continue;
+                };
+                if ef == face {
+                    continue;
+                }
+                let f = &scene.faces[ef as usize];
+                let [b1, b2] = uniform_triangle([qmc(k, i, 1), qmc(k, i, 2)]);
+                let x = f.point(b1, b2);
+                let g = geometry(y, n, x, f.normal);
+                let a = n_e as f64 * table.power_density(ef);
+                if g == 0.0 || a <= 0.0 {
+                    continue;
+                }
+                let from = Domain::surface_point_3d(y, n, face);
+                if !bvh.visible(&Domain::surface_point_3d(x, f.normal, ef), &from) {
+                    continue;
+                }
+                let w = g / a * (1.0 - power(a, shared_density(x, f.normal)));
+                let e = f.emission.0;
+                add(k, i % replicates, e, w);
+            }
+        }
+        // ⟨Shared cosine rays: every member's hits, with their paths, for every member⟩
+        let mut weight = vec![0.0; m];
+        for (a, &(y, n, face)) in members.iter().enumerate() {
+            for i in 0..n_c {
+                let dir = cosine_hemisphere(n, [qmc(a, i, 3), qmc(a, i, 4)]);
+                let from = Domain::surface_point_3d(y, n, face);
+                let Some(h) = bvh.trace_from(&from, dir) else {
+                    continue;
+                };
+                let hit = bvh.surface_point(&h);
+                let (x, nx) = (hit.point, hit.normal);
+                if nx.dot(y - x) <= 0.0 {
+                    continue;
+                }
+                // G·V for every member (the caster sees x: its ray hit it)
+                for (k, &(yk, nk, fk)) in members.iter().enumerate() {
+                    let g = geometry(yk, nk, x, nx);
+                    weight[k] = if k == a {
+                        g
+                    } else if g > 0.0 && bvh.visible(&hit, &Domain::surface_point_3d(yk, nk, fk)) {
+                        g
+                    } else {
+                        0.0
+                    };
+                }
+                let total: f64 = weight.iter().sum();
+                if !(total > 0.0 && total.is_finite()) {
+                    continue;
+                }
+                let r = i % replicates;
+                let e = scene.faces[hit.face as usize].emission.0;
+                let mis = if e.iter().any(|v| *v != 0.0) {
+                    power(
+                        n_e as f64 * table.power_density(hit.face),
+                        shared_density(x, nx),
+                    )
+                } else {
+                    0.0
+                };
+                let vertex = Vertex {
+                    p: x,
+                    n: nx,
+                    face: hit.face,
+                };
+                let u = std::array::from_fn(|d| qmc(a, i, 5 + d as u32));
+                let l = self.reflected(&vertex, Some(u), &mut rng);
+                for k in 0..m {
+                    if weight[k] == 0.0 {
+                        continue;
+                    }
+                    let s = weight[k] / (n_c as f64 * total);
+                    let t: Bands = std::array::from_fn(|b| l[b] + mis * e[b]);
+                    add(k, r, t, s);
+                }
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::PathSettings;
+    use crate::emitters::Emitters;
+    use scene_sampler::{KernelSampler, SceneBvh, SurfaceSampler, builtin};
+
+    /// Groups of 8 points within 1 cm on the faces of the Cornell box (by the blocks, at the
+    /// walls' corners, in shadow), each gathered 32 times with independent seeds, shared and alone
+    /// (64 rays per point): the means agree within their standard errors at every point and band
+    /// (mean z² about 1: no bias), the replicates' standard error predicts the spread of the shared
+    /// runs (mean σ̂² / variance about 1), and at equal rays the shared runs vary less (each
+    /// member sees all the group's paths). Checked to fail when the mixture's sum leaves out the
+    /// caster or the visibility of the other members.
+    #[test]
+    fn shared_paths_agree_with_lone_points() {
+        let scene = builtin("cornell-box").unwrap().into_3d().unwrap();
+        let bvh = SceneBvh::new(&scene);
+        let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+        let emitters = Emitters::new(&domain);
+        let centres = SurfaceSampler::new(&scene)
+            .spread(24, |q| scene.faces[q.face as usize].emission.is_zero());
+        let mut points = Vec::new();
+        for (c, q) in centres.iter().enumerate() {
+            let f = &scene.faces[q.face as usize];
+            let e1 = (f.v[1] - f.v[0]).normalize();
+            let e2 = f.normal.cross(e1);
+            for j in 0..8 {
+                // up to 1 cm away in the face's plane, kept on the face
+                let t = (c * 8 + j) as f64;
+                let (s, u) = ((t * 0.618_034) % 1.0 - 0.5, (t * 0.754_878) % 1.0 - 0.5);
+                let p = f.closest_point(q.point + 0.02 * (s * e1 + u * e2));
+                points.push((p, f.normal, q.face));
+            }
+        }
+        let groups = groups(&domain, &points, 8);
+        let grouped: usize = groups.iter().filter(|g| g.len() > 1).map(Vec::len).sum();
+        assert!(
+            grouped > points.len() / 2,
+            "{grouped} of {} grouped",
+            points.len()
+        );
+        let samples = GatherSamples {
+            direct: 64,
+            indirect: 64,
+        };
+        let gather = PathGather::new(
+            &domain,
+            &emitters,
+            |_: DVec3, _: DVec3| [0.0; BANDS],
+            samples,
+            PathSettings::default(),
+        );
+        const RUNS: usize = 32;
+        // per point and band: Σ and Σ² of the shared runs, of the lone runs, and Σσ̂² of the shared
+        let mut acc = vec![[[0.0f64; 5]; BANDS]; points.len()];
+        for run in 0..RUNS as u64 {
+            let seed = |i: usize| (i as u64 * 7919 + 1) ^ run.wrapping_mul(0x2545_F491_4F6C_DD1D);
+            for g in &groups {
+                let members: Vec<_> = g.iter().map(|&i| points[i]).collect();
+                let seeds: Vec<u64> = g.iter().map(|&i| seed(i)).collect();
+                let shared = gather.estimate_group(&members, &seeds, 0, samples);
+                for (k, &i) in g.iter().enumerate() {
+                    let s = shared[k].gathered();
+                    let a = gather.estimate(points[i], !seed(i), 0, samples).gathered();
+                    for b in 0..BANDS {
+                        let (x, y) = (s.radiosity[b], a.radiosity[b]);
+                        let v = &mut acc[i][b];
+                        *v = [
+                            v[0] + x,
+                            v[1] + x * x,
+                            v[2] + y,
+                            v[3] + y * y,
+                            v[4] + s.std_error[b].powi(2),
+                        ];
+                    }
+                }
+            }
+        }
+        let n = RUNS as f64;
+        let (mut z2, mut count, mut var_shared, mut var_alone, mut claimed) =
+            (0.0, 0.0, 0.0, 0.0, 0.0);
+        for v in acc.iter().flatten() {
+            let (ms, ma) = (v[0] / n, v[2] / n);
+            let vs = (v[1] / n - ms * ms).max(0.0) * n / (n - 1.0);
+            let va = (v[3] / n - ma * ma).max(0.0) * n / (n - 1.0);
+            if vs + va == 0.0 {
+                continue; // a point no light reaches
+            }
+            z2 += (ms - ma).powi(2) / ((vs + va) / n);
+            count += 1.0;
+            var_shared += vs;
+            var_alone += va;
+            claimed += v[4] / n;
+        }
+        let (z2, predicted) = (z2 / count, claimed / var_shared);
+        assert!((0.6..1.6).contains(&z2), "mean z² {z2} over {count} values");
+        assert!(
+            (0.7..1.4).contains(&predicted),
+            "mean σ̂² / variance {predicted}"
+        );
+        assert!(
+            var_shared < 0.5 * var_alone,
+            "variance shared {var_shared} vs alone {var_alone}"
+        );
+    }
+
+    #[test]
+    fn morton_interleaves() {
+        assert_eq!(morton([1, 0, 0]), 1);
+        assert_eq!(morton([0, 1, 0]), 2);
+        assert_eq!(morton([0, 0, 1]), 4);
+        assert_eq!(morton([3, 0, 0]), 0b1001);
+        assert_eq!(morton([0x1f_ffff; 3]), (1u64 << 63) - 1);
+    }
+}

@@ -118,6 +118,12 @@ pub struct SolveArgs {
     /// less accurate per second on cornell-box).
     #[arg(long)]
     pub corrections: Option<usize>,
+    /// `--gather paths` to a target error: at most this many neighbouring output points (within 3 %
+    /// of the scene's diagonal, facing alike) share each other's cosine rays and paths, each
+    /// weighted for every member by the multi-sample balance heuristic (unbiased; docs/estimator-plan.md).
+    /// 1: every point alone.
+    #[arg(long, default_value_t = PathSettings::default().neighbours as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub share_paths: u32,
     /// Train the shading network and build its base even when the gather does not read it
     /// (by default they are skipped: same result, less time).
     #[arg(long)]
@@ -258,6 +264,7 @@ impl SolveArgs {
                     .corrections
                     .unwrap_or(PathSettings::default().corrections),
                 target_error,
+                neighbours: self.share_paths as usize,
                 ..PathSettings::default()
             },
             skip_unused_base: !self.keep_base,

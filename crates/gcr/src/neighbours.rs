@@ -24,10 +24,12 @@
 //! shared technique (b = c·Σ_a G(y_a, x), visibility left out: MIS weights need only sum to one),
 //! so shadow-ray and shared-hit weights partition unity at every emitter point.
 //!
-//! Cost per member and cosine sample: a visibility ray plus 1/m of a cosine ray and its path,
-//! against a cosine ray and a whole path alone; the price is a mixture that fits a member's own
-//! cosine density less well the farther apart the members are. Members are grouped
-//! ([`groups`]) by position (a Morton order of the points, runs within
+//! Cost: each hit needs m − 1 visibility rays (one per other member) but only one path, so a
+//! hit seen by a member costs (m − 1 + path)/m rays instead of 1 + path (a path with its shadow rays
+//! is 4–6 rays at these albedos); each member therefore casts only about `SHARE_FACTOR / m` of a
+//! lone point's cosine rays ([`cosine_share`]) and still sees about twice as many hits. The price
+//! is a mixture that fits a member's own cosine density less well the farther apart the members
+//! are. Members are grouped ([`groups`]) by position (a Morton order of the points, runs within
 //! [`GROUP_RADIUS`] of the scene's diagonal) and facing (normals within 25°), at most
 //! `PathSettings::neighbours` per group, deterministically from the point set (not from the input
 //! order). Flatland, points in the air and points that do not reflect are gathered alone.
@@ -44,6 +46,13 @@ use std::f64::consts::PI;
 
 /// A group's members lie within this fraction of the scene's diagonal of its first member.
 pub(crate) const GROUP_RADIUS: f64 = 0.03;
+/// A member of a group of m casts about `SHARE_FACTOR / m` of a lone point's cosine rays
+/// ([`cosine_share`]), so that it still sees about twice as many hits as alone. Measured with
+/// `--target-error 0.02` at 20 000 area-uniform probes (time × estimated error², lower is better;
+/// docs/estimator-plan.md): 1, 2, 4 and 8 gave 16.0, 13.0, 10.5, 12.0 on cornell-box, 2.4, 1.6,
+/// 1.8, 3.1 on two-blockers, 1.8, 2.2, 2.3, 2.8 on wall-floor, 31, 25, 25, 26 on closed-room
+/// (points alone: 31, 2.5, 1.9, 87).
+const SHARE_FACTOR: f64 = 2.0;
 /// Members' normals within this cosine of the first member's (25°).
 const GROUP_FACING: f64 = 0.9;
 
@@ -105,6 +114,17 @@ pub(crate) fn groups(
     out
 }
 
+/// Each member's cosine rays in a group of `m` when a lone point would cast `n_c` from Sobol index
+/// `first` on (per replicate), and the index its own sequence continues from: the group's hits
+/// reach every member, so a member needs about `SHARE_FACTOR / m` as many (a power-of-two
+/// fraction, so rounds continue the sequences at integer indices), at least one per replicate.
+fn cosine_share(m: usize, n_c: usize, first: usize, replicates: usize) -> (usize, usize) {
+    let halvings = (m as f64 / SHARE_FACTOR).log2().floor().max(0.0) as u32;
+    let ratio = 0.5f64.powi(halvings as i32);
+    let c = ((n_c as f64 * ratio / replicates as f64).ceil() as usize).max(1) * replicates;
+    (c, (first as f64 * ratio).floor() as usize)
+}
+
 /// Interleaves the low 21 bits of three coordinates.
 fn morton(c: [u64; 3]) -> u64 {
     let spread = |mut v: u64| {
@@ -162,11 +182,15 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
         let mut rng = ChaCha8Rng::seed_from_u64(
             group_seed ^ (first as u64).wrapping_mul(0xD1B5_4A32_D192_ED03),
         );
-        let qmc = |k: usize, i: usize, dim: u32| {
+        // ⟨Each member's cosine rays: fewer as the group grows (module docs)⟩
+        let (c, first_c) = cosine_share(m, n_c, first, replicates);
+        let qmc_from = |first: usize, k: usize, i: usize, dim: u32| {
             let (r, j) = (i % replicates, first + i / replicates);
             let scramble = (seeds[k] ^ (r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) as u32;
             f64::from(sobol_burley::sample(j as u32, dim, scramble)).min(1.0 - f64::EPSILON)
         };
+        let qmc = |k: usize, i: usize, dim: u32| qmc_from(first, k, i, dim);
+        let qmc_c = |k: usize, i: usize, dim: u32| qmc_from(first_c, k, i, dim);
         let rho: Vec<Bands> = (members.iter())
             .map(|&(y, _, f)| self.domain.reflectance_at(f, y))
             .collect();
@@ -186,7 +210,7 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
         };
         // b̃(x) = n_c·Σ_a G(y_a, x): the shared cosine technique's count density, unoccluded
         let shared_density = |x: DVec3, nx: DVec3| -> f64 {
-            n_c as f64
+            c as f64
                 * (members.iter())
                     .map(|&(y, n, _)| geometry(y, n, x, nx))
                     .sum::<f64>()
@@ -228,8 +252,8 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
         // ⟨Shared cosine rays: every member's hits, with their paths, for every member⟩
         let mut weight = vec![0.0; m];
         for (a, &(y, n, face)) in members.iter().enumerate() {
-            for i in 0..n_c {
-                let dir = cosine_hemisphere(n, [qmc(a, i, 3), qmc(a, i, 4)]);
+            for i in 0..c {
+                let dir = cosine_hemisphere(n, [qmc_c(a, i, 3), qmc_c(a, i, 4)]);
                 let from = Domain::surface_point_3d(y, n, face);
                 let Some(h) = bvh.trace_from(&from, dir) else {
                     continue;
@@ -269,13 +293,13 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
                     n: nx,
                     face: hit.face,
                 };
-                let u = std::array::from_fn(|d| qmc(a, i, 5 + d as u32));
+                let u = std::array::from_fn(|d| qmc_c(a, i, 5 + d as u32));
                 let l = self.reflected(&vertex, Some(u), &mut rng);
                 for k in 0..m {
                     if weight[k] == 0.0 {
                         continue;
                     }
-                    let s = weight[k] / (n_c as f64 * total);
+                    let s = weight[k] / (c as f64 * total);
                     let t: Bands = std::array::from_fn(|b| l[b] + mis * e[b]);
                     add(k, r, t, s);
                 }
@@ -296,9 +320,10 @@ mod tests {
     /// walls' corners, in shadow), each gathered 32 times with independent seeds, shared and alone
     /// (64 rays per point): the means agree within their standard errors at every point and band
     /// (mean z² about 1: no bias), the replicates' standard error predicts the spread of the shared
-    /// runs (mean σ̂² / variance about 1), and at equal rays the shared runs vary less (each
-    /// member sees all the group's paths). Checked to fail when the mixture's sum leaves out the
-    /// caster or the visibility of the other members.
+    /// runs (mean σ̂² / variance about 1), and at equal rays per point the shared runs vary less
+    /// (a member casts a quarter of the cosine rays in a group of 8 but sees twice as many hits).
+    /// Checked to fail when the mixture's sum leaves out the caster or the visibility of the other
+    /// members.
     #[test]
     fn shared_paths_agree_with_lone_points() {
         let scene = builtin("cornell-box").unwrap().into_3d().unwrap();
@@ -387,7 +412,7 @@ mod tests {
             "mean σ̂² / variance {predicted}"
         );
         assert!(
-            var_shared < 0.5 * var_alone,
+            var_shared < var_alone,
             "variance shared {var_shared} vs alone {var_alone}"
         );
     }

@@ -11,13 +11,14 @@
 //!   of every point to the target relative standard error (or its path cap; the report counts those), cached
 //!   in `$CARGO_TARGET_DIR/field-refs/<scene>-<hash>.txt` (default `target/`) so that reruns skip it.
 //! * **Solvers**: GCR's default (`gcr default`: the paths gather run to each of the target errors 10, 5, 2,
-//!   1 %, no networks: what `gcr solve` does for points), GCR's gathers from a solve (kernel cells × gather
+//!   1 %, no networks, paths shared between neighbouring points: what `gcr solve` does for points; `gcr alone`
+//!   the same without the sharing), GCR's gathers from a solve (kernel cells × gather
 //!   rays, ray and paths gathers; one solve per cell count, timed once and added to each gather), our path tracer (fixed paths per point), HR + final gather (16 rays per leaf, as in
 //!   `compare`), and Mitsuba 3 through `xtask/py/mitsuba_field.py` (skipped with a note when `mitsuba` is
 //!   not importable). Every time includes building the scene and its BVH (measured once, added).
 //!
 //! `FIELD_SCENES=cornell-box,closed-room` restricts the scenes; `FIELD_N=20000,2000` the point counts;
-//! `FIELD_SOLVERS=gcr-default,pt` the solvers (gcr-default, gcr-rays, gcr-paths, pt, hr, mitsuba);
+//! `FIELD_SOLVERS=gcr-default,pt` the solvers (gcr-default, gcr-alone, gcr-rays, gcr-paths, pt, hr, mitsuba);
 //! `FIELD_CELLS=300` GCR's cell counts;
 //! `FIELD_CORRECTED=0.25` the fraction of the `paths` gather's rays that get a path-traced correction.
 
@@ -108,7 +109,7 @@ fn plan(quick: bool) -> Plan {
     }
 }
 
-/// Whether `FIELD_SOLVERS` (a comma list of gcr-default, gcr-rays, gcr-paths, pt, hr, mitsuba; all
+/// Whether `FIELD_SOLVERS` (a comma list of gcr-default, gcr-alone, gcr-rays, gcr-paths, pt, hr, mitsuba; all
 /// when unset)
 /// selects `solver`.
 fn selected(solver: &str) -> bool {
@@ -536,40 +537,49 @@ fn one(name: &str, n: usize, p: &Plan) -> Result<(Vec<Curve>, String)> {
     curves.extend(path_curves.into_iter().filter(|_| use_paths));
 
     // GCR as `gcr solve` runs by default: the paths gather to a target error from a 16-ray pilot,
-    // with every ray corrected, so no network is trained (nothing reads them at points)
-    let mut default = Curve::new("gcr default");
-    for &target in p.targets.iter().filter(|_| selected("gcr-default")) {
-        let config = SolveConfig {
-            gather: GatherMode::Paths,
-            gather_samples: GatherSamples {
-                direct: 16,
-                indirect: 16,
-            },
-            paths: PathSettings {
-                target_error: Some(target),
-                neighbours: std::env::var("FIELD_SHARE")
-                    .ok()
-                    .and_then(|v| v.parse().ok())
-                    .unwrap_or(PathSettings::default().neighbours),
-                ..PathSettings::default()
-            },
-            ..SolveConfig::default()
-        };
-        let t = Instant::now();
-        let trained = gcr::Trained::without_networks(&domain, &config);
-        let g = radiosity_at_points(&domain, &trained, &emitters, &config, &at)?;
-        let seconds = setup + t.elapsed().as_secs_f64();
-        let v: Vec<[f64; 3]> = g.iter().map(|g| g.radiosity).collect();
-        let rays = g.iter().map(|g| g.rays).max().unwrap_or(0);
-        println!(
-            "field: {name} gcr default target {:.1} %: {rays} rays per point, estimated {:.2} %",
-            100.0 * target,
-            100.0 * gcr::relative_std_error(&g).unwrap_or(0.0)
-        );
-        push(&mut default, name, n, rays, seconds, score(&v));
-    }
-    if selected("gcr-default") {
-        curves.push(default);
+    // with every ray corrected, so no network is trained (nothing reads them at points), and paths
+    // shared between neighbouring points; `gcr alone`: the same with every point alone
+    // (`--share-paths 1`), the default before the sharing
+    for (label, solver, neighbours) in [
+        (
+            "gcr default",
+            "gcr-default",
+            PathSettings::default().neighbours,
+        ),
+        ("gcr alone", "gcr-alone", 1),
+    ] {
+        if !selected(solver) {
+            continue;
+        }
+        let mut curve = Curve::new(label);
+        for &target in p.targets {
+            let config = SolveConfig {
+                gather: GatherMode::Paths,
+                gather_samples: GatherSamples {
+                    direct: 16,
+                    indirect: 16,
+                },
+                paths: PathSettings {
+                    target_error: Some(target),
+                    neighbours,
+                    ..PathSettings::default()
+                },
+                ..SolveConfig::default()
+            };
+            let t = Instant::now();
+            let trained = gcr::Trained::without_networks(&domain, &config);
+            let g = radiosity_at_points(&domain, &trained, &emitters, &config, &at)?;
+            let seconds = setup + t.elapsed().as_secs_f64();
+            let v: Vec<[f64; 3]> = g.iter().map(|g| g.radiosity).collect();
+            let rays = g.iter().map(|g| g.rays).max().unwrap_or(0);
+            println!(
+                "field: {name} {label} target {:.1} %: {rays} rays per point, estimated {:.2} %",
+                100.0 * target,
+                100.0 * gcr::relative_std_error(&g).unwrap_or(0.0)
+            );
+            push(&mut curve, name, n, rays, seconds, score(&v));
+        }
+        curves.push(curve);
     }
 
     let mut pt = Curve::new("path tracer (NEE)");
@@ -746,7 +756,9 @@ pub fn run(ctx: &Ctx) -> Result<()> {
          three bands, against the NEE path tracer run adaptively to {refe:.1} % relative standard error per band and point. \
          Times: from the built-in scene (its construction and BVH, measured once and added to every solver) to the N values. \
          `gcr default`: what `gcr solve` does for points by default — the paths gather (every ray corrected, so no network \
-         is trained) run to the target errors 10, 5, 2, 1 % from a 16-ray pilot; budget = rays per point it took. \
+         is trained) run to the target errors 10, 5, 2, 1 % from a 16-ray pilot, paths shared between up to 8 neighbouring \
+         points (`crates/gcr/src/neighbours.rs`); budget = rays per point it took. `gcr alone`: the same with every point \
+         alone (`--share-paths 1`). \
          Other GCR curves: budget = kernel cells (shading cells = half), one solve per cell count (its time in every curve), curve \
          per gather ray count (direct = indirect = rays): `gcr rays R` the ray gather, `gcr paths R` the consistent \
          gather with {corrected_pct:.0} % of its rays corrected by paths (`FIELD_CORRECTED`; at 100 % the networks \

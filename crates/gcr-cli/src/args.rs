@@ -118,9 +118,9 @@ pub struct SolveArgs {
     /// less accurate per second on cornell-box).
     #[arg(long)]
     pub corrections: Option<usize>,
-    /// `--gather paths` to a target error: at most this many neighbouring output points (within 3 %
-    /// of the scene's diagonal, facing alike) share each other's cosine rays and paths, each
-    /// weighted for every member by the multi-sample balance heuristic (unbiased; docs/estimator-plan.md).
+    /// `--gather paths` to a target error: at most this many neighbouring output points (close for
+    /// the points' density, facing alike) share each other's cosine rays and paths, each weighted
+    /// for every member by the multi-sample balance heuristic (unbiased; docs/estimator-plan.md).
     /// 1: every point alone.
     #[arg(long, default_value_t = PathSettings::default().neighbours as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub share_paths: u32,

@@ -124,6 +124,10 @@ fn bad_input_gives_a_message_and_a_non_zero_exit() {
         (vec!["solve", "cornell-box", "--cells", "0"], "cell"),
         (vec!["solve", "furnace", "--time-budget=-1"], "budget"),
         (
+            vec!["solve", "furnace", "--share-paths", "0"],
+            "share-paths",
+        ),
+        (
             vec![
                 "solve",
                 "cornell-box",

@@ -537,7 +537,7 @@ impl Default for PathSettings {
             roulette_depth: 3,
             target_error: None,
             max_rays: 1 << 16,
-            neighbours: 8,
+            neighbours: 16,
         }
     }
 }

@@ -65,17 +65,18 @@ const GROUP_FACING: f64 = 0.9;
 /// similar normal near its first point (the radius: [`GROUP_RADIUS`]); every point in exactly one
 /// group. The grouping depends only on the set of points: they are walked in a Morton order of
 /// their positions (ties by coordinates), a group closed when the next point is too far or faces
-/// away. Points that cannot share (Flatland, no face, ρ = 0, `max` ≤ 1) are singletons.
+/// away. Points that cannot share (Flatland, ρ = 0, `max` ≤ 1) are singletons; points on no face
+/// ([`NO_FACE`]: irradiance probes in the air) share with each other.
 pub(crate) fn groups(
     domain: &Domain,
     points: &[(DVec3, DVec3, u32)],
     max: usize,
 ) -> Vec<Vec<usize>> {
+    // a point on no face is an irradiance probe (a white receiver); others must reflect
     let shareable = |&(y, _, face): &(DVec3, DVec3, u32)| {
         max > 1
             && matches!(domain, Domain::ThreeD(_))
-            && face != NO_FACE
-            && domain.reflectance_at(face, y).iter().any(|r| *r > 0.0)
+            && (face == NO_FACE || domain.reflectance_at(face, y).iter().any(|r| *r > 0.0))
     };
     let (origin, diagonal) = domain.frame();
     let key = |y: DVec3| {
@@ -163,25 +164,29 @@ fn geometry(y: DVec3, n: DVec3, x: DVec3, nx: DVec3) -> f64 {
 }
 
 impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
-    /// One round of the shared gather (module docs) at the group `members` (each `(y, n, face)`,
-    /// all on faces of a 3-D scene, all reflecting), seeded per member by `seeds`: `samples.direct`
-    /// shadow rays and `samples.indirect` cosine rays per member, each cosine ray's hit continued
-    /// as a path shared by all members. One estimate per member, in order; a group of one is
-    /// [`PathGather::estimate`].
+    /// One round of the shared gather (module docs) at the group `members` (each `(y, n, face)`
+    /// of a 3-D scene, a reflecting face or [`NO_FACE`]) with reflectance and emission `material`
+    /// (an irradiance probe: ρ = 1, E = 0), seeded per member by `seeds`: `samples.direct` shadow
+    /// rays and `samples.indirect` cosine rays per member, each cosine ray's hit continued as a
+    /// path shared by all members. One estimate per member, in order; a group of one is the lone
+    /// gather ([`PathGather::estimate`], [`PathGather::estimate_irradiance`]).
     pub(crate) fn estimate_group(
         &self,
         members: &[(DVec3, DVec3, u32)],
+        material: &[(Bands, Bands)],
         seeds: &[u64],
         first: usize,
         samples: GatherSamples,
     ) -> Vec<PointEstimate> {
+        let alone = |k: usize| {
+            let (p, n, face) = members[k];
+            self.estimate_at(Vertex { p, n, face }, material[k], seeds[k], first, samples)
+        };
         let Domain::ThreeD(kernel) = self.domain else {
-            return vec![self.estimate(members[0], seeds[0], first, samples)];
+            return (0..members.len()).map(alone).collect();
         };
         if members.len() == 1 || self.settings.corrections < samples.indirect {
-            return (members.iter().zip(seeds))
-                .map(|(&p, &s)| self.estimate(p, s, first, samples))
-                .collect();
+            return (0..members.len()).map(alone).collect();
         }
         let (scene, bvh) = (kernel.scene, kernel.bvh);
         let m = members.len();
@@ -203,12 +208,10 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
         };
         let qmc = |k: usize, i: usize, dim: u32| qmc_from(first, k, i, dim);
         let qmc_c = |k: usize, i: usize, dim: u32| qmc_from(first_c, k, i, dim);
-        let rho: Vec<Bands> = (members.iter())
-            .map(|&(y, _, f)| self.domain.reflectance_at(f, y))
-            .collect();
-        let mut out: Vec<PointEstimate> = (members.iter())
-            .map(|&(_, _, f)| PointEstimate {
-                emission: self.domain.emission(f),
+        let rho: Vec<Bands> = material.iter().map(|m| m.0).collect();
+        let mut out: Vec<PointEstimate> = (material.iter())
+            .map(|&(_, emission)| PointEstimate {
+                emission,
                 replicates,
                 rays: n_e.max(n_c),
                 reflects: true,
@@ -328,14 +331,14 @@ mod tests {
     use crate::emitters::Emitters;
     use scene_sampler::{KernelSampler, SceneBvh, SurfaceSampler, builtin};
 
-    /// Groups of 8 points within 1 cm on the faces of the Cornell box (by the blocks, at the
-    /// walls' corners, in shadow), each gathered 32 times with independent seeds, shared and alone
-    /// (64 rays per point): the means agree within their standard errors at every point and band
-    /// (mean z² about 1: no bias), the replicates' standard error predicts the spread of the shared
-    /// runs (mean σ̂² / variance about 1), and at equal rays per point the shared runs vary less
-    /// (a member casts a quarter of the cosine rays in a group of 8 but sees twice as many hits).
-    /// Checked to fail when the mixture's sum leaves out the caster or the visibility of the other
-    /// members.
+    /// Clusters of 8 points within 1 cm on the faces of the Cornell box (by the blocks, at the
+    /// walls' corners, in shadow), grouped by [`groups`] (at most 8 a group), each gathered 32
+    /// times with independent seeds, shared and alone (64 rays per point): the means agree within
+    /// their standard errors at every point and band (mean z² about 1: no bias), the replicates'
+    /// standard error predicts the spread of the shared runs (mean σ̂² / variance about 1), and at
+    /// equal rays per point the shared runs vary less (a member casts a quarter of the cosine rays
+    /// in a group of 8 but sees twice as many hits). Checked to fail when the mixture's sum leaves
+    /// out the caster or the visibility of the other members.
     #[test]
     fn shared_paths_agree_with_lone_points() {
         let scene = builtin("cornell-box").unwrap().into_3d().unwrap();
@@ -383,7 +386,10 @@ mod tests {
             for g in &groups {
                 let members: Vec<_> = g.iter().map(|&i| points[i]).collect();
                 let seeds: Vec<u64> = g.iter().map(|&i| seed(i)).collect();
-                let shared = gather.estimate_group(&members, &seeds, 0, samples);
+                let materials: Vec<_> = (members.iter())
+                    .map(|&(y, _, f)| (domain.reflectance_at(f, y), domain.emission(f)))
+                    .collect();
+                let shared = gather.estimate_group(&members, &materials, &seeds, 0, samples);
                 for (k, &i) in g.iter().enumerate() {
                     let s = shared[k].gathered();
                     let a = gather.estimate(points[i], !seed(i), 0, samples).gathered();

@@ -201,7 +201,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
     }
 
     /// [`PathGather::estimate`] at the vertex z with reflectance ρ and emission E.
-    fn estimate_at(
+    pub(crate) fn estimate_at(
         &self,
         z: Vertex,
         (rho, e): (Bands, Bands),

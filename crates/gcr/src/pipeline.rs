@@ -93,20 +93,23 @@ pub fn irradiance_at_points(
         .iter()
         .map(|&(y, _)| point_seed(config.seed ^ IRRADIANCE_SALT, y, frame))
         .collect();
-    let estimate =
-        |i: usize, first, samples| paths.estimate_irradiance(points[i], seeds[i], first, samples);
     Ok(match config.paths.target_error {
-        Some(target) => rounds_to_target(
-            points.len(),
-            &singletons(points.len()),
-            |g: &[usize], first, samples| vec![estimate(g[0], first, samples)],
-            config.gather_samples,
-            target,
-            config.paths.max_rays,
-        ),
+        Some(target) => {
+            // receivers in the air (on no face), white, not emitting: they share paths as
+            // surface points do
+            let receivers: Vec<_> = points
+                .iter()
+                .map(|&(y, n)| (y, n, scene_sampler::NO_FACE))
+                .collect();
+            let white = |_| ([1.0; BANDS], [0.0; BANDS]);
+            grouped_rounds(domain, &paths, &receivers, white, &seeds, target, config)
+        }
         None => (0..points.len())
             .into_par_iter()
-            .map(|i| estimate(i, 0, config.gather_samples).gathered())
+            .map(|i| {
+                (paths.estimate_irradiance(points[i], seeds[i], 0, config.gather_samples))
+                    .gathered()
+            })
             .collect(),
     })
 }
@@ -149,14 +152,32 @@ fn paths_to_target(
     target: f64,
     config: &SolveConfig,
 ) -> Vec<Gathered> {
+    let material =
+        |(y, _, face): (DVec3, DVec3, u32)| (domain.reflectance_at(face, y), domain.emission(face));
+    grouped_rounds(domain, paths, points, material, seeds, target, config)
+}
+
+/// [`rounds_to_target`] over the groups of neighbouring `points` ([`crate::neighbours::groups`],
+/// at most `PathSettings::neighbours` a group), each round of a group by
+/// [`PathGather::estimate_group`] with the members' (ρ, E) from `material`.
+fn grouped_rounds(
+    domain: &Domain,
+    paths: &PathGather<impl Fn(DVec3, DVec3) -> Bands + Sync>,
+    points: &[(DVec3, DVec3, u32)],
+    material: impl Fn((DVec3, DVec3, u32)) -> (Bands, Bands) + Sync,
+    seeds: &[u64],
+    target: f64,
+    config: &SolveConfig,
+) -> Vec<Gathered> {
     let groups = crate::neighbours::groups(domain, points, config.paths.neighbours);
     rounds_to_target(
         points.len(),
         &groups,
         |group: &[usize], first, samples| {
             let members: Vec<_> = group.iter().map(|&i| points[i]).collect();
+            let materials: Vec<_> = members.iter().map(|&p| material(p)).collect();
             let member_seeds: Vec<u64> = group.iter().map(|&i| seeds[i]).collect();
-            paths.estimate_group(&members, &member_seeds, first, samples)
+            paths.estimate_group(&members, &materials, &member_seeds, first, samples)
         },
         config.gather_samples,
         target,

@@ -41,7 +41,7 @@ use crate::paths::{PathGather, PointEstimate, REPLICATES, Vertex};
 use glam::DVec3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use scene_sampler::{NO_FACE, cosine_hemisphere, uniform_triangle};
+use scene_sampler::{KernelSampler, NO_FACE, cosine_hemisphere, uniform_triangle};
 use std::f64::consts::PI;
 
 /// A group's members lie within twice the radius of a disc that holds a full group at the points'
@@ -163,6 +163,54 @@ fn geometry(y: DVec3, n: DVec3, x: DVec3, nx: DVec3) -> f64 {
     if g.is_finite() { g } else { 0.0 }
 }
 
+/// One round of a group ([`PathGather::estimate_group`]): the members, their random numbers and
+/// the counts of their rays.
+struct Group<'g> {
+    members: &'g [(DVec3, DVec3, u32)],
+    seeds: &'g [u64],
+    /// Shadow rays per member, and the first Sobol index of this round (per replicate).
+    n_e: usize,
+    first: usize,
+    /// Cosine rays per member ([`cosine_share`]), and their first Sobol index.
+    c: usize,
+    first_c: usize,
+    replicates: usize,
+}
+
+impl Group<'_> {
+    /// Member k's Sobol point i (dimension `dim`) from index `first` of its replicate's sequence.
+    fn qmc(&self, first: usize, k: usize, i: usize, dim: u32) -> f64 {
+        let (r, j) = (i % self.replicates, first + i / self.replicates);
+        let scramble = (self.seeds[k] ^ (r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) as u32;
+        f64::from(sobol_burley::sample(j as u32, dim, scramble)).min(1.0 - f64::EPSILON)
+    }
+
+    /// b̃(x) = c·Σ_a G(y_a, x): the shared cosine technique's count density at x, unoccluded.
+    fn shared_density(&self, x: DVec3, nx: DVec3) -> f64 {
+        let g: f64 = (self.members.iter())
+            .map(|&(y, n, _)| geometry(y, n, x, nx))
+            .sum();
+        self.c as f64 * g
+    }
+}
+
+/// The power heuristic's weight b²/(a² + b²) of the technique with count density b against a
+/// (0 where b is 0).
+fn power(a: f64, b: f64) -> f64 {
+    if b > 0.0 {
+        1.0 / (1.0 + (a / b).powi(2))
+    } else {
+        0.0
+    }
+}
+
+/// Adds ρ_k·t·scale to member k's share of replicate r.
+fn add(out: &mut [PointEstimate], rho: &[Bands], (k, r): (usize, usize), t: Bands, scale: f64) {
+    for b in 0..BANDS {
+        out[k].share[r][b] += rho[k][b] * t[b] * scale;
+    }
+}
+
 impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
     /// One round of the shared gather (module docs) at the group `members` (each `(y, n, face)`
     /// of a 3-D scene, a reflecting face or [`NO_FACE`]) with reflectance and emission `material`
@@ -188,26 +236,19 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
         if members.len() == 1 || self.settings.corrections < samples.indirect {
             return (0..members.len()).map(alone).collect();
         }
-        let (scene, bvh) = (kernel.scene, kernel.bvh);
-        let m = members.len();
         let (n_e, n_c) = (samples.direct, samples.indirect);
         let replicates = REPLICATES.min(n_e.max(n_c)).max(1);
-        // ⟨The group's paths: one random stream per group and round⟩
-        let group_seed = seeds.iter().fold(0x243F_6A88_85A3_08D3u64, |h, s| {
-            (h ^ s).wrapping_mul(0x9E37_79B9_7F4A_7C15).rotate_left(29)
-        });
-        let mut rng = ChaCha8Rng::seed_from_u64(
-            group_seed ^ (first as u64).wrapping_mul(0xD1B5_4A32_D192_ED03),
-        );
         // ⟨Each member's cosine rays: fewer as the group grows (module docs)⟩
-        let (c, first_c) = cosine_share(m, n_c, first, replicates);
-        let qmc_from = |first: usize, k: usize, i: usize, dim: u32| {
-            let (r, j) = (i % replicates, first + i / replicates);
-            let scramble = (seeds[k] ^ (r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) as u32;
-            f64::from(sobol_burley::sample(j as u32, dim, scramble)).min(1.0 - f64::EPSILON)
+        let (c, first_c) = cosine_share(members.len(), n_c, first, replicates);
+        let group = Group {
+            members,
+            seeds,
+            n_e,
+            first,
+            c,
+            first_c,
+            replicates,
         };
-        let qmc = |k: usize, i: usize, dim: u32| qmc_from(first, k, i, dim);
-        let qmc_c = |k: usize, i: usize, dim: u32| qmc_from(first_c, k, i, dim);
         let rho: Vec<Bands> = material.iter().map(|m| m.0).collect();
         let mut out: Vec<PointEstimate> = (material.iter())
             .map(|&(_, emission)| PointEstimate {
@@ -218,59 +259,69 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
                 ..PointEstimate::default()
             })
             .collect();
-        let mut add = |k: usize, r: usize, t: Bands, scale: f64| {
-            for b in 0..BANDS {
-                out[k].share[r][b] += rho[k][b] * t[b] * scale;
-            }
-        };
-        // b̃(x) = n_c·Σ_a G(y_a, x): the shared cosine technique's count density, unoccluded
-        let shared_density = |x: DVec3, nx: DVec3| -> f64 {
-            c as f64
-                * (members.iter())
-                    .map(|&(y, n, _)| geometry(y, n, x, nx))
-                    .sum::<f64>()
-        };
-        let power = |a: f64, b: f64| {
-            if b > 0.0 {
-                1.0 / (1.0 + (a / b).powi(2))
-            } else {
-                0.0
-            }
-        };
+        self.group_direct(kernel, &group, &rho, &mut out);
+        self.group_hits(kernel, &group, &rho, &mut out);
+        out
+    }
+
+    /// ⟨Direct light: each member's shadow rays, MIS against the shared cosine hits⟩
+    fn group_direct(
+        &self,
+        kernel: &KernelSampler,
+        g: &Group,
+        rho: &[Bands],
+        out: &mut [PointEstimate],
+    ) {
         let table = self.emitters.table();
-        // ⟨Direct light: each member's shadow rays, MIS against the shared cosine hits⟩
-        for (k, &(y, n, face)) in members.iter().enumerate() {
-            for i in 0..n_e {
-                let Some(ef) = table.pick_by_power(qmc(k, i, 0)) else {
+        for (k, &(y, n, face)) in g.members.iter().enumerate() {
+            for i in 0..g.n_e {
+                let Some(ef) = table.pick_by_power(g.qmc(g.first, k, i, 0)) else {
                     continue;
                 };
                 if ef == face {
                     continue;
                 }
-                let f = &scene.faces[ef as usize];
-                let [b1, b2] = uniform_triangle([qmc(k, i, 1), qmc(k, i, 2)]);
+                let f = &kernel.scene.faces[ef as usize];
+                let u = [g.qmc(g.first, k, i, 1), g.qmc(g.first, k, i, 2)];
+                let [b1, b2] = uniform_triangle(u);
                 let x = f.point(b1, b2);
-                let g = geometry(y, n, x, f.normal);
-                let a = n_e as f64 * table.power_density(ef);
-                if g == 0.0 || a <= 0.0 {
+                let geo = geometry(y, n, x, f.normal);
+                let a = g.n_e as f64 * table.power_density(ef);
+                if geo == 0.0 || a <= 0.0 {
                     continue;
                 }
                 let from = Domain::surface_point_3d(y, n, face);
-                if !bvh.visible(&Domain::surface_point_3d(x, f.normal, ef), &from) {
+                if !(kernel.bvh).visible(&Domain::surface_point_3d(x, f.normal, ef), &from) {
                     continue;
                 }
-                let w = g / a * (1.0 - power(a, shared_density(x, f.normal)));
-                let e = f.emission.0;
-                add(k, i % replicates, e, w);
+                let w = geo / a * (1.0 - power(a, g.shared_density(x, f.normal)));
+                add(out, rho, (k, i % g.replicates), f.emission.0, w);
             }
         }
-        // ⟨Shared cosine rays: every member's hits, with their paths, for every member⟩
-        let mut weight = vec![0.0; m];
-        for (a, &(y, n, face)) in members.iter().enumerate() {
-            for i in 0..c {
-                let dir = cosine_hemisphere(n, [qmc_c(a, i, 3), qmc_c(a, i, 4)]);
+    }
+
+    /// ⟨Shared cosine rays: every member's hits, with their paths, for every member⟩
+    fn group_hits(
+        &self,
+        kernel: &KernelSampler,
+        g: &Group,
+        rho: &[Bands],
+        out: &mut [PointEstimate],
+    ) {
+        let (scene, bvh) = (kernel.scene, kernel.bvh);
+        // the group's paths: one random stream per group and round
+        let group_seed = g.seeds.iter().fold(0x243F_6A88_85A3_08D3u64, |h, s| {
+            (h ^ s).wrapping_mul(0x9E37_79B9_7F4A_7C15).rotate_left(29)
+        });
+        let mut rng = ChaCha8Rng::seed_from_u64(
+            group_seed ^ (g.first as u64).wrapping_mul(0xD1B5_4A32_D192_ED03),
+        );
+        let mut weight = vec![0.0; g.members.len()];
+        for (a, &(y, n, face)) in g.members.iter().enumerate() {
+            for i in 0..g.c {
+                let u = [g.qmc(g.first_c, a, i, 3), g.qmc(g.first_c, a, i, 4)];
                 let from = Domain::surface_point_3d(y, n, face);
-                let Some(h) = bvh.trace_from(&from, dir) else {
+                let Some(h) = bvh.trace_from(&from, cosine_hemisphere(n, u)) else {
                     continue;
                 };
                 let hit = bvh.surface_point(&h);
@@ -279,27 +330,20 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
                     continue;
                 }
                 // G·V for every member (the caster sees x: its ray hit it)
-                for (k, &(yk, nk, fk)) in members.iter().enumerate() {
-                    let g = geometry(yk, nk, x, nx);
-                    weight[k] = if k == a {
-                        g
-                    } else if g > 0.0 && bvh.visible(&hit, &Domain::surface_point_3d(yk, nk, fk)) {
-                        g
-                    } else {
-                        0.0
-                    };
+                for (k, &(yk, nk, fk)) in g.members.iter().enumerate() {
+                    let geo = geometry(yk, nk, x, nx);
+                    let seen = k == a
+                        || (geo > 0.0 && bvh.visible(&hit, &Domain::surface_point_3d(yk, nk, fk)));
+                    weight[k] = if seen { geo } else { 0.0 };
                 }
                 let total: f64 = weight.iter().sum();
                 if !(total > 0.0 && total.is_finite()) {
                     continue;
                 }
-                let r = i % replicates;
                 let e = scene.faces[hit.face as usize].emission.0;
                 let mis = if e.iter().any(|v| *v != 0.0) {
-                    power(
-                        n_e as f64 * table.power_density(hit.face),
-                        shared_density(x, nx),
-                    )
+                    let a = g.n_e as f64 * self.emitters.table().power_density(hit.face);
+                    power(a, g.shared_density(x, nx))
                 } else {
                     0.0
                 };
@@ -308,19 +352,14 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
                     n: nx,
                     face: hit.face,
                 };
-                let u = std::array::from_fn(|d| qmc_c(a, i, 5 + d as u32));
-                let l = self.reflected(&vertex, Some(u), &mut rng);
-                for k in 0..m {
-                    if weight[k] == 0.0 {
-                        continue;
-                    }
-                    let s = weight[k] / (c as f64 * total);
-                    let t: Bands = std::array::from_fn(|b| l[b] + mis * e[b]);
-                    add(k, r, t, s);
+                let first = std::array::from_fn(|d| g.qmc(g.first_c, a, i, 5 + d as u32));
+                let l = self.reflected(&vertex, Some(first), &mut rng);
+                let t: Bands = std::array::from_fn(|b| l[b] + mis * e[b]);
+                for (k, &w) in weight.iter().enumerate().filter(|(_, w)| **w > 0.0) {
+                    add(out, rho, (k, i % g.replicates), t, w / (g.c as f64 * total));
                 }
             }
         }
-        out
     }
 }
 

@@ -32,7 +32,8 @@
 //! are. Members are grouped ([`groups`]) by position (a Morton order of the points, runs within
 //! a radius set by the points' density, [`GROUP_RADIUS`]) and facing (normals within 25°), at most
 //! `PathSettings::neighbours` per group, deterministically from the point set (not from the input
-//! order). Flatland, points in the air and points that do not reflect are gathered alone.
+//! order). Irradiance probes in the air share as surface points do; Flatland and points that do not
+//! reflect are gathered alone.
 
 use crate::config::GatherSamples;
 use crate::domain::Domain;
@@ -45,18 +46,12 @@ use scene_sampler::{KernelSampler, NO_FACE, cosine_hemisphere, uniform_triangle}
 use std::f64::consts::PI;
 
 /// A group's members lie within twice the radius of a disc that holds a full group at the points'
-/// mean density, and at most this fraction of the scene's diagonal, of its first member.
-/// Measured at 2 000 and 20 000 area-uniform probes (`--target-error 0.02`, time × estimated
-/// error²): a fixed 3 % of the diagonal left most of 2 000 points alone (cornell-box 5.2 against
-/// 2.9 at 12 %; closed-room 12.0 against 6.4), and 12–25 % did no harm at 20 000 points (cornell-box
-/// 25.1, 24.2, 23.4 at 3, 12, 25 %; closed-room 51.6, 45.2, 41.6).
+/// mean density, and at most this fraction of the scene's diagonal, of its first member (a fixed
+/// small radius left sparse point sets ungrouped; docs/estimator-plan.md has the measurements).
 pub(crate) const GROUP_RADIUS: f64 = 0.25;
 /// A member of a group of m casts about `SHARE_FACTOR / m` of a lone point's cosine rays
-/// ([`cosine_share`]), so that it still sees about twice as many hits as alone. Measured with
-/// `--target-error 0.02` at 20 000 area-uniform probes (time × estimated error², lower is better;
-/// docs/estimator-plan.md): 1, 2, 4 and 8 gave 16.0, 13.0, 10.5, 12.0 on cornell-box, 2.4, 1.6,
-/// 1.8, 3.1 on two-blockers, 1.8, 2.2, 2.3, 2.8 on wall-floor, 31, 25, 25, 26 on closed-room
-/// (points alone: 31, 2.5, 1.9, 87).
+/// ([`cosine_share`]), so that it still sees about twice as many hits as alone (1, 2, 4 and 8
+/// measured within noise of each other, 2 the cheapest rounds; docs/estimator-plan.md).
 const SHARE_FACTOR: f64 = 2.0;
 /// Members' normals within this cosine of the first member's (25°).
 const GROUP_FACING: f64 = 0.9;

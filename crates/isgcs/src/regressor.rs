@@ -472,6 +472,8 @@ impl Regressor {
         };
         let xs = xstd.apply(&permute(inputs, n));
         let ys = ystd.apply(&permute(targets, m));
+        let t0 = std::time::Instant::now();
+        let trace = std::env::var_os("ISGCS_TRACE").is_some();
         let (transform, pilot_mult) = if params.metric {
             learn_metric(&xs, &ys, n, m, params)
         } else {
@@ -483,6 +485,7 @@ impl Regressor {
             None => (xs, Vec::new()),
         };
 
+        if trace { eprintln!("TRACE metric {:.3}", t0.elapsed().as_secs_f64()); }
         let (k, simplex) = topology_from_data(&xs, n, params.topology_dim);
         if params.max_cells < k + 1 || params.max_cells > rows {
             return Err(RegressorError::CellBudget {
@@ -591,6 +594,7 @@ impl Regressor {
         train(&mut net, settle_steps)?;
         net.relax(&xs, relax_final)?;
 
+        if trace { eprintln!("TRACE growth+settle {:.3}", t0.elapsed().as_secs_f64()); }
         let z = net.len();
         let centres: Vec<f64> = (0..z).flat_map(|i| net.centre(i).to_vec()).collect();
         let basis = Basis {
@@ -647,6 +651,7 @@ impl Regressor {
             pilot_mult,
         )
         .ok_or_else(|| RegressorError::Solve("no row activates any cell".into()))?;
+        if trace { eprintln!("TRACE output {:.3} chose {index} {:?}", t0.elapsed().as_secs_f64(), chosen); }
         let (basis, in_metric) = bases.swap_remove(index);
         let transform = if in_metric { transform } else { None };
         let readout = Readout {

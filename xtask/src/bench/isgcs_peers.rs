@@ -5,7 +5,9 @@
 //! they are installed. Every problem of `isgcs::test_functions::suite`, at 300 cells on 3000
 //! rows and 1000 cells on 10 000 rows; rms/σ on 20 000 noise-free test points, fit and
 //! predict seconds (two rayon threads). Writes `benchmarks-isgcs-peers.md` and
-//! `figures/isgcs-peers.png`. `ISGCS_PEERS_CELLS=300` (a comma list) runs only those sizes.
+//! `figures/isgcs-peers.png`. `ISGCS_PEERS_CELLS=300` (a comma list) runs only those sizes;
+//! `ISGCS_PEERS_PYTHON_CACHE=FILE` keeps the Python results in FILE and reruns only the cases
+//! it lacks (`python_peers`).
 
 use crate::Ctx;
 use anyhow::Result;
@@ -80,54 +82,138 @@ fn measure(p: &Problem, cells: usize, rows: usize, seed: u64, out: &mut Vec<Row>
     Ok(())
 }
 
-/// The Python peers on the same samples: `Ok(rows)` or `Err(note)` when skipped.
+/// FNV-1a (64 bit): the cache key of a Python case (stable across Rust versions, unlike the
+/// standard library's hasher).
+fn fnv1a(parts: &[&[u8]]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for part in parts {
+        for &b in *part {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    h
+}
+
+/// Parses one result line of `isgcs_peers.py` (`None` for anything else).
+fn python_row(v: &serde_json::Value) -> Option<Row> {
+    let name = v.get("problem")?.as_str()?;
+    let problem = suite().into_iter().find(|p| p.name == name)?.name;
+    Some(Row {
+        problem,
+        cells: v["cells"].as_u64()? as usize,
+        method: v["method"].as_str()?.to_string(),
+        rms: v["rms"].as_f64().unwrap_or(f64::NAN),
+        fit: v["fit"].as_f64().unwrap_or(f64::NAN),
+        predict: v["predict"].as_f64().unwrap_or(f64::NAN),
+    })
+}
+
+/// The Python peers on the same samples: `Ok((rows, cached))` or `Err(note)` when skipped.
+///
+/// The Python models do not depend on this crate's code, so with
+/// `ISGCS_PEERS_PYTHON_CACHE=FILE` their results are kept in FILE (JSON lines, each with a key
+/// hashing the script and the case's data) and only cases without a result are run; `cached`
+/// counts the rows taken from FILE. Results are appended as they arrive, so an interrupted run
+/// keeps what it finished.
 fn python_peers(
     ctx: &Ctx,
     cases: &[(Problem, usize, usize)],
     seed: u64,
-) -> Result<Vec<Row>, String> {
+) -> Result<(Vec<Row>, usize), String> {
+    use std::io::{BufRead, Write};
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("py/isgcs_peers.py");
+    let script_text = std::fs::read(&script).map_err(|e| format!("{}: {e}", script.display()))?;
+    let cache_path = std::env::var_os("ISGCS_PEERS_PYTHON_CACHE").map(std::path::PathBuf::from);
+    let cached_lines: Vec<serde_json::Value> = cache_path
+        .as_ref()
+        .and_then(|p| std::fs::read_to_string(p).ok())
+        .map(|t| {
+            t.lines()
+                .filter_map(|l| serde_json::from_str(l).ok())
+                .collect()
+        })
+        .unwrap_or_default();
     let dir = ctx.out.join("isgcs-peers-data");
     std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
-    for (p, cells, rows) in cases {
-        let (x, y) = p.sample(*rows, true, seed);
+    let mut rows = Vec::new();
+    let mut cached = 0;
+    // (problem, cells) → key of the cases to run.
+    let mut pending: Vec<(&'static str, usize, String)> = Vec::new();
+    for (p, cells, n_rows) in cases {
+        let (x, y) = p.sample(*n_rows, true, seed);
         let (tx, ty) = p.sample(20_000, false, seed + 1000);
         let json = serde_json::json!({
             "problem": p.name, "cells": cells, "n": p.dim(),
             "x": x, "y": y, "tx": tx, "ty": ty,
-        });
-        std::fs::write(
-            dir.join(format!("{}-{cells}.json", p.name)),
-            json.to_string(),
-        )
-        .map_err(|e| e.to_string())?;
-    }
-    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("py/isgcs_peers.py");
-    let output = std::process::Command::new("python3")
-        .arg(script)
-        .arg(&dir)
-        .output()
-        .map_err(|e| format!("python3 not runnable: {e}"))?;
-    let _ = std::fs::remove_dir_all(&dir);
-    let text = String::from_utf8_lossy(&output.stdout);
-    let mut rows = Vec::new();
-    for line in text.lines() {
-        let v: serde_json::Value = serde_json::from_str(line).map_err(|e| e.to_string())?;
-        if let Some(note) = v.get("skipped") {
-            return Err(note.as_str().unwrap_or("skipped").to_string());
+        })
+        .to_string();
+        let key = format!("{:016x}", fnv1a(&[&script_text, json.as_bytes()]));
+        let hits: Vec<Row> = cached_lines
+            .iter()
+            .filter(|v| v["key"].as_str() == Some(key.as_str()))
+            .filter_map(python_row)
+            .collect();
+        if cache_path.is_some() && !hits.is_empty() {
+            cached += hits.len();
+            rows.extend(hits);
+            continue;
         }
-        let name = v["problem"].as_str().unwrap_or("");
-        let problem = suite()
-            .into_iter()
-            .find(|p| p.name == name)
-            .map_or("?", |p| p.name);
-        rows.push(Row {
-            problem,
-            cells: v["cells"].as_u64().unwrap_or(0) as usize,
-            method: v["method"].as_str().unwrap_or("?").to_string(),
-            rms: v["rms"].as_f64().unwrap_or(f64::NAN),
-            fit: v["fit"].as_f64().unwrap_or(f64::NAN),
-            predict: v["predict"].as_f64().unwrap_or(f64::NAN),
-        });
+        std::fs::write(dir.join(format!("{}-{cells}.json", p.name)), json)
+            .map_err(|e| e.to_string())?;
+        pending.push((p.name, *cells, key));
+    }
+    if pending.is_empty() {
+        let _ = std::fs::remove_dir_all(&dir);
+        return Ok((rows, cached));
+    }
+    let mut child = std::process::Command::new("python3")
+        .arg(&script)
+        .arg(&dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("python3 not runnable: {e}"))?;
+    let stdout = child.stdout.take().expect("piped");
+    let mut cache = cache_path.as_ref().and_then(|p| {
+        std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(p)
+            .ok()
+    });
+    let mut skipped = None;
+    for line in std::io::BufReader::new(stdout).lines() {
+        let line = line.map_err(|e| e.to_string())?;
+        let Ok(mut v) = serde_json::from_str::<serde_json::Value>(&line) else {
+            continue;
+        };
+        if let Some(note) = v.get("skipped") {
+            skipped = Some(note.as_str().unwrap_or("skipped").to_string());
+            continue;
+        }
+        let Some(row) = python_row(&v) else {
+            continue;
+        };
+        println!(
+            "isgcs-peers: {} {}: {} {:.4} ({:.2} s)",
+            row.problem, row.cells, row.method, row.rms, row.fit
+        );
+        if let (Some(file), Some((_, _, key))) = (
+            cache.as_mut(),
+            pending
+                .iter()
+                .find(|(p, c, _)| *p == row.problem && *c == row.cells),
+        ) {
+            v["key"] = serde_json::Value::String(key.clone());
+            let _ = writeln!(file, "{v}");
+        }
+        rows.push(row);
+    }
+    let output = child.wait_with_output().map_err(|e| e.to_string())?;
+    let _ = std::fs::remove_dir_all(&dir);
+    if let Some(note) = skipped {
+        return Err(note);
     }
     if !output.status.success() {
         return Err(format!(
@@ -135,7 +221,7 @@ fn python_peers(
             String::from_utf8_lossy(&output.stderr)
         ));
     }
-    Ok(rows)
+    Ok((rows, cached))
 }
 
 fn plot(path: &std::path::Path, rows: &[Row], cells: usize) -> Result<()> {
@@ -257,7 +343,16 @@ fn body(ctx: &Ctx) -> Result<()> {
     }
     let python = python_peers(ctx, &cases, seed);
     let note = match &python {
-        Ok(extra) => {
+        Ok((extra, cached)) => {
+            let note = if *cached > 0 {
+                format!(
+                    "\n{cached} of the {} Python results were taken from `ISGCS_PEERS_PYTHON_CACHE` \
+                     (same script and data; they were measured in an earlier run, under its load).\n",
+                    extra.len()
+                )
+            } else {
+                String::new()
+            };
             rows.extend(extra.iter().map(|r| Row {
                 problem: r.problem,
                 cells: r.cells,
@@ -266,7 +361,7 @@ fn body(ctx: &Ctx) -> Result<()> {
                 fit: r.fit,
                 predict: r.predict,
             }));
-            String::new()
+            note
         }
         Err(note) => format!(
             "\n**Python peers skipped**: {note}. Install them with `pip install scikit-learn scipy` \

@@ -489,7 +489,8 @@ mod tests {
     fn lower_block_gram_equals_the_full_product() {
         // z not a multiple of the block, added onto a non-zero G.
         for z in [5, GRAM_BLOCK + 1, 2 * GRAM_BLOCK + 37] {
-            let a = Array2::from_shape_fn((300, z), |(i, j)| ((i * 31 + j * 17) % 23) as f64 - 11.0);
+            let a =
+                Array2::from_shape_fn((300, z), |(i, j)| ((i * 31 + j * 17) % 23) as f64 - 11.0);
             let mut g = Array2::from_shape_fn((z, z), |(i, j)| (i + j) as f64);
             let mut expect = g.clone();
             general_mat_mul(1.0, &a.t(), &a, 1.0, &mut expect);

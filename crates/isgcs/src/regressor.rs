@@ -35,12 +35,14 @@
 //!    fewer than max(S/2, 200) rows are left, by the exact closed-form leave-one-out error
 //!    mean(e_i/(1 − h_ii))² over the S rows instead, every ridge from one symmetric
 //!    eigendecomposition of AᵀA, `linalg::RidgePath`). For each μ the relative ridge in
-//!    10⁻¹²…1 is the one with the lowest score (one Cholesky solve per ridge: every second
-//!    decade, then the best one's neighbours at ±1 and ±½ decade; at the next μ of a walk,
-//!    the previous ridge and ±½ decade, walking on while an end is best). Every candidate is
-//!    scored at the pilot's multiplier (in parallel); the two best then walk μ by √2 (in
-//!    parallel) while the score falls. The candidate with the lowest score is refitted on all
-//!    rows with the same absolute ridge (relative ridge × S/N, floored at 10⁻¹²).
+//!    ε…1 (ε = machine epsilon) is the one with the lowest score (one Cholesky solve per
+//!    ridge: every second decade, then the best one's neighbours at ±1 decade; at the next μ
+//!    of a walk, the previous ridge and ±2 decades; then half decades around the best until
+//!    both neighbours are tried). Every candidate is scored at the pilot's multiplier (in
+//!    parallel); the two best then walk μ by √2 (in parallel) while the score falls. The
+//!    candidate with the lowest score is refitted on all rows with the same absolute ridge
+//!    (relative ridge × S/N, floored at ε, raised by half decades while the factorisation
+//!    fails).
 //!
 //! Cost: growth O(steps · z · n); the output layer O(S · z²) per candidate multiplier (S
 //! selection rows; dense matrix products on two threads) plus O(z³/3 + H · z) per candidate
@@ -472,8 +474,6 @@ impl Regressor {
         };
         let xs = xstd.apply(&permute(inputs, n));
         let ys = ystd.apply(&permute(targets, m));
-        let t0 = std::time::Instant::now();
-        let trace = std::env::var_os("ISGCS_TRACE").is_some();
         let (transform, pilot_mult) = if params.metric {
             learn_metric(&xs, &ys, n, m, params)
         } else {
@@ -485,7 +485,6 @@ impl Regressor {
             None => (xs, Vec::new()),
         };
 
-        if trace { eprintln!("TRACE metric {:.3}", t0.elapsed().as_secs_f64()); }
         let (k, simplex) = topology_from_data(&xs, n, params.topology_dim);
         if params.max_cells < k + 1 || params.max_cells > rows {
             return Err(RegressorError::CellBudget {
@@ -594,7 +593,6 @@ impl Regressor {
         train(&mut net, settle_steps)?;
         net.relax(&xs, relax_final)?;
 
-        if trace { eprintln!("TRACE growth+settle {:.3}", t0.elapsed().as_secs_f64()); }
         let z = net.len();
         let centres: Vec<f64> = (0..z).flat_map(|i| net.centre(i).to_vec()).collect();
         let basis = Basis {
@@ -651,7 +649,6 @@ impl Regressor {
             pilot_mult,
         )
         .ok_or_else(|| RegressorError::Solve("no row activates any cell".into()))?;
-        if trace { eprintln!("TRACE output {:.3} chose {index} {:?}", t0.elapsed().as_secs_f64(), chosen); }
         let (basis, in_metric) = bases.swap_remove(index);
         let transform = if in_metric { transform } else { None };
         let readout = Readout {

@@ -5,7 +5,7 @@
 //! they are installed. Every problem of `isgcs::test_functions::suite`, at 300 cells on 3000
 //! rows and 1000 cells on 10 000 rows; rms/σ on 20 000 noise-free test points, fit and
 //! predict seconds (two rayon threads). Writes `benchmarks-isgcs-peers.md` and
-//! `figures/isgcs-peers.png`. `ISGCS_PEERS_CELLS=300` (a comma list) runs only those sizes;
+//! `figures/isgcs-peers-<cells>.png` (one per size). `ISGCS_PEERS_CELLS=300` (a comma list) runs only those sizes;
 //! `ISGCS_PEERS_PYTHON_CACHE=FILE` keeps the Python results in FILE and reruns only the cases
 //! it lacks (`python_peers`).
 
@@ -26,6 +26,16 @@ struct Row {
     rms: f64,
     fit: f64,
     predict: f64,
+}
+
+/// An rms/σ for the tables: four decimals, or two significant digits below 0.001 (the
+/// smooth problems reach 10⁻⁶, which four decimals showed as 0.0000).
+fn fmt_rms(v: f64) -> String {
+    if v.abs() < 1e-3 && v != 0.0 {
+        format!("{v:.1e}")
+    } else {
+        format!("{v:.4}")
+    }
 }
 
 fn rms_over_sd(pred: &[f64], truth: &[f64]) -> f64 {
@@ -196,8 +206,12 @@ fn python_peers(
             continue;
         };
         println!(
-            "isgcs-peers: {} {}: {} {:.4} ({:.2} s)",
-            row.problem, row.cells, row.method, row.rms, row.fit
+            "isgcs-peers: {} {}: {} {} ({:.2} s)",
+            row.problem,
+            row.cells,
+            row.method,
+            fmt_rms(row.rms),
+            row.fit
         );
         if let (Some(file), Some((_, _, key))) = (
             cache.as_mut(),
@@ -244,7 +258,7 @@ fn plot(path: &std::path::Path, rows: &[Row], cells: usize) -> Result<()> {
             .y_label_area_size(60)
             .build_cartesian_2d(
                 -0.5f64..names.len() as f64 - 0.5,
-                (1e-4f64..2.0).log_scale(),
+                (1e-6f64..2.0).log_scale(),
             )
             .map_err(|x| e(x.to_string()))?;
         chart
@@ -269,7 +283,7 @@ fn plot(path: &std::path::Path, rows: &[Row], cells: usize) -> Result<()> {
                 .filter(|r| &r.method == method && r.cells == cells && r.rms.is_finite())
                 .filter_map(|r| {
                     let i = names.iter().position(|n| *n == r.problem)?;
-                    Some((i as f64 + off, r.rms.clamp(1e-4, 2.0)))
+                    Some((i as f64 + off, r.rms.clamp(1e-6, 2.0)))
                 })
                 .collect();
             chart
@@ -337,8 +351,12 @@ fn body(ctx: &Ctx) -> Result<()> {
         measure(p, *cells, *n, seed, &mut rows)?;
         let r = &rows[rows.len() - 2..];
         println!(
-            "isgcs-peers: {} {cells}: isgcs {:.4} ({:.2} s), kmeans-rbf {:.4} ({:.2} s)",
-            p.name, r[0].rms, r[0].fit, r[1].rms, r[1].fit
+            "isgcs-peers: {} {cells}: isgcs {} ({:.2} s), kmeans-rbf {} ({:.2} s)",
+            p.name,
+            fmt_rms(r[0].rms),
+            r[0].fit,
+            fmt_rms(r[1].rms),
+            r[1].fit
         );
     }
     let python = python_peers(ctx, &cases, seed);
@@ -370,8 +388,9 @@ fn body(ctx: &Ctx) -> Result<()> {
     };
     let dir = ctx.out.join("figures");
     std::fs::create_dir_all(&dir)?;
-    let big = sizes.last().map_or(0, |s| s.0);
-    plot(&dir.join("isgcs-peers.png"), &rows, big)?;
+    for &(cells, _) in &sizes {
+        plot(&dir.join(format!("isgcs-peers-{cells}.png")), &rows, cells)?;
+    }
 
     let load_end = load_average();
     let mut md = format!(
@@ -401,11 +420,15 @@ fn body(ctx: &Ctx) -> Result<()> {
         if let (Some(a), Some(b)) = (find("isgcs"), find("kmeans-rbf")) {
             let _ = writeln!(
                 md,
-                "| {} | {cells} | {n} | {:.4} | {:.4} | {:.2} | {:.2} | {:.2} | {:.2} | {:.3} |",
+                "| {} | {cells} | {n} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.3} |",
                 p.name,
-                a.rms,
-                b.rms,
-                a.rms / b.rms,
+                fmt_rms(a.rms),
+                fmt_rms(b.rms),
+                if a.rms / b.rms < 0.1 {
+                    format!("{:.3}", a.rms / b.rms)
+                } else {
+                    format!("{:.2}", a.rms / b.rms)
+                },
                 a.fit,
                 b.fit,
                 a.fit / b.fit,
@@ -420,12 +443,22 @@ fn body(ctx: &Ctx) -> Result<()> {
         for r in &rows {
             let _ = writeln!(
                 md,
-                "| {} | {} | {} | {:.4} | {:.2} | {:.3} |",
-                r.problem, r.cells, r.method, r.rms, r.fit, r.predict
+                "| {} | {} | {} | {} | {:.2} | {:.3} |",
+                r.problem,
+                r.cells,
+                r.method,
+                fmt_rms(r.rms),
+                r.fit,
+                r.predict
             );
         }
     }
-    md.push_str("\n![rms/σ per problem](figures/isgcs-peers.png)\n");
+    for &(cells, _) in &sizes {
+        let _ = writeln!(
+            md,
+            "\n![rms/σ per problem at {cells} centres](figures/isgcs-peers-{cells}.png)"
+        );
+    }
     std::fs::write(ctx.out.join("benchmarks-isgcs-peers.md"), md)?;
     Ok(())
 }

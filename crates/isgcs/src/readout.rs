@@ -463,14 +463,15 @@ pub(crate) fn fit_best(
     } else if ridge.is_none() {
         // The same absolute ridge ρ on every row: the relative ridge is ρ over the mean
         // diagonal of G, which grows with the rows (floored as in the selection). One Cholesky
-        // solve; the eigendecomposition's ridge path only if it fails.
+        // solve, the ridge raised by half decades while it fails; the eigendecomposition's
+        // ridge path only if no relative ridge up to 1 factorises.
         let floor = if use_holdout {
             holdout_floor()
         } else {
             RIDGE_FLOOR
         };
         let r = (fit.2 * sel as f64 / rows as f64).max(floor);
-        match refit_all(basis, mult, xs, ys, r, fit.2.max(r)) {
+        match refit_all(basis, mult, xs, ys, r, 1.0) {
             Some((w, relative, dof)) => (fit.0, w, relative, dof),
             None => gcv_at(basis, mult, ridge, xs, ys, sel)?,
         }

@@ -257,13 +257,15 @@ fn plot(path: &std::path::Path, rows: &[Row], cells: usize) -> Result<()> {
             .x_label_area_size(50)
             .y_label_area_size(60)
             .build_cartesian_2d(
-                -0.5f64..names.len() as f64 - 0.5,
+                // One empty column on the right for the legend.
+                -0.5f64..names.len() as f64 + 0.7,
                 (1e-6f64..2.0).log_scale(),
             )
             .map_err(|x| e(x.to_string()))?;
         chart
             .configure_mesh()
-            .x_labels(names.len())
+            // Enough label slots that every integer (problem) position gets one.
+            .x_labels(4 * names.len())
             .x_label_formatter(&|v| {
                 let i = v.round() as usize;
                 if (v - i as f64).abs() < 0.01 {
@@ -294,6 +296,7 @@ fn plot(path: &std::path::Path, rows: &[Row], cells: usize) -> Result<()> {
         }
         chart
             .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
             .draw()
@@ -409,7 +412,9 @@ fn body(ctx: &Ctx) -> Result<()> {
          | problem | cells | rows | isgcs rms/σ | k-means RBF rms/σ | ratio | isgcs fit s | RBF fit s | time ratio | isgcs predict s |\n\
          |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         only.as_ref()
-            .map_or(String::new(), |o| format!("ISGCS_PEERS_CELLS={o} ")),
+            .map_or(String::new(), |o| format!("ISGCS_PEERS_CELLS={o} "))
+            + &std::env::var("ISGCS_PEERS_PYTHON_CACHE")
+                .map_or(String::new(), |c| format!("ISGCS_PEERS_PYTHON_CACHE={c} ")),
         if ctx.quick { " --quick" } else { "" },
     );
     for (p, cells, n) in &cases {

@@ -110,7 +110,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let er = rms_over_sd(&out, &ty);
         let r = model.report();
         println!(
-            "{:16} {e:7.4} {ts:6.2} {er:7.4} {tr:6.2} {:6.3} {} {:3} {:5.2} {:8.1e} {:6.1} {:5.2}  rbf μ,ρ {:?}",
+            "{:16} {e:7.4} {ts:6.2} {er:7.4} {tr:6.2} {:6.3} {} {:3} {:5.2} {:8.1e} {:6.1} {:5.2}  rbf μ,ρ {:?} [{e:.2e} {er:.2e}]",
             p.name,
             e / er,
             r.topology_dim,

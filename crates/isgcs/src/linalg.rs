@@ -69,19 +69,41 @@ fn cholesky(g: &[f64], z: usize, rho: f64) -> Option<Vec<f64>> {
 /// Block size of the blocked Cholesky factorisation.
 const BLOCK: usize = 64;
 
-/// G += AᵀA for a dense block A (rows × z), the rows split over two threads when large.
+/// Column block of [`gram_add`]'s lower-triangle products.
+const GRAM_BLOCK: usize = 128;
+
+/// G += AᵀA for a dense block A (rows × z). Only the blocks on and below the diagonal are
+/// multiplied (blocks of [`GRAM_BLOCK`] columns, spread over the rayon threads; about half
+/// the multiply-adds of the full product for large z) and mirrored into the upper triangle.
 pub(crate) fn gram_add(a: ArrayView2<'_, f64>, g: &mut Array2<f64>) {
-    let rows = a.nrows();
-    if rows >= 256 {
-        let (top, bottom) = a.split_at(Axis(0), rows / 2);
-        let mut other = Array2::zeros(g.raw_dim());
-        rayon::join(
-            || general_mat_mul(1.0, &top.t(), &top, 1.0, g),
-            || general_mat_mul(1.0, &bottom.t(), &bottom, 0.0, &mut other),
-        );
-        *g += &other;
-    } else {
+    use rayon::prelude::*;
+    let z = a.ncols();
+    let blocks = z.div_ceil(GRAM_BLOCK);
+    if blocks <= 1 {
         general_mat_mul(1.0, &a.t(), &a, 1.0, g);
+        return;
+    }
+    let pairs: Vec<(usize, usize)> = (0..blocks)
+        .flat_map(|i| (0..=i).map(move |j| (i, j)))
+        .collect();
+    let cols = |b: usize| Slice::from(b * GRAM_BLOCK..((b + 1) * GRAM_BLOCK).min(z));
+    let products: Vec<Array2<f64>> = pairs
+        .par_iter()
+        .map(|&(i, j)| {
+            let ai = a.slice_axis(Axis(1), cols(i));
+            let aj = a.slice_axis(Axis(1), cols(j));
+            ai.t().dot(&aj)
+        })
+        .collect();
+    for (&(i, j), p) in pairs.iter().zip(&products) {
+        let mut lower = g.slice_axis_mut(Axis(0), cols(i));
+        let mut lower = lower.slice_axis_mut(Axis(1), cols(j));
+        lower += p;
+        if i != j {
+            let mut upper = g.slice_axis_mut(Axis(0), cols(j));
+            let mut upper = upper.slice_axis_mut(Axis(1), cols(i));
+            upper += &p.t();
+        }
     }
 }
 
@@ -461,6 +483,21 @@ mod tests {
             (b[0] - 1.0).abs() < 1e-9 && (b[1] + 2.0).abs() < 1e-9,
             "{b:?}"
         );
+    }
+
+    #[test]
+    fn lower_block_gram_equals_the_full_product() {
+        // z not a multiple of the block, added onto a non-zero G.
+        for z in [5, GRAM_BLOCK + 1, 2 * GRAM_BLOCK + 37] {
+            let a =
+                Array2::from_shape_fn((300, z), |(i, j)| ((i * 31 + j * 17) % 23) as f64 - 11.0);
+            let mut g = Array2::from_shape_fn((z, z), |(i, j)| (i + j) as f64);
+            let mut expect = g.clone();
+            general_mat_mul(1.0, &a.t(), &a, 1.0, &mut expect);
+            gram_add(a.view(), &mut g);
+            let worst = (&g - &expect).iter().fold(0.0f64, |w, v| w.max(v.abs()));
+            assert!(worst < 1e-9, "z = {z}: {worst}");
+        }
     }
 
     #[test]

@@ -35,12 +35,14 @@
 //!    fewer than max(S/2, 200) rows are left, by the exact closed-form leave-one-out error
 //!    mean(e_i/(1 − h_ii))² over the S rows instead, every ridge from one symmetric
 //!    eigendecomposition of AᵀA, `linalg::RidgePath`). For each μ the relative ridge in
-//!    10⁻¹²…1 is the one with the lowest score (one Cholesky solve per ridge: every second
-//!    decade, then the best one's neighbours at ±1 and ±½ decade; at the next μ of a walk,
-//!    the previous ridge and ±½ decade, walking on while an end is best). Every candidate is
-//!    scored at the pilot's multiplier (in parallel); the two best then walk μ by √2 (in
-//!    parallel) while the score falls. The candidate with the lowest score is refitted on all
-//!    rows with the same absolute ridge (relative ridge × S/N, floored at 10⁻¹²).
+//!    ε…1 (ε = machine epsilon) is the one with the lowest score (one Cholesky solve per
+//!    ridge: every second decade, then the best one's neighbours at ±1 decade; at the next μ
+//!    of a walk, the previous ridge and ±2 decades; then half decades around the best until
+//!    both neighbours are tried). Every candidate is scored at the pilot's multiplier (in
+//!    parallel); the two best then walk μ by √2 (in parallel) while the score falls. The
+//!    candidate with the lowest score is refitted on all rows with the same absolute ridge
+//!    (relative ridge × S/N, floored at ε, raised by half decades while the factorisation
+//!    fails).
 //!
 //! Cost: growth O(steps · z · n); the output layer O(S · z²) per candidate multiplier (S
 //! selection rows; dense matrix products on two threads) plus O(z³/3 + H · z) per candidate

@@ -5,7 +5,9 @@
 //! they are installed. Every problem of `isgcs::test_functions::suite`, at 300 cells on 3000
 //! rows and 1000 cells on 10 000 rows; rms/σ on 20 000 noise-free test points, fit and
 //! predict seconds (two rayon threads). Writes `benchmarks-isgcs-peers.md` and
-//! `figures/isgcs-peers.png`. `ISGCS_PEERS_CELLS=300` (a comma list) runs only those sizes.
+//! `figures/isgcs-peers-<cells>.png` (one per size). `ISGCS_PEERS_CELLS=300` (a comma list) runs only those sizes;
+//! `ISGCS_PEERS_PYTHON_CACHE=FILE` keeps the Python results in FILE and reruns only the cases
+//! it lacks (`python_peers`).
 
 use crate::Ctx;
 use anyhow::Result;
@@ -24,6 +26,16 @@ struct Row {
     rms: f64,
     fit: f64,
     predict: f64,
+}
+
+/// An rms/σ for the tables: four decimals, or two significant digits below 0.001 (the
+/// smooth problems reach 10⁻⁶, which four decimals showed as 0.0000).
+fn fmt_rms(v: f64) -> String {
+    if v.abs() < 1e-3 && v != 0.0 {
+        format!("{v:.1e}")
+    } else {
+        format!("{v:.4}")
+    }
 }
 
 fn rms_over_sd(pred: &[f64], truth: &[f64]) -> f64 {
@@ -80,54 +92,142 @@ fn measure(p: &Problem, cells: usize, rows: usize, seed: u64, out: &mut Vec<Row>
     Ok(())
 }
 
-/// The Python peers on the same samples: `Ok(rows)` or `Err(note)` when skipped.
+/// FNV-1a (64 bit): the cache key of a Python case (stable across Rust versions, unlike the
+/// standard library's hasher).
+fn fnv1a(parts: &[&[u8]]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for part in parts {
+        for &b in *part {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    h
+}
+
+/// Parses one result line of `isgcs_peers.py` (`None` for anything else).
+fn python_row(v: &serde_json::Value) -> Option<Row> {
+    let name = v.get("problem")?.as_str()?;
+    let problem = suite().into_iter().find(|p| p.name == name)?.name;
+    Some(Row {
+        problem,
+        cells: v["cells"].as_u64()? as usize,
+        method: v["method"].as_str()?.to_string(),
+        rms: v["rms"].as_f64().unwrap_or(f64::NAN),
+        fit: v["fit"].as_f64().unwrap_or(f64::NAN),
+        predict: v["predict"].as_f64().unwrap_or(f64::NAN),
+    })
+}
+
+/// The Python peers on the same samples: `Ok((rows, cached))` or `Err(note)` when skipped.
+///
+/// The Python models do not depend on this crate's code, so with
+/// `ISGCS_PEERS_PYTHON_CACHE=FILE` their results are kept in FILE (JSON lines, each with a key
+/// hashing the script and the case's data) and only cases without a result are run; `cached`
+/// counts the rows taken from FILE. Results are appended as they arrive, so an interrupted run
+/// keeps what it finished.
 fn python_peers(
     ctx: &Ctx,
     cases: &[(Problem, usize, usize)],
     seed: u64,
-) -> Result<Vec<Row>, String> {
+) -> Result<(Vec<Row>, usize), String> {
+    use std::io::{BufRead, Write};
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("py/isgcs_peers.py");
+    let script_text = std::fs::read(&script).map_err(|e| format!("{}: {e}", script.display()))?;
+    let cache_path = std::env::var_os("ISGCS_PEERS_PYTHON_CACHE").map(std::path::PathBuf::from);
+    let cached_lines: Vec<serde_json::Value> = cache_path
+        .as_ref()
+        .and_then(|p| std::fs::read_to_string(p).ok())
+        .map(|t| {
+            t.lines()
+                .filter_map(|l| serde_json::from_str(l).ok())
+                .collect()
+        })
+        .unwrap_or_default();
     let dir = ctx.out.join("isgcs-peers-data");
     std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
-    for (p, cells, rows) in cases {
-        let (x, y) = p.sample(*rows, true, seed);
+    let mut rows = Vec::new();
+    let mut cached = 0;
+    // (problem, cells) → key of the cases to run.
+    let mut pending: Vec<(&'static str, usize, String)> = Vec::new();
+    for (p, cells, n_rows) in cases {
+        let (x, y) = p.sample(*n_rows, true, seed);
         let (tx, ty) = p.sample(20_000, false, seed + 1000);
         let json = serde_json::json!({
             "problem": p.name, "cells": cells, "n": p.dim(),
             "x": x, "y": y, "tx": tx, "ty": ty,
-        });
-        std::fs::write(
-            dir.join(format!("{}-{cells}.json", p.name)),
-            json.to_string(),
-        )
-        .map_err(|e| e.to_string())?;
-    }
-    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("py/isgcs_peers.py");
-    let output = std::process::Command::new("python3")
-        .arg(script)
-        .arg(&dir)
-        .output()
-        .map_err(|e| format!("python3 not runnable: {e}"))?;
-    let _ = std::fs::remove_dir_all(&dir);
-    let text = String::from_utf8_lossy(&output.stdout);
-    let mut rows = Vec::new();
-    for line in text.lines() {
-        let v: serde_json::Value = serde_json::from_str(line).map_err(|e| e.to_string())?;
-        if let Some(note) = v.get("skipped") {
-            return Err(note.as_str().unwrap_or("skipped").to_string());
+        })
+        .to_string();
+        let key = format!("{:016x}", fnv1a(&[&script_text, json.as_bytes()]));
+        let hits: Vec<Row> = cached_lines
+            .iter()
+            .filter(|v| v["key"].as_str() == Some(key.as_str()))
+            .filter_map(python_row)
+            .collect();
+        if cache_path.is_some() && !hits.is_empty() {
+            cached += hits.len();
+            rows.extend(hits);
+            continue;
         }
-        let name = v["problem"].as_str().unwrap_or("");
-        let problem = suite()
-            .into_iter()
-            .find(|p| p.name == name)
-            .map_or("?", |p| p.name);
-        rows.push(Row {
-            problem,
-            cells: v["cells"].as_u64().unwrap_or(0) as usize,
-            method: v["method"].as_str().unwrap_or("?").to_string(),
-            rms: v["rms"].as_f64().unwrap_or(f64::NAN),
-            fit: v["fit"].as_f64().unwrap_or(f64::NAN),
-            predict: v["predict"].as_f64().unwrap_or(f64::NAN),
-        });
+        std::fs::write(dir.join(format!("{}-{cells}.json", p.name)), json)
+            .map_err(|e| e.to_string())?;
+        pending.push((p.name, *cells, key));
+    }
+    if pending.is_empty() {
+        let _ = std::fs::remove_dir_all(&dir);
+        return Ok((rows, cached));
+    }
+    let mut child = std::process::Command::new("python3")
+        .arg(&script)
+        .arg(&dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("python3 not runnable: {e}"))?;
+    let stdout = child.stdout.take().expect("piped");
+    let mut cache = cache_path.as_ref().and_then(|p| {
+        std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(p)
+            .ok()
+    });
+    let mut skipped = None;
+    for line in std::io::BufReader::new(stdout).lines() {
+        let line = line.map_err(|e| e.to_string())?;
+        let Ok(mut v) = serde_json::from_str::<serde_json::Value>(&line) else {
+            continue;
+        };
+        if let Some(note) = v.get("skipped") {
+            skipped = Some(note.as_str().unwrap_or("skipped").to_string());
+            continue;
+        }
+        let Some(row) = python_row(&v) else {
+            continue;
+        };
+        println!(
+            "isgcs-peers: {} {}: {} {} ({:.2} s)",
+            row.problem,
+            row.cells,
+            row.method,
+            fmt_rms(row.rms),
+            row.fit
+        );
+        if let (Some(file), Some((_, _, key))) = (
+            cache.as_mut(),
+            pending
+                .iter()
+                .find(|(p, c, _)| *p == row.problem && *c == row.cells),
+        ) {
+            v["key"] = serde_json::Value::String(key.clone());
+            let _ = writeln!(file, "{v}");
+        }
+        rows.push(row);
+    }
+    let output = child.wait_with_output().map_err(|e| e.to_string())?;
+    let _ = std::fs::remove_dir_all(&dir);
+    if let Some(note) = skipped {
+        return Err(note);
     }
     if !output.status.success() {
         return Err(format!(
@@ -135,7 +235,7 @@ fn python_peers(
             String::from_utf8_lossy(&output.stderr)
         ));
     }
-    Ok(rows)
+    Ok((rows, cached))
 }
 
 fn plot(path: &std::path::Path, rows: &[Row], cells: usize) -> Result<()> {
@@ -157,13 +257,15 @@ fn plot(path: &std::path::Path, rows: &[Row], cells: usize) -> Result<()> {
             .x_label_area_size(50)
             .y_label_area_size(60)
             .build_cartesian_2d(
-                -0.5f64..names.len() as f64 - 0.5,
-                (1e-4f64..2.0).log_scale(),
+                // One empty column on the right for the legend.
+                -0.5f64..names.len() as f64 + 0.7,
+                (1e-6f64..2.0).log_scale(),
             )
             .map_err(|x| e(x.to_string()))?;
         chart
             .configure_mesh()
-            .x_labels(names.len())
+            // Enough label slots that every integer (problem) position gets one.
+            .x_labels(4 * names.len())
             .x_label_formatter(&|v| {
                 let i = v.round() as usize;
                 if (v - i as f64).abs() < 0.01 {
@@ -183,7 +285,7 @@ fn plot(path: &std::path::Path, rows: &[Row], cells: usize) -> Result<()> {
                 .filter(|r| &r.method == method && r.cells == cells && r.rms.is_finite())
                 .filter_map(|r| {
                     let i = names.iter().position(|n| *n == r.problem)?;
-                    Some((i as f64 + off, r.rms.clamp(1e-4, 2.0)))
+                    Some((i as f64 + off, r.rms.clamp(1e-6, 2.0)))
                 })
                 .collect();
             chart
@@ -194,6 +296,7 @@ fn plot(path: &std::path::Path, rows: &[Row], cells: usize) -> Result<()> {
         }
         chart
             .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
             .draw()
@@ -251,13 +354,26 @@ fn body(ctx: &Ctx) -> Result<()> {
         measure(p, *cells, *n, seed, &mut rows)?;
         let r = &rows[rows.len() - 2..];
         println!(
-            "isgcs-peers: {} {cells}: isgcs {:.4} ({:.2} s), kmeans-rbf {:.4} ({:.2} s)",
-            p.name, r[0].rms, r[0].fit, r[1].rms, r[1].fit
+            "isgcs-peers: {} {cells}: isgcs {} ({:.2} s), kmeans-rbf {} ({:.2} s)",
+            p.name,
+            fmt_rms(r[0].rms),
+            r[0].fit,
+            fmt_rms(r[1].rms),
+            r[1].fit
         );
     }
     let python = python_peers(ctx, &cases, seed);
     let note = match &python {
-        Ok(extra) => {
+        Ok((extra, cached)) => {
+            let note = if *cached > 0 {
+                format!(
+                    "\n{cached} of the {} Python results were taken from `ISGCS_PEERS_PYTHON_CACHE` \
+                     (same script and data; they were measured in an earlier run, under its load).\n",
+                    extra.len()
+                )
+            } else {
+                String::new()
+            };
             rows.extend(extra.iter().map(|r| Row {
                 problem: r.problem,
                 cells: r.cells,
@@ -266,7 +382,7 @@ fn body(ctx: &Ctx) -> Result<()> {
                 fit: r.fit,
                 predict: r.predict,
             }));
-            String::new()
+            note
         }
         Err(note) => format!(
             "\n**Python peers skipped**: {note}. Install them with `pip install scikit-learn scipy` \
@@ -275,8 +391,9 @@ fn body(ctx: &Ctx) -> Result<()> {
     };
     let dir = ctx.out.join("figures");
     std::fs::create_dir_all(&dir)?;
-    let big = sizes.last().map_or(0, |s| s.0);
-    plot(&dir.join("isgcs-peers.png"), &rows, big)?;
+    for &(cells, _) in &sizes {
+        plot(&dir.join(format!("isgcs-peers-{cells}.png")), &rows, cells)?;
+    }
 
     let load_end = load_average();
     let mut md = format!(
@@ -295,7 +412,9 @@ fn body(ctx: &Ctx) -> Result<()> {
          | problem | cells | rows | isgcs rms/σ | k-means RBF rms/σ | ratio | isgcs fit s | RBF fit s | time ratio | isgcs predict s |\n\
          |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         only.as_ref()
-            .map_or(String::new(), |o| format!("ISGCS_PEERS_CELLS={o} ")),
+            .map_or(String::new(), |o| format!("ISGCS_PEERS_CELLS={o} "))
+            + &std::env::var("ISGCS_PEERS_PYTHON_CACHE")
+                .map_or(String::new(), |c| format!("ISGCS_PEERS_PYTHON_CACHE={c} ")),
         if ctx.quick { " --quick" } else { "" },
     );
     for (p, cells, n) in &cases {
@@ -306,11 +425,15 @@ fn body(ctx: &Ctx) -> Result<()> {
         if let (Some(a), Some(b)) = (find("isgcs"), find("kmeans-rbf")) {
             let _ = writeln!(
                 md,
-                "| {} | {cells} | {n} | {:.4} | {:.4} | {:.2} | {:.2} | {:.2} | {:.2} | {:.3} |",
+                "| {} | {cells} | {n} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.3} |",
                 p.name,
-                a.rms,
-                b.rms,
-                a.rms / b.rms,
+                fmt_rms(a.rms),
+                fmt_rms(b.rms),
+                if a.rms / b.rms < 0.1 {
+                    format!("{:.3}", a.rms / b.rms)
+                } else {
+                    format!("{:.2}", a.rms / b.rms)
+                },
                 a.fit,
                 b.fit,
                 a.fit / b.fit,
@@ -325,12 +448,22 @@ fn body(ctx: &Ctx) -> Result<()> {
         for r in &rows {
             let _ = writeln!(
                 md,
-                "| {} | {} | {} | {:.4} | {:.2} | {:.3} |",
-                r.problem, r.cells, r.method, r.rms, r.fit, r.predict
+                "| {} | {} | {} | {} | {:.2} | {:.3} |",
+                r.problem,
+                r.cells,
+                r.method,
+                fmt_rms(r.rms),
+                r.fit,
+                r.predict
             );
         }
     }
-    md.push_str("\n![rms/σ per problem](figures/isgcs-peers.png)\n");
+    for &(cells, _) in &sizes {
+        let _ = writeln!(
+            md,
+            "\n![rms/σ per problem at {cells} centres](figures/isgcs-peers-{cells}.png)"
+        );
+    }
     std::fs::write(ctx.out.join("benchmarks-isgcs-peers.md"), md)?;
     Ok(())
 }

@@ -38,7 +38,7 @@
 use crate::config::GatherSamples;
 use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
-use crate::paths::{PathGather, PointEstimate, REPLICATES, Vertex};
+use crate::paths::{PathGather, PointEstimate, REPLICATES, Vertex, replicate_sobol};
 use glam::DVec3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -175,9 +175,7 @@ struct Group<'g> {
 impl Group<'_> {
     /// Member k's Sobol point i (dimension `dim`) from index `first` of its replicate's sequence.
     fn qmc(&self, first: usize, k: usize, i: usize, dim: u32) -> f64 {
-        let (r, j) = (i % self.replicates, first + i / self.replicates);
-        let scramble = (self.seeds[k] ^ (r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) as u32;
-        f64::from(sobol_burley::sample(j as u32, dim, scramble)).min(1.0 - f64::EPSILON)
+        replicate_sobol(self.seeds[k], self.replicates, first, i, dim)
     }
 
     /// b̃(x) = c·Σ_a G(y_a, x): the shared cosine technique's count density at x, unoccluded.

@@ -50,6 +50,21 @@ const MAX_DEPTH: usize = 100_000;
 /// and little of the QMC gain lost (8 replicates cost 1.3–2× in variance, measured).
 pub(crate) const REPLICATES: usize = 2;
 
+/// Sample i's Sobol coordinate `dim` for a point seeded `seed`: sample i belongs to replicate
+/// i mod `replicates`, each replicate its own Owen scrambling of the sequence, continued from index
+/// `first` (per replicate) so that rounds take disjoint points.
+pub(crate) fn replicate_sobol(
+    seed: u64,
+    replicates: usize,
+    first: usize,
+    i: usize,
+    dim: u32,
+) -> f64 {
+    let (r, j) = (i % replicates, first + i / replicates);
+    let scramble = (seed ^ (r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) as u32;
+    f64::from(sobol_burley::sample(j as u32, dim, scramble)).min(1.0 - f64::EPSILON)
+}
+
 /// Everything the consistent gather needs, built once per set of output points.
 pub struct PathGather<'a, C> {
     pub(crate) domain: &'a Domain<'a>,
@@ -232,11 +247,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             n_c: n_c as f64,
         };
         // ⟨Ray i belongs to replicate i mod R: each replicate is its own Owen scrambling⟩
-        let qmc = |i: usize, dim: u32| {
-            let (r, j) = (i % replicates, first + i / replicates);
-            let scramble = (seed ^ (r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) as u32;
-            f64::from(sobol_burley::sample(j as u32, dim, scramble)).min(1.0 - f64::EPSILON)
-        };
+        let qmc = |i: usize, dim: u32| replicate_sobol(seed, replicates, first, i, dim);
         // Per replicate, its share of ρ·(D̂ + mean C + mean correction).
         let mut share = [[0.0; BANDS]; REPLICATES];
         let mut from_networks = [0.0; BANDS];
@@ -294,11 +305,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         let mut rng =
             ChaCha8Rng::seed_from_u64(seed ^ (first as u64).wrapping_mul(0xD1B5_4A32_D192_ED03));
         let replicates = REPLICATES.min(rays).max(1);
-        let qmc = |i: usize, dim: u32| {
-            let (r, j) = (i % replicates, first + i / replicates);
-            let scramble = (seed ^ (r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) as u32;
-            f64::from(sobol_burley::sample(j as u32, dim, scramble)).min(1.0 - f64::EPSILON)
-        };
+        let qmc = |i: usize, dim: u32| replicate_sobol(seed, replicates, first, i, dim);
         // One shadow ray and one cosine ray per sample.
         let mis = Mis {
             emitters: self.emitters,

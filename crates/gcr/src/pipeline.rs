@@ -140,7 +140,8 @@ const IRRADIANCE_SALT: u64 = 0x6972_7261_6469_616E;
 /// `max_rays` per point is reached.
 ///
 /// The stopping test is conservative where the estimate is rough: with `k` degrees of freedom
-/// (one per reflecting point and replicate pair) the estimated variance is scaled by
+/// (one per group of points that share paths and reflect: a lone point is its own group; members
+/// of a group share their replicates) the estimated variance is scaled by
 /// `k/χ²_{0.1}(k)`, its one-sided 90 % upper bound (Wilson–Hilferty), so that a handful of probes
 /// do not stop on a lucky small spread (1.06 in variance at 1000 points, ×190 at one point, whose
 /// rays are cheap).
@@ -217,9 +218,10 @@ pub(crate) fn rounds_to_target(
     loop {
         let gathered: Vec<Gathered> = estimates.iter().map(PointEstimate::gathered).collect();
         // ⟨Stop at the target (its upper confidence bound) or the ray cap⟩
-        let dof = gathered
-            .iter()
-            .filter(|g| g.std_error.iter().any(|s| *s != 0.0))
+        // one degree of freedom per group with a reflecting point: a group's members share
+        // their paths, so their standard errors come from the same two replicates
+        let dof = (groups.iter())
+            .filter(|g| (g.iter()).any(|&i| gathered[i].std_error.iter().any(|s| *s != 0.0)))
             .count();
         let Some(error) = relative_std_error(&gathered) else {
             return gathered;

@@ -124,7 +124,7 @@ pub(crate) fn shadow_ray(
     u: [f64; 2],
     (y, n, face): (DVec3, DVec3, u32),
 ) -> Option<Bands> {
-    let g = emitter_geometry(domain, ef, u, y, n, face)?;
+    let (_, g) = emitter_geometry(domain, ef, u, y, n, face)?;
     let (w, e) = (mis.light(g, ef), domain.emission(ef));
     Some(e.map(|e| w * e))
 }
@@ -216,31 +216,41 @@ fn geometry(domain: &Domain, cx: f64, cy: f64, d: DVec3) -> f64 {
     }
 }
 
-/// G(x, y) for an area-uniform point x on emitter `ef` at `u` ∈ [0,1)² (3-D: barycentrics
-/// (1 − √u1, √u1(1 − u2), √u1·u2); Flatland: arc length u1), when x and the receiver (y, n, face)
-/// face each other and see each other; None otherwise.
-fn emitter_geometry(
+/// G(y, x) = cos θ_y cos θ_x/(π r²) of the receiver (y, n) and the surface point (x, n_x), 0
+/// unless they face each other (or it is not finite).
+pub(crate) fn geometry_3d(y: DVec3, n: DVec3, x: DVec3, nx: DVec3) -> f64 {
+    let d = x - y;
+    let (cy, cx, r2) = (n.dot(d), -nx.dot(d), d.length_squared());
+    if cy <= 0.0 || cx <= 0.0 || r2 == 0.0 {
+        return 0.0;
+    }
+    let g = cy * cx / (PI * r2 * r2);
+    if g.is_finite() { g } else { 0.0 }
+}
+
+/// An area-uniform point x on emitter `ef` at `u` ∈ [0,1)² (3-D: barycentrics (1 − √u1,
+/// √u1(1 − u2), √u1·u2); Flatland: arc length u1, embedded at z = 0) and G(x, y), when x and the
+/// receiver (y, n, face) face each other and see each other; None otherwise.
+pub(crate) fn emitter_geometry(
     domain: &Domain,
     ef: u32,
     u: [f64; 2],
     y: DVec3,
     n: DVec3,
     face: u32,
-) -> Option<f64> {
+) -> Option<(DVec3, f64)> {
     match domain {
         Domain::ThreeD(k) => {
             let f = &k.scene.faces[ef as usize];
             let [b1, b2] = uniform_triangle(u);
             let x = f.point(b1, b2);
-            let d = y - x;
-            let r2 = d.length_squared();
-            let (cx, cy) = (f.normal.dot(d), -n.dot(d));
-            if cx <= 0.0 || cy <= 0.0 || r2 == 0.0 {
+            let g = geometry_3d(y, n, x, f.normal);
+            if g == 0.0 {
                 return None;
             }
             let xp = Domain::surface_point_3d(x, f.normal, ef);
             let yp = Domain::surface_point_3d(y, n, face);
-            k.bvh.visible(&xp, &yp).then(|| cx * cy / (PI * r2 * r2))
+            k.bvh.visible(&xp, &yp).then_some((x, g))
         }
         Domain::Flat(k) => {
             let s = &k.scene.segments[ef as usize];
@@ -257,7 +267,8 @@ fn emitter_geometry(
                 ef,
             );
             let yp = Domain::flat_point(y, n, face);
-            k.vis.visible(&xp, &yp).then(|| cx * cy / (2.0 * r * r * r))
+            (k.vis.visible(&xp, &yp))
+                .then(|| (DVec3::new(x2.x, x2.y, 0.0), cx * cy / (2.0 * r * r * r)))
         }
     }
 }

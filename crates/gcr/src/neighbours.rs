@@ -38,11 +38,12 @@
 use crate::config::GatherSamples;
 use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
+use crate::gather::{emitter_geometry, geometry_3d};
 use crate::paths::{PathGather, PointEstimate, REPLICATES, Vertex, replicate_sobol};
 use glam::DVec3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use scene_sampler::{KernelSampler, NO_FACE, cosine_hemisphere, uniform_triangle};
+use scene_sampler::{KernelSampler, NO_FACE, cosine_hemisphere};
 use std::f64::consts::PI;
 
 /// A group's members lie within twice the radius of a disc that holds a full group at the points'
@@ -79,17 +80,11 @@ pub(crate) fn groups(
         let scale = ((1u64 << 21) - 1) as f64;
         morton([q.x, q.y, q.z].map(|c| (c * scale) as u64))
     };
-    let mut order: Vec<usize> = (0..points.len())
-        .filter(|&i| shareable(&points[i]))
-        .collect();
-    let bits = |i: usize| {
+    let (mut order, alone): (Vec<usize>, Vec<usize>) =
+        (0..points.len()).partition(|&i| shareable(&points[i]));
+    order.sort_by_cached_key(|&i| {
         let (y, n, _) = points[i];
-        [y.x, y.y, y.z, n.x, n.y, n.z].map(f64::to_bits)
-    };
-    order.sort_by(|&i, &j| {
-        key(points[i].0)
-            .cmp(&key(points[j].0))
-            .then_with(|| bits(i).cmp(&bits(j)))
+        (key(y), [y.x, y.y, y.z, n.x, n.y, n.z].map(f64::to_bits))
     });
     // a disc that holds `max` points at the set's mean density (N points over the scene's area A)
     // has radius √(max·A/(πN)); twice that, at most GROUP_RADIUS·diagonal
@@ -114,11 +109,7 @@ pub(crate) fn groups(
             _ => out.push(vec![i]),
         }
     }
-    out.extend(
-        (0..points.len())
-            .filter(|&i| !shareable(&points[i]))
-            .map(|i| vec![i]),
-    );
+    out.extend(alone.into_iter().map(|i| vec![i]));
     out
 }
 
@@ -146,18 +137,6 @@ fn morton(c: [u64; 3]) -> u64 {
     spread(c[0]) | spread(c[1]) << 1 | spread(c[2]) << 2
 }
 
-/// G(y, x) = cos θ_y cos θ_x/(π r²) of the receiver (y, n) and the surface point (x, n_x), 0
-/// unless they face each other.
-fn geometry(y: DVec3, n: DVec3, x: DVec3, nx: DVec3) -> f64 {
-    let d = x - y;
-    let (cy, cx, r2) = (n.dot(d), -nx.dot(d), d.length_squared());
-    if cy <= 0.0 || cx <= 0.0 || r2 == 0.0 {
-        return 0.0;
-    }
-    let g = cy * cx / (PI * r2 * r2);
-    if g.is_finite() { g } else { 0.0 }
-}
-
 /// One round of a group ([`PathGather::estimate_group`]): the members, their random numbers and
 /// the counts of their rays.
 struct Group<'g> {
@@ -181,7 +160,7 @@ impl Group<'_> {
     /// b̃(x) = c·Σ_a G(y_a, x): the shared cosine technique's count density at x, unoccluded.
     fn shared_density(&self, x: DVec3, nx: DVec3) -> f64 {
         let g: f64 = (self.members.iter())
-            .map(|&(y, n, _)| geometry(y, n, x, nx))
+            .map(|&(y, n, _)| geometry_3d(y, n, x, nx))
             .sum();
         self.c as f64 * g
     }
@@ -274,17 +253,13 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
                 if ef == face {
                     continue;
                 }
-                let f = &kernel.scene.faces[ef as usize];
                 let u = [g.qmc(g.first, k, i, 1), g.qmc(g.first, k, i, 2)];
-                let [b1, b2] = uniform_triangle(u);
-                let x = f.point(b1, b2);
-                let geo = geometry(y, n, x, f.normal);
-                let a = g.n_e as f64 * table.power_density(ef);
-                if geo == 0.0 || a <= 0.0 {
+                let Some((x, geo)) = emitter_geometry(self.domain, ef, u, y, n, face) else {
                     continue;
-                }
-                let from = Domain::surface_point_3d(y, n, face);
-                if !(kernel.bvh).visible(&Domain::surface_point_3d(x, f.normal, ef), &from) {
+                };
+                let f = &kernel.scene.faces[ef as usize];
+                let a = g.n_e as f64 * table.power_density(ef);
+                if a <= 0.0 {
                     continue;
                 }
                 let w = geo / a * (1.0 - power(a, g.shared_density(x, f.normal)));
@@ -324,7 +299,7 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
                 }
                 // G·V for every member (the caster sees x: its ray hit it)
                 for (k, &(yk, nk, fk)) in g.members.iter().enumerate() {
-                    let geo = geometry(yk, nk, x, nx);
+                    let geo = geometry_3d(yk, nk, x, nx);
                     let seen = k == a
                         || (geo > 0.0 && bvh.visible(&hit, &Domain::surface_point_3d(yk, nk, fk)));
                     weight[k] = if seen { geo } else { 0.0 };

@@ -128,20 +128,16 @@ pub fn quad(c: V, a: f64, [p, q, r, s]: [V; 4]) -> f64 {
 
 /// [`quad`] without the relative-accuracy fallback, as [`triangle_fast`] is to [`triangle`]:
 /// absolute error ≲ 3e−15/a (times `exp(−a h²)`), what a FEM sum over near elements needs.
-pub fn quad_fast(c: V, a: f64, [p, q, r, s]: [V; 4]) -> f64 {
-    match Plane::new(c, a, p, q, r) {
-        Some(geo) => {
-            let geo = geo.with_fourth(s);
-            (geo.signed_sum(a) / a * geo.damp).max(0.0)
-        }
-        None => triangle_fast(c, a, p, q, r) + triangle_fast(c, a, p, r, s),
-    }
+/// Many Gaussians on one quadrilateral: [`ConvexPolygon`] prepares its geometry once.
+pub fn quad_fast(c: V, a: f64, q: [V; 4]) -> f64 {
+    ConvexPolygon::quad(q).map_or(0.0, |g| g.gaussian_integral(c, a))
 }
 
 /// The exact triangle integral of MATH.md §2 (signed edge decomposition around the centre's foot
 /// c' on the plane) with each right triangle read from the tabulated function `R(ε, u)` of
 /// [`crate::wedge`] instead of two Owen's T calls: 6 × 45 multiply–adds (in two-lane SIMD), one
-/// `exp`, four square roots and divisions (the frame, see `Tri`), no other transcendental call.
+/// `exp`, four square roots and divisions (the frame, see [`ConvexPolygon`]), no other transcendental call.
+/// Many Gaussians on one triangle: [`ConvexPolygon`] prepares its geometry once.
 ///
 /// Absolute error ≲ 2e−15/a (times `exp(−a h²)`); no relative guarantee where the signed parts
 /// cancel or the value is tiny (use [`triangle`] there). What a FEM step needs: its sums are
@@ -150,15 +146,16 @@ pub fn triangle_fast(c: V, a: f64, p: V, q: V, r: V) -> f64 {
     if a.is_nan() || a <= 0.0 || !a.is_finite() {
         return 0.0;
     }
-    match Tri::new(p, q, r) {
+    match ConvexPolygon::triangle(p, q, r) {
         Some(t) => t.integral(c, a, a.sqrt()),
         None => 0.0,
     }
 }
 
-/// A triangle's geometry that does not depend on the Gaussian, computed once per element (the
-/// Gram and transfer sums integrate each element against ~100 Gaussians): its corners, unit
-/// normal, and per edge the unit direction, the in-plane unit normal and the length.
+/// A planar convex polygon (a triangle or a quadrilateral) prepared for many Gaussian integrals:
+/// the geometry that does not depend on the Gaussian, computed once per element (a FEM sum
+/// integrates each element against thousands of Gaussians): its corners, unit normal, and per
+/// edge the unit direction, the in-plane unit normal and the length.
 ///
 /// Everything the per-Gaussian sum needs is then a dot product with the centre's offset from a
 /// corner: with `ê_i` the direction of edge `i` (corner `i` to `i + 1`) and `ŵ_i = ê_i × n̂` (in
@@ -167,50 +164,91 @@ pub fn triangle_fast(c: V, a: f64, p: V, q: V, r: V) -> f64 {
 /// ends lie at `(v_i − c)·ê_i` and that plus its length along it, counted from the foot's
 /// projection. Both hold for the 3-D centre `c` as well as for its foot, since `ŵ_i, ê_i ⊥ n̂`:
 /// no foot and no in-plane frame per call.
+///
+/// ```
+/// use gauss_integrals::{ConvexPolygon, quad_fast};
+/// let q = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+/// let prepared = ConvexPolygon::quad(q).expect("a unit square");
+/// let (c, a) = ([0.3, 0.4, 0.1], 20.0);
+/// assert!((prepared.gaussian_integral(c, a) - quad_fast(c, a, q)).abs() < 1e-15);
+/// ```
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Tri {
-    /// Corners.
-    v: [V; 3],
-    /// Unit normal (`(q − p) × (r − p)` normalized: the corners are counter-clockwise about it).
+pub struct ConvexPolygon {
+    /// Corners (the first `corners`).
+    v: [V; 4],
+    /// Unit normal (the corners are counter-clockwise about it).
     n: V,
-    /// Unit edge directions, corner `i` to `i + 1`.
-    e: [V; 3],
+    /// Unit edge directions, corner `i` to `i + 1` (zero for a zero-length edge).
+    e: [V; 4],
     /// In-plane unit normals of the edges, `ŵ_i = ê_i × n̂` (inward).
-    w: [V; 3],
+    w: [V; 4],
     /// Edge lengths.
-    len: [f64; 3],
+    len: [f64; 4],
+    /// 3 or 4.
+    corners: usize,
 }
 
-impl Tri {
-    /// `None` for degenerate (zero-area or non-finite) triangles, whose integral is 0.
+impl ConvexPolygon {
+    /// The triangle (p, q, r); `None` when degenerate (zero-area or non-finite), its integral 0.
     ///
     /// Four square roots and four divisions, all independent of each other (the normal's and the
     /// three edges'). A non-degenerate triangle has no zero-length edge: a repeated corner makes
     /// the cross product exactly 0.
     #[inline(always)]
-    pub(crate) fn new(p: V, q: V, r: V) -> Option<Self> {
-        let v = [p, q, r];
-        let ed = [sub(q, p), sub(r, q), sub(p, r)];
-        let n = cross(ed[0], sub(r, p));
+    pub fn triangle(p: V, q: V, r: V) -> Option<Self> {
+        Self::new([p, q, r, p], cross(sub(q, p), sub(r, p)), 3)
+    }
+
+    /// The planar convex quadrilateral (p, q, r, s), corners in order; `None` when degenerate.
+    /// The normal is that of the diagonals, `(r − p) × (s − q)`, so three collinear corners (a
+    /// triangle stored as a quadrilateral) are fine; a zero-length edge contributes nothing.
+    /// The caller guarantees planarity and convexity.
+    pub fn quad([p, q, r, s]: [V; 4]) -> Option<Self> {
+        Self::new([p, q, r, s], cross(sub(r, p), sub(s, q)), 4)
+    }
+
+    #[inline(always)]
+    fn new(v: [V; 4], n: V, corners: usize) -> Option<Self> {
         let n2 = dot(n, n);
-        let l2 = [dot(ed[0], ed[0]), dot(ed[1], ed[1]), dot(ed[2], ed[2])];
-        if !(n2 > 0.0 && n2.is_finite() && l2.iter().all(|&x| x > 0.0 && x.is_finite())) {
+        if !(n2 > 0.0 && n2.is_finite()) {
             return None;
         }
         let n = scale(n, 1.0 / n2.sqrt());
-        let len = [l2[0].sqrt(), l2[1].sqrt(), l2[2].sqrt()];
-        let e = [
-            scale(ed[0], 1.0 / len[0]),
-            scale(ed[1], 1.0 / len[1]),
-            scale(ed[2], 1.0 / len[2]),
-        ];
-        let w = [cross(e[0], n), cross(e[1], n), cross(e[2], n)];
-        Some(Self { v, n, e, w, len })
+        let (mut e, mut w, mut len) = ([[0.0; 3]; 4], [[0.0; 3]; 4], [0.0; 4]);
+        for i in 0..corners {
+            let ed = sub(v[(i + 1) % corners], v[i]);
+            let l2 = dot(ed, ed);
+            if !l2.is_finite() {
+                return None;
+            }
+            if l2 > 0.0 {
+                len[i] = l2.sqrt();
+                e[i] = scale(ed, 1.0 / len[i]);
+                w[i] = cross(e[i], n);
+            }
+        }
+        Some(Self {
+            v,
+            n,
+            e,
+            w,
+            len,
+            corners,
+        })
     }
 
-    /// `∫ exp(−a|x − c|²) dA` over the triangle (as [`triangle_fast`]; `sa = √a`, `a` finite
-    /// and > 0): the signed edge decomposition around the centre's foot (MATH.md §2), one
-    /// [`crate::wedge::r_diff`] (two right triangles sharing ε) per edge:
+    /// `∫ exp(−a|x − c|²) dA` over the polygon, as [`triangle_fast`] and [`quad_fast`]: absolute
+    /// error ≲ 3e−15/a (times `exp(−a h²)`), 0 for a non-positive or non-finite `a`.
+    pub fn gaussian_integral(&self, c: V, a: f64) -> f64 {
+        if a.is_nan() || a <= 0.0 || !a.is_finite() {
+            return 0.0;
+        }
+        self.integral(c, a, a.sqrt())
+    }
+
+    /// The integral for `a` finite and > 0, `sa = √a`: the signed edge decomposition around the
+    /// centre's foot (MATH.md §2), one [`crate::wedge::r_diff`] (two right triangles sharing ε)
+    /// per edge:
     /// `∫ = (1/a)·exp(−a h²)·Σ_i sign(ε_i)·[R(|ε_i|, u_i + ℓ_i) − R(|ε_i|, u_i)]` with
     /// `ε_i = √a·(v_i − c)·ŵ_i`, `u_i = √a·(v_i − c)·ê_i`, `ℓ_i = √a·len_i` and `h` the centre's
     /// distance from the plane.
@@ -223,7 +261,10 @@ impl Tri {
         }
         let tab = crate::wedge::table();
         let edge = |i| self.edge(tab, c, sa, i);
-        let sum = (edge(0) + edge(1)) + edge(2);
+        let mut sum = (edge(0) + edge(1)) + edge(2);
+        if self.corners == 4 {
+            sum += edge(3);
+        }
         (sum * (damp / a)).max(0.0)
     }
 
@@ -463,6 +504,14 @@ mod tests {
                 "{c:?} a={a}: {got} vs {want}"
             );
         }
+        // A repeated corner (a triangle stored as a quadrilateral): the zero-length edge adds 0.
+        let c = at(0.4, 0.5);
+        let (got, want) = (
+            quad_fast(c, 1.0, flat),
+            triangle_fast(c, 1.0, q[0], q[2], q[3]),
+        );
+        assert!((got - want).abs() <= 5e-15, "{got} vs {want}");
+        assert_eq!(quad_fast(c, 1.0, [q[0]; 4]), 0.0, "a point has no area");
     }
 
     /// `triangle_fast` (precomputed frame, one table pair per edge) against `triangle` (the

@@ -32,7 +32,7 @@
 //! assert_eq!(o.rejected(), 0);
 //! ```
 
-use crate::closed_form::{Tri, product, segment, triangle};
+use crate::closed_form::{ConvexPolygon, product, segment, triangle};
 use crate::criteria::Integration;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
@@ -109,7 +109,7 @@ pub struct Domain {
     /// Bounding-sphere centre and radius per element.
     spheres: Vec<(V, f64)>,
     /// Per triangle (3-D), its Gaussian-independent geometry (`None`: degenerate, integral 0).
-    tris: Vec<Option<Tri>>,
+    tris: Vec<Option<ConvexPolygon>>,
     cell: f64,
     buckets: HashMap<[i64; 3], Vec<u32>>,
 }
@@ -207,7 +207,7 @@ impl Domain {
                 .iter()
                 .map(|e| {
                     let [p, q, r] = e.map(|v| vertices[v as usize]);
-                    Tri::new(p, q, r)
+                    ConvexPolygon::triangle(p, q, r)
                 })
                 .collect(),
             Dim::Two => Vec::new(),

@@ -30,7 +30,8 @@ pub mod transfer;
 pub mod wedge;
 
 pub use closed_form::{
-    line, plane, product, quad, quad_fast, segment, triangle, triangle_fast, triangle_reference,
+    ConvexPolygon, line, plane, product, quad, quad_fast, segment, triangle, triangle_fast,
+    triangle_reference,
 };
 pub use cubature::{Cubature, triangle_cubature};
 pub use gram::{

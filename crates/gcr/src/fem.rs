@@ -164,6 +164,46 @@ pub struct SceneSurface {
     /// Unit normal of each element.
     pub normals: Vec<DVec3>,
     index: SurfaceIndex,
+    /// Per element, its polygon's Gaussian-independent geometry ([`Prepared`]); empty on a
+    /// clustered surface (its many elements would cost ~400 bytes each).
+    prepared: Vec<Prepared>,
+}
+
+/// An element ready for many Gaussian integrals: a Gram matrix integrates each of a small
+/// surface's elements against ~10⁶ Gaussian products, and a polygon's edge frames
+/// ([`gauss_integrals::ConvexPolygon`]) are the same for all of them.
+// A surface holds one kind (Flatland: segments; 3-D: polygons), so the small variant wastes
+// nothing that boxing the large one (one indirection per integral) would save.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Copy, Debug)]
+enum Prepared {
+    Segment([DVec3; 2]),
+    Polygon(gauss_integrals::ConvexPolygon),
+    /// A degenerate polygon: its integral is 0.
+    Empty,
+}
+
+impl Prepared {
+    fn of(element: &Element) -> Self {
+        let polygon = match *element {
+            Element::Segment(s) => return Self::Segment(s),
+            Element::Triangle([p, q, r]) => {
+                gauss_integrals::ConvexPolygon::triangle(p.to_array(), q.to_array(), r.to_array())
+            }
+            Element::Quad(q) => gauss_integrals::ConvexPolygon::quad(q.map(|v| v.to_array())),
+        };
+        polygon.map_or(Self::Empty, Self::Polygon)
+    }
+
+    /// The same value as [`Element::gaussian_integral`].
+    #[inline]
+    fn gaussian_integral(&self, c: DVec3, a: f64) -> f64 {
+        match self {
+            Self::Segment([p, q]) => integrals::segment(c, a, *p, *q),
+            Self::Polygon(polygon) => polygon.gaussian_integral(c.to_array(), a),
+            Self::Empty => 0.0,
+        }
+    }
 }
 
 /// How a [`SceneSurface`] finds the elements under a Gaussian: a hash grid for exact sums, or the
@@ -216,7 +256,13 @@ impl SceneSurface {
         clusters: SurfaceClusters,
     ) -> Self {
         assert_eq!(elements.len(), normals.len(), "one normal per element");
-        let index = if elements.len() >= clusters.min_elements {
+        let clustered = elements.len() >= clusters.min_elements;
+        let prepared = if clustered {
+            Vec::new()
+        } else {
+            elements.iter().map(Prepared::of).collect()
+        };
+        let index = if clustered {
             SurfaceIndex::Tree(Box::new(ClusterTree::new(
                 &elements,
                 &normals,
@@ -232,6 +278,16 @@ impl SceneSurface {
             elements,
             normals,
             index,
+            prepared,
+        }
+    }
+
+    /// `∫ exp(−a|x − c|²) dx` over element `e`, from its prepared geometry when it has one.
+    #[inline]
+    fn element_integral(&self, e: u32, c: DVec3, a: f64) -> f64 {
+        match self.prepared.get(e as usize) {
+            Some(p) => p.gaussian_integral(c, a),
+            None => self.elements[e as usize].gaussian_integral(c, a),
         }
     }
 
@@ -279,7 +335,7 @@ impl SceneSurface {
             SurfaceIndex::Tree(tree) => {
                 return tree.integral(c, a, r, mask, &mut |e| {
                     if mask.accepts(self.normals[e as usize]) {
-                        self.elements[e as usize].gaussian_integral(c, a)
+                        self.element_integral(e, c, a)
                     } else {
                         0.0
                     }
@@ -290,7 +346,7 @@ impl SceneSurface {
         candidates
             .iter()
             .filter(|&&e| grid.box_hits(e, c, r) && mask.accepts(self.normals[e as usize]))
-            .map(|&e| self.elements[e as usize].gaussian_integral(c, a))
+            .map(|&e| self.element_integral(e, c, a))
             .sum()
     }
 
@@ -311,7 +367,7 @@ impl SceneSurface {
             SurfaceIndex::Tree(tree) => {
                 return tree.integral(c, a, r, &mask, &mut |e| {
                     if mask.accepts(self.normals[e as usize]) {
-                        self.elements[e as usize].gaussian_integral(c, a)
+                        self.element_integral(e, c, a)
                     } else {
                         0.0
                     }
@@ -323,7 +379,7 @@ impl SceneSurface {
         scratch
             .iter()
             .filter(|&&e| mask.accepts(self.normals[e as usize]))
-            .map(|&e| self.elements[e as usize].gaussian_integral(c, a))
+            .map(|&e| self.element_integral(e, c, a))
             .sum()
     }
 }

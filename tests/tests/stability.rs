@@ -286,6 +286,8 @@ fn a_projected_kernel_with_gain_above_one_does_not_blow_up() {
 /// cornell-box, seed 5, this made projections diverge from about 300 cells on (each was redone
 /// with most cells rejected) and stopped the solve with the guard from 1000 cells. Leaving the
 /// cells with less than two samples of support out of the projection (the default) removes it.
+/// (Since the training projections run only at doublings up to half the budget, fewer of them
+/// meet the edge cells: at 1200 cells one bounce iteration runs away without the rule.)
 #[test]
 fn cells_without_samples_do_not_feed_their_noise_back() {
     let scene = scene_sampler::builtin("cornell-box")
@@ -300,7 +302,7 @@ fn cells_without_samples_do_not_feed_their_noise_back() {
             projection_min_support,
             // the dissertation's target, which grows the edge cells (the default clamps G)
             network_target: NetworkTarget::KernelValue,
-            ..small(600)
+            ..small(1200)
         };
         let trained = gcr::solve(&domain, &config, &mut |_| {}).unwrap();
         let m = &trained.metrics;
@@ -309,12 +311,15 @@ fn cells_without_samples_do_not_feed_their_noise_back() {
              iterations stopped, {} cells unsupported",
             m.stabilized_projections, m.diverging_bounces_stopped, m.unsupported_cells
         );
-        (m.stabilized_projections, m.unsupported_cells)
+        (
+            m.stabilized_projections + m.diverging_bounces_stopped,
+            m.unsupported_cells,
+        )
     };
     let (without, none) = redone(0.0);
     assert_eq!(none, 0);
     assert!(without > 0, "every cell projected: the edge cells run away");
     let (with, unsupported) = redone(SolveConfig::default().projection_min_support);
-    assert_eq!(with, 0, "no projection had to be redone");
+    assert_eq!(with, 0, "no projection redone, no bounce iteration stopped");
     assert!(unsupported > 0);
 }

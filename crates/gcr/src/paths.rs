@@ -100,6 +100,10 @@ pub struct PointEstimate {
     pub(crate) rays: usize,
     /// Whether the point reflects (else B = E exactly and the shares are 0).
     pub(crate) reflects: bool,
+    /// Mean over the rays of the square of one ray's estimate (a footprint's,
+    /// [`PathGather::estimate_footprint`]; 0 for the other estimators): with the mean, the
+    /// variance of one ray, which allocates a pixel's rays (`output::adaptive`).
+    pub(crate) ray_square: Bands,
 }
 
 impl PointEstimate {
@@ -116,6 +120,7 @@ impl PointEstimate {
         }
         for k in 0..BANDS {
             self.from_networks[k] = w * self.from_networks[k] + v * other.from_networks[k];
+            self.ray_square[k] = w * self.ray_square[k] + v * other.ray_square[k];
         }
         self.rays += other.rays;
         self.replicates = self.replicates.min(other.replicates);
@@ -313,6 +318,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             n_c: 1.0,
         };
         let mut share = [[0.0; BANDS]; REPLICATES];
+        let mut ray_square = [0.0; BANDS];
         for i in 0..rays {
             let Some((y, n, face)) = receiver([qmc(i, 10), qmc(i, 11)]) else {
                 continue;
@@ -340,6 +346,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             }
             for k in 0..BANDS {
                 share[i % replicates][k] += b[k] / rays as f64;
+                ray_square[k] += b[k] * b[k] / rays as f64;
             }
         }
         PointEstimate {
@@ -347,6 +354,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             replicates,
             rays,
             reflects: true,
+            ray_square,
             ..PointEstimate::default()
         }
     }

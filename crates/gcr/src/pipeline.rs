@@ -189,8 +189,8 @@ fn grouped_rounds(
 /// The rounds of [`paths_to_target`] for `count` estimates gathered in `groups` (each index in
 /// exactly one), `estimate(group, first, samples)` being the group's round with `samples` rays per
 /// member from Sobol index `first` on, one estimate per member (a point's gather, a group of
-/// neighbours sharing paths, [`PathGather::estimate_group`], or a pixel's footprint,
-/// [`PathGather::estimate_footprint`]).
+/// neighbours sharing paths, [`PathGather::estimate_group`]). Pixels have their own rounds
+/// (`output::adaptive`).
 pub(crate) fn rounds_to_target(
     count: usize,
     groups: &[Vec<usize>],
@@ -223,10 +223,9 @@ pub(crate) fn rounds_to_target(
         let dof = (groups.iter())
             .filter(|g| (g.iter()).any(|&i| gathered[i].std_error.iter().any(|s| *s != 0.0)))
             .count();
-        let Some(error) = relative_std_error(&gathered) else {
+        let Some(bound) = error_bound(&gathered, dof) else {
             return gathered;
         };
-        let bound = error * (dof as f64 / chi2_lower(dof)).sqrt();
         if bound <= target || rays >= max_rays {
             return gathered;
         }
@@ -258,9 +257,16 @@ pub(crate) fn rounds_to_target(
     }
 }
 
-/// Every estimate its own group ([`rounds_to_target`]).
-pub(crate) fn singletons(count: usize) -> Vec<Vec<usize>> {
-    (0..count).map(|i| vec![i]).collect()
+/// The upper confidence bound (90 %) of the relative error of `gathered` ([`relative_std_error`],
+/// None when nothing was measured), its standard errors estimated with `dof` degrees of freedom
+/// in all: `error·√(dof/χ²₀.₁(dof))`. What rounds to a target compare with the target.
+pub(crate) fn error_bound(gathered: &[Gathered], dof: usize) -> Option<f64> {
+    let dof = dof.min(
+        (gathered.iter())
+            .filter(|g| g.std_error.iter().any(|s| *s != 0.0))
+            .count(),
+    );
+    relative_std_error(gathered).map(|error| error * (dof as f64 / chi2_lower(dof)).sqrt())
 }
 
 /// The lower 10 % quantile of χ² with `k` degrees of freedom (Wilson–Hilferty:

@@ -4,6 +4,7 @@
 
 use std::path::PathBuf;
 
+mod adaptive;
 pub mod autocam;
 pub mod camera;
 pub mod flatland;

@@ -8,8 +8,9 @@
 //!   estimated as a whole ([`render_footprints`]): every ray has its own point in the pixel, where
 //!   it gets E, one shadow ray and one cosine ray continued as a path — a path tracer with Owen-
 //!   scrambled Sobol points over the pixel and the first bounce, in rounds to the target error of
-//!   the pixels (`--quality`, `--target-error`), with their standard errors. Edges converge with
-//!   the rays (an emitter's outline dominates a Cornell box's squared error).
+//!   the pixels (`--quality`, `--target-error`), with their standard errors. Each pixel's rays
+//!   follow its standard deviation ([`super::adaptive`]): edges (an emitter's outline dominates a
+//!   Cornell box's squared error) get many, flat walls few.
 //! * **The other gathers** read the networks at fixed points: `--pixel-samples N` sub-samples per
 //!   pixel (1: the centre; N: the first N points of the R2 sequence `frac(½ + k·(α₁, α₂))`), B
 //!   gathered at each visible point ([`radiosity_at_points`]), their mean. A pixel's error is its
@@ -27,9 +28,7 @@ use crate::domain::Domain;
 use crate::emitters::Emitters;
 use crate::gather::Gathered;
 use crate::paths::PathGather;
-use crate::pipeline::{
-    GatherError, GatherStats, radiosity_at_points, rounds_to_target, singletons,
-};
+use crate::pipeline::{GatherError, GatherStats, radiosity_at_points};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -162,8 +161,9 @@ pub fn render_pixels(
 
 /// The paths gather over each pixel's footprint ([`PathGather::estimate_footprint`]): every ray
 /// has its own point in the pixel (a path tracer's antialiasing, Sobol dimensions for the pixel
-/// and the first bounce), rounds to the target error over the pixels as at points
-/// ([`rounds_to_target`]). `--pixel-samples` plays no part: the rays are the sub-samples.
+/// and the first bounce), to the target error over the pixels with each pixel's rays in
+/// proportion to its standard deviation ([`super::adaptive`]). `--pixel-samples` plays no part:
+/// the rays are the sub-samples.
 fn render_footprints(
     domain: &Domain,
     config: &SolveConfig,
@@ -233,11 +233,19 @@ fn render_footprints(
         )
     };
     let gathered: Vec<Gathered> = match config.paths.target_error {
-        Some(target) => rounds_to_target(
+        Some(target) => super::adaptive::allocated_rounds(
             n,
-            &singletons(n),
-            |g: &[usize], first, samples| vec![estimate(g[0], first, samples)],
-            config.gather_samples,
+            &|p, first, rays| {
+                let samples = GatherSamples {
+                    direct: rays,
+                    indirect: rays,
+                };
+                estimate(p, first, samples)
+            },
+            config
+                .gather_samples
+                .direct
+                .max(config.gather_samples.indirect),
             target,
             config.paths.max_rays,
         ),

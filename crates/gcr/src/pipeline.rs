@@ -180,7 +180,7 @@ fn grouped_rounds(
             let member_seeds: Vec<u64> = group.iter().map(|&i| seeds[i]).collect();
             paths.estimate_group(&members, &materials, &member_seeds, first, samples)
         },
-        config.gather_samples,
+        (config.gather_samples, None),
         target,
         config.paths.max_rays,
     )
@@ -189,13 +189,13 @@ fn grouped_rounds(
 /// The rounds of [`paths_to_target`] for `count` estimates gathered in `groups` (each index in
 /// exactly one), `estimate(group, first, samples)` being the group's round with `samples` rays per
 /// member from Sobol index `first` on, one estimate per member (a point's gather, a group of
-/// neighbours sharing paths, [`PathGather::estimate_group`]). Pixels have their own rounds
-/// (`output::adaptive`).
+/// neighbours sharing paths, [`PathGather::estimate_group`], a pixel's footprint). `piloted`:
+/// the pilot round's estimates when the caller has run it (`output::adaptive`).
 pub(crate) fn rounds_to_target(
     count: usize,
     groups: &[Vec<usize>],
     estimate: impl Fn(&[usize], usize, GatherSamples) -> Vec<PointEstimate> + Sync,
-    pilot: GatherSamples,
+    (pilot, piloted): (GatherSamples, Option<Vec<PointEstimate>>),
     target: f64,
     max_rays: usize,
 ) -> Vec<Gathered> {
@@ -213,7 +213,7 @@ pub(crate) fn rounds_to_target(
         out
     };
     // ⟨Pilot round: the configured rays⟩
-    let mut estimates = round(0, pilot);
+    let mut estimates = piloted.unwrap_or_else(|| round(0, pilot));
     let mut rays = pilot.direct.max(pilot.indirect).min(max_rays);
     loop {
         let gathered: Vec<Gathered> = estimates.iter().map(PointEstimate::gathered).collect();
@@ -255,6 +255,11 @@ pub(crate) fn rounds_to_target(
         }
         rays += more;
     }
+}
+
+/// Every estimate its own group ([`rounds_to_target`]).
+pub(crate) fn singletons(count: usize) -> Vec<Vec<usize>> {
+    (0..count).map(|i| vec![i]).collect()
 }
 
 /// The upper confidence bound (90 %) of the relative error of `gathered` ([`relative_std_error`],

@@ -11,7 +11,9 @@
 //! The steps ([`allocated_rounds`]):
 //!
 //! 1. a pilot round gives every pixel the same rays (the configured first round); if it meets
-//!    the target, it is the image;
+//!    the target, it is the image; if the allocation would not save a fifth of the rays the
+//!    uniform rounds need (its gain, less the pilot it leaves out: an image without edges), the
+//!    rounds go on uniformly from the pilot ([`crate::pipeline::rounds_to_target`]);
 //! 2. each pixel's share of the rays is set once, from the pilot: the variance of one ray's
 //!    estimate over the pilot's rays (pilot − 1 degrees of freedom), a quarter of the rays spread
 //!    evenly over all pixels (a defensive floor: a pixel whose variance the pilot missed gets at
@@ -25,9 +27,10 @@
 //! their own values (the pixel's value stays unbiased; the level depends on the whole image's
 //! estimated error, as every round to a target does).
 
+use crate::config::GatherSamples;
 use crate::gather::Gathered;
 use crate::paths::{PointEstimate, REPLICATES};
-use crate::pipeline::error_bound;
+use crate::pipeline::{error_bound, rounds_to_target, singletons};
 use rayon::prelude::*;
 
 /// Share of the rays spread evenly over the pixels (step 2).
@@ -73,16 +76,33 @@ pub(super) fn allocated_rounds(
     } else {
         vec![1.0; n]
     };
+    // the uniform rays the pilot's error asks for, and the allocation's expected gain on them
+    let uniform = pilot as f64 * (bound / target).powi(2);
+    let gain = mean_sigma.powi(2) / (sigma.iter().map(|s| s * s).sum::<f64>() / n as f64);
+    let gain = if gain > 0.0 { gain.min(1.0) } else { 1.0 };
+    if uniform * gain + pilot as f64 > 0.8 * uniform {
+        let samples = GatherSamples {
+            direct: pilot,
+            indirect: pilot,
+        };
+        return rounds_to_target(
+            n,
+            &singletons(n),
+            |g: &[usize], first, samples: GatherSamples| {
+                vec![estimate(g[0], first, samples.direct)]
+            },
+            (samples, Some(pilot_estimates)),
+            target,
+            max_rays,
+        );
+    }
     // ⟨Rounds: raise the level until the bound meets the target or every pixel is capped⟩
     let start = pilot.div_ceil(REPLICATES);
     let cap = (max_rays / REPLICATES).max(2 * start);
     // per pixel: its Sobol index so far (per replicate) and its estimate after the pilot
     let mut done = vec![start; n];
     let mut estimates: Vec<Option<PointEstimate>> = vec![None; n];
-    // the uniform rays the pilot's error asks for, times Neyman's expected gain
-    let gain = mean_sigma.powi(2) / (sigma.iter().map(|s| s * s).sum::<f64>() / n as f64);
-    let mut level =
-        (pilot as f64 * (bound / target).powi(2) * gain.clamp(0.0, 1.0)).max(pilot as f64);
+    let mut level = (uniform * gain).max(pilot as f64);
     loop {
         let wanted: Vec<usize> = (share.iter())
             .map(|s| end_index(start, s * level / REPLICATES as f64, cap))

@@ -150,7 +150,10 @@ mod tests {
         assert!(!s.fem_due(70, 200, 0), "only 10 insertions since");
         assert!(!s.fem_due(90, 139, 0), "139 < 2 · 70");
         assert!(s.fem_due(90, 140, 0));
-        assert!(!s.fem_due(200, 290, 0), "past half the budget: the final step comes");
+        assert!(
+            !s.fem_due(200, 290, 0),
+            "past half the budget: the final step comes"
+        );
 
         let delta = SolveConfig {
             fem_every: 30,

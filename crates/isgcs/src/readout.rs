@@ -2,7 +2,7 @@
 //! exact leave-one-out (the default regressor) or on a holdout (the k-means RBF
 //! reference), on standardized inputs and outputs.
 
-use crate::linalg::{RidgePath, gcv, gram_add, rademacher, ridge_fit};
+use crate::linalg::{RidgePath, gcv, gram_add, mul_few, rademacher, ridge_fit};
 use ndarray::{Array2, ArrayView2, Axis, Slice};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -188,7 +188,7 @@ fn residual(blocks: &[Array2<f64>], w: &Array2<f64>, ys: ArrayView2<'_, f64>) ->
     let mut sum = 0.0;
     for a in blocks {
         let end = start + a.nrows();
-        let pred = a.dot(w);
+        let pred = mul_few(a.view(), w.view());
         let y = ys.slice_axis(Axis(0), Slice::from(start..end));
         sum += pred
             .iter()
@@ -551,7 +551,10 @@ fn holdout_at(
         let Some(f) = ridge_fit(&g, &b, yy, 10f64.powf(e), &zero) else {
             return;
         };
-        let err = (&a.dot(&f.weights) - &hold.1).mapv(|v| v * v).sum() / rows;
+        let err = (&mul_few(a.view(), f.weights.view()) - &hold.1)
+            .mapv(|v| v * v)
+            .sum()
+            / rows;
         if err.is_finite() && best.as_ref().is_none_or(|(_, s, _)| err < *s) {
             *best = Some((e, err, f.weights));
         }
@@ -645,7 +648,9 @@ pub(crate) fn fit_holdout(
             let err = if hy.nrows() == 0 {
                 fit.rss
             } else {
-                (&a.dot(&fit.weights) - &hy).mapv(|e| e * e).sum()
+                (&mul_few(a.view(), fit.weights.view()) - &hy)
+                    .mapv(|e| e * e)
+                    .sum()
             };
             if err.is_finite() && best.is_none_or(|(e, _, _)| err < e) {
                 best = Some((err, mult, r));

@@ -818,10 +818,20 @@ fn fit_best_holdout(
             .position(|&o| o == geometry[i])
             .expect("owner")]
     };
-    // Every candidate at the first multiplier (in parallel) …
-    let mut starts: Vec<Option<Fit>> = (0..candidates.len())
-        .into_par_iter()
-        .map(|i| eval(&candidates[i], raw_of(i), None))
+    // Every candidate at the first multiplier: the first one with the full ridge search,
+    // the others (in parallel) from its ridge as the hint (the ridge is the noise-to-signal
+    // ratio of the data, relative to the Gram's mean diagonal, so it carries over between
+    // bases; the hint's probes two decades to either side and the refinement still walk to
+    // a different optimum) …
+    let lead = eval(&candidates[0], raw_of(0), None);
+    let hint = lead.as_ref().map(|f| f.2);
+    let mut starts: Vec<Option<Fit>> = std::iter::once(lead)
+        .chain(
+            (1..candidates.len())
+                .into_par_iter()
+                .map(|i| eval(&candidates[i], raw_of(i), hint))
+                .collect::<Vec<_>>(),
+        )
         .collect();
     // … then the walk (module docs of `regressor`) only from the RACE_KEEP best of them.
     let mut order: Vec<usize> = (0..candidates.len())

@@ -38,11 +38,15 @@
 //!    ε…1 (ε = machine epsilon) is the one with the lowest score (one Cholesky solve per
 //!    ridge: every second decade, then the best one's neighbours at ±1 decade; at the next μ
 //!    of a walk, the previous ridge and ±2 decades; then half decades around the best until
-//!    both neighbours are tried). Every candidate is scored at the pilot's multiplier (in
-//!    parallel); the two best then walk μ by √2 (in parallel) while the score falls. The
+//!    both neighbours are tried). Every candidate is scored at the pilot's multiplier (the
+//!    first with the full ridge search, the others in parallel from its ridge as the hint);
+//!    the two best then walk μ by √2 (in parallel) while the score falls. The raw Gaussians
+//!    of the selection and holdout rows are computed once per geometry and moved along the
+//!    walk (μ → √2 μ is an elementwise square root, μ → μ/√2 a square). The
 //!    candidate with the lowest score is refitted on all rows with the same absolute ridge
-//!    (relative ridge × S/N, floored at ε, raised by half decades while the factorisation
-//!    fails).
+//!    (relative ridge × S/N, floored at ε, raised by quarter decades while the
+//!    factorisation fails), its Gram matrix from the moved raw values of the selection and
+//!    holdout rows plus the remaining rows.
 //!
 //! Cost: growth O(steps · z · n); the output layer O(S · z²) per candidate multiplier (S
 //! selection rows; dense matrix products on two threads) plus O(z³/3 + H · z) per candidate

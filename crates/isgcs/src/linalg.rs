@@ -175,9 +175,12 @@ pub(crate) fn cholesky_in_place(a: &mut Array2<f64>, rho: f64) -> bool {
             let data = a.as_slice_mut().expect("standard layout");
             let (top, bottom) = data.split_at_mut(k1 * z);
             let l11 = &top[k0 * z..];
-            for ri in bottom.chunks_exact_mut(z) {
-                for j in k0..k1 {
-                    let rj = &l11[(j - k0) * z..(j - k0 + 1) * z];
+            // Column by column of the panel, every row within a column: each element gets the
+            // same operations in the same order as row by row, but consecutive ones (other
+            // rows) do not wait for each other's dependent sums and divisions.
+            for j in k0..k1 {
+                let rj = &l11[(j - k0) * z..(j - k0 + 1) * z];
+                for ri in bottom.chunks_exact_mut(z) {
                     let mut s = ri[j];
                     for p in k0..j {
                         s -= ri[p] * rj[p];

@@ -384,6 +384,29 @@ fn gcv_at(
     Some((score, path.weights(relative), relative, dof))
 }
 
+/// The output layer at a fixed multiplier and relative ridge on the rows `xs` (N × n,
+/// standardized) with targets `ys`: the weights (cols × m) and the fitted values (N × m) from
+/// the same design matrix (one Cholesky solve; `None` when it fails). The growth rounds'
+/// residuals: predicting the rows again would compute every basis value twice.
+pub(crate) fn fit_fixed(
+    basis: &Basis,
+    mult: f64,
+    ridge: f64,
+    xs: &[f64],
+    ys: ArrayView2<'_, f64>,
+) -> Option<(Array2<f64>, Array2<f64>)> {
+    let (g, b, yy, blocks) = basis.normal_equations(mult, xs, ys, true);
+    let zero = Array2::zeros((basis.cols(), 0));
+    let fit = ridge_fit(&g, &b, yy, ridge, &zero)?;
+    let parts: Vec<Array2<f64>> = blocks
+        .iter()
+        .map(|a| mul_few(a.view(), fit.weights.view()))
+        .collect();
+    let views: Vec<_> = parts.iter().map(|p| p.view()).collect();
+    let fitted = ndarray::concatenate(Axis(0), &views).ok()?;
+    Some((fit.weights, fitted))
+}
+
 /// Chooses the width multiplier (unless given: a geometric walk by √2 from `start`, on at
 /// most `select_rows` rows) and the relative ridge (unless given) by leave-one-out, then
 /// refits on every row. `xs`/`ys` are standardized and in random row order; returns the
@@ -1232,6 +1255,41 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn fit_fixed_equals_the_fixed_selection_and_its_fitted_values_the_predictions() {
+        // y = sin 3x on 300 rows, 25 normalized Gaussians: the weights of `fit_fixed` are the
+        // fixed-multiplier, fixed-ridge selection's (`fit_gcv`), and its fitted values are the
+        // layer's predictions at the rows.
+        let rows = 300;
+        let xs: Vec<f64> = (0..rows)
+            .map(|i| -1.0 + 2.0 * ((i as f64 * 0.618_034) % 1.0))
+            .collect();
+        let ys: Vec<f64> = xs.iter().map(|x| (3.0 * x).sin()).collect();
+        let centres: Vec<f64> = (0..25).map(|i| -1.0 + 2.0 * i as f64 / 24.0).collect();
+        let basis = Basis {
+            n: 1,
+            base: nearest_widths(&centres, 1, 2),
+            centres,
+            normalized: true,
+            affine: false,
+        };
+        let yv = ArrayView2::from_shape((rows, 1), &ys).unwrap();
+        let (w, fitted) = fit_fixed(&basis, 1.5, 1e-6, &xs, yv).unwrap();
+        let (w_sel, _) = fit_gcv(&basis, &xs, yv, Some(1.5), Some(1e-6), rows, 1.5).unwrap();
+        assert_eq!(w.into_raw_vec_and_offset().0, w_sel);
+        let mut row = vec![0.0; basis.cols()];
+        for (r, x) in xs.iter().enumerate() {
+            basis.row(1.5, &[*x], &mut row);
+            let f: f64 = row.iter().zip(&w_sel).map(|(a, w)| a * w).sum();
+            assert!(
+                (f - fitted[[r, 0]]).abs() < 1e-12,
+                "row {r}: {f} vs {}",
+                fitted[[r, 0]]
+            );
+        }
+        assert!(fitted.iter().zip(&ys).all(|(f, y)| (f - y).abs() < 0.01));
     }
 
     #[test]

@@ -55,11 +55,14 @@
 pub use crate::data::RegressorError;
 use crate::data::check_data;
 use crate::kmeans::kmeans;
-use crate::readout::{Basis, Readout, Standardizer, egop, fit_best, fit_gcv, nearest_widths};
+use crate::readout::{
+    Basis, Readout, Standardizer, egop, fit_best, fit_fixed, fit_gcv, nearest_widths,
+};
 use crate::{GoalFunction, Isgcs, IsgcsError, Params, Termination};
 use ndarray::ArrayView2;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::ops::ControlFlow;
 
@@ -426,6 +429,11 @@ fn learn_metric(
     (best.1, best.2)
 }
 
+/// Width multiplier of the growth rounds' least-squares fits.
+const GROWTH_MULT: f64 = 1.5;
+/// Relative ridge of the growth rounds' least-squares fits.
+const GROWTH_RIDGE: f64 = 1e-6;
+
 /// Smallest scale of a direction in the learned metric, relative to the largest.
 const METRIC_FLOOR: f64 = 0.1;
 
@@ -551,42 +559,18 @@ impl Regressor {
                 affine: params.affine,
             };
             let yv = ArrayView2::from_shape((sample, m), &ys[..sample * m]).expect("shape");
-            let fitted = fit_gcv(
-                &basis,
-                &xs[..sample * n],
-                yv,
-                Some(1.5),
-                Some(1e-6),
-                sample,
-                1.5,
-            );
+            let fitted = fit_fixed(&basis, GROWTH_MULT, GROWTH_RIDGE, &xs[..sample * n], yv);
             tau.clear();
             tau.resize(z, 0.0);
-            if let Some((weights, sel)) = fitted {
-                let readout = Readout {
-                    basis,
-                    mult: sel.mult,
-                    weights,
-                    m,
-                    x: Standardizer {
-                        mean: vec![0.0; n],
-                        scale: vec![1.0; n],
-                    },
-                    y: Standardizer {
-                        mean: vec![0.0; m],
-                        scale: vec![1.0; m],
-                    },
-                    ridge: sel.ridge,
-                    transform: None,
-                };
-                let mut pred = vec![0.0; sample * m];
-                readout.predict(&xs[..sample * n], &mut pred);
-                for r in 0..sample {
-                    let x = &xs[r * n..(r + 1) * n];
-                    let e: f64 = (0..m)
-                        .map(|c| (pred[r * m + c] - ys[r * m + c]).powi(2))
-                        .sum();
-                    tau[net.bmu(x, None)] += e;
+            if let Some((_, pred)) = fitted {
+                let bmus: Vec<usize> = xs[..sample * n]
+                    .par_chunks(n)
+                    .with_min_len(64)
+                    .map(|x| net.bmu(x, None))
+                    .collect();
+                for (r, &bmu) in bmus.iter().enumerate() {
+                    let e: f64 = (0..m).map(|c| (pred[[r, c]] - ys[r * m + c]).powi(2)).sum();
+                    tau[bmu] += e;
                 }
             }
             let add = (z * 3 / 10).max(1).min(params.max_cells - z);

@@ -66,6 +66,24 @@ fn cholesky(g: &[f64], z: usize, rho: f64) -> Option<Vec<f64>> {
     Some(l)
 }
 
+/// A W for a matrix A and a W with few columns: one matrix-vector product per column of W
+/// (ndarray's unrolled row dot products) instead of a general matrix product, which packs
+/// all of A and pads W's columns to the kernel's width (most of the product's time for one
+/// column: the holdout predictions and G W of every candidate ridge).
+pub(crate) fn mul_few(a: ArrayView2<'_, f64>, w: ArrayView2<'_, f64>) -> Array2<f64> {
+    if w.ncols() > FEW {
+        return a.dot(&w);
+    }
+    let mut out = Array2::zeros((a.nrows(), w.ncols()));
+    for (mut o, c) in out.columns_mut().into_iter().zip(w.columns()) {
+        o.assign(&a.dot(&c));
+    }
+    out
+}
+
+/// Right-hand sides up to which [`mul_few`] and the triangular solves work column by column.
+const FEW: usize = 4;
+
 /// Block size of the blocked Cholesky factorisation.
 const BLOCK: usize = 64;
 
@@ -157,9 +175,12 @@ pub(crate) fn cholesky_in_place(a: &mut Array2<f64>, rho: f64) -> bool {
             let data = a.as_slice_mut().expect("standard layout");
             let (top, bottom) = data.split_at_mut(k1 * z);
             let l11 = &top[k0 * z..];
-            for ri in bottom.chunks_exact_mut(z) {
-                for j in k0..k1 {
-                    let rj = &l11[(j - k0) * z..(j - k0 + 1) * z];
+            // Column by column of the panel, every row within a column: each element gets the
+            // same operations in the same order as row by row, but consecutive ones (other
+            // rows) do not wait for each other's dependent sums and divisions.
+            for j in k0..k1 {
+                let rj = &l11[(j - k0) * z..(j - k0 + 1) * z];
+                for ri in bottom.chunks_exact_mut(z) {
                     let mut s = ri[j];
                     for p in k0..j {
                         s -= ri[p] * rj[p];
@@ -197,6 +218,20 @@ pub(crate) fn cholesky_in_place(a: &mut Array2<f64>, rho: f64) -> bool {
 pub(crate) fn forward(l: &Array2<f64>, b: &mut Array2<f64>) {
     let z = l.nrows();
     let c = b.ncols();
+    if let (true, Some(ld)) = (c <= FEW, l.as_slice()) {
+        // Column by column: row i of L against the solved head (unrolled dot products),
+        // instead of packing L's blocks for a one-column product.
+        for mut col in b.columns_mut() {
+            let mut x = col.to_vec();
+            for i in 0..z {
+                let row = ndarray::ArrayView1::from(&ld[i * z..i * z + i]);
+                let s = x[i] - row.dot(&ndarray::ArrayView1::from(&x[..i]));
+                x[i] = s / l[[i, i]];
+            }
+            col.assign(&ndarray::ArrayView1::from(&x[..]));
+        }
+        return;
+    }
     if b.as_slice().is_none() {
         *b = b.as_standard_layout().into_owned();
     }
@@ -234,6 +269,23 @@ pub(crate) fn forward(l: &Array2<f64>, b: &mut Array2<f64>) {
 pub(crate) fn backward(l: &Array2<f64>, b: &mut Array2<f64>) {
     let z = l.nrows();
     let c = b.ncols();
+    if let (true, Some(ld)) = (c <= FEW, l.as_slice()) {
+        // Column by column, from the bottom: x_i from the updated b_i, then b_p −= L_ip x_i
+        // for p < i (row i of L, contiguous).
+        for mut col in b.columns_mut() {
+            let mut x = col.to_vec();
+            for i in (0..z).rev() {
+                let xi = x[i] / l[[i, i]];
+                x[i] = xi;
+                let row = &ld[i * z..i * z + i];
+                for (v, lip) in x[..i].iter_mut().zip(row) {
+                    *v -= lip * xi;
+                }
+            }
+            col.assign(&ndarray::ArrayView1::from(&x[..]));
+        }
+        return;
+    }
     if b.as_slice().is_none() {
         *b = b.as_standard_layout().into_owned();
     }
@@ -305,7 +357,7 @@ pub(crate) fn ridge_fit(
     let mut w = b.clone();
     forward(&l, &mut w);
     backward(&l, &mut w);
-    let gw = g.dot(&w);
+    let gw = mul_few(g.view(), w.view());
     let rss = (yy - 2.0 * (&w * b).sum() + (&w * &gw).sum()).max(0.0);
     let mut u = probes.clone();
     forward(&l, &mut u);
@@ -502,11 +554,11 @@ mod tests {
 
     #[test]
     fn blocked_triangular_solves_match_the_matrix() {
-        // A random SPD matrix larger than two blocks; solve L Lᵀ X = B and check G X = B.
+        // A random SPD matrix larger than two blocks; solve L Lᵀ X = B and check G X = B, with
+        // few right-hand sides (solved column by column) and many (blocked products).
         let z = 2 * BLOCK + 17;
         let a = rademacher(z, z + 5, 3);
         let g = a.dot(&a.t());
-        let b = rademacher(z, 3, 4);
         let mut l = g.clone();
         assert!(cholesky_in_place(&mut l, 1e-3));
         for i in 0..z {
@@ -514,17 +566,25 @@ mod tests {
                 l[[i, j]] = 0.0;
             }
         }
-        let mut x = b.clone();
-        forward(&l, &mut x);
-        backward(&l, &mut x);
         let mut gi = g.clone();
         for i in 0..z {
             gi[[i, i]] += 1e-3;
         }
-        let err = (&gi.dot(&x) - &b)
-            .mapv(f64::abs)
-            .fold(0.0f64, |m, &v| m.max(v));
-        assert!(err < 1e-8, "{err}");
+        for cols in [1, FEW, FEW + 5] {
+            let b = rademacher(z, cols, 4);
+            let mut x = b.clone();
+            forward(&l, &mut x);
+            backward(&l, &mut x);
+            let err = (&gi.dot(&x) - &b)
+                .mapv(f64::abs)
+                .fold(0.0f64, |m, &v| m.max(v));
+            assert!(err < 1e-8, "{cols} columns: {err}");
+            // The product for few columns equals the general one.
+            let diff = (&mul_few(gi.view(), x.view()) - &gi.dot(&x))
+                .mapv(f64::abs)
+                .fold(0.0f64, |m, &v| m.max(v));
+            assert!(diff < 1e-9, "{cols} columns: {diff}");
+        }
     }
 
     #[test]

@@ -2,10 +2,11 @@
 //! exact leave-one-out (the default regressor) or on a holdout (the k-means RBF
 //! reference), on standardized inputs and outputs.
 
-use crate::linalg::{RidgePath, gcv, gram_add, rademacher, ridge_fit};
+use crate::linalg::{RidgePath, gcv, gram_add, mul_few, rademacher, ridge_fit};
 use ndarray::{Array2, ArrayView2, Axis, Slice};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 
 /// Rows per block when the design matrix is accumulated into the Gram matrix.
 const ROW_BLOCK: usize = 2048;
@@ -131,6 +132,76 @@ impl Basis {
         }
     }
 
+    /// The raw Gaussians exp(−|x − c_i|²/(μ d_i)²) of `rows` standardized inputs (rows ×
+    /// cells, flushed to 0 below e^−FLUSH as in [`Basis::row`]; neither normalized nor with
+    /// the affine columns), rows in parallel. [`Basis::design_of_raw`] makes the design matrix.
+    pub fn raw(&self, mult: f64, xs: &[f64]) -> Array2<f64> {
+        let (n, z) = (self.n, self.cells());
+        let rows = xs.len() / n;
+        let w2: Vec<f64> = self.base.iter().map(|b| (mult * b) * (mult * b)).collect();
+        let mut a = Array2::zeros((rows, z));
+        a.as_slice_mut()
+            .expect("fresh arrays are contiguous")
+            .par_chunks_mut(z.max(1))
+            .zip(xs.par_chunks(n))
+            .with_min_len(16)
+            .for_each(|(o, x)| {
+                for (i, (o, &w2)) in o.iter_mut().zip(&w2).enumerate() {
+                    let c = &self.centres[i * n..(i + 1) * n];
+                    let r2: f64 = c.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum();
+                    *o = gaussian(r2, w2);
+                }
+            });
+        a
+    }
+
+    /// The design matrix of the rows `xs` from their raw values ([`Basis::raw`]): the same
+    /// numbers as [`Basis::design`] for raw values at the same multiplier (normalized by the
+    /// row sum in the same order; a row without any positive value gets its nearest cell).
+    /// Borrowed when there is nothing to do (plain Gaussians without affine columns).
+    pub fn design_of_raw<'a>(&self, raw: &'a Array2<f64>, xs: &[f64]) -> Cow<'a, Array2<f64>> {
+        if !self.normalized && !self.affine {
+            return Cow::Borrowed(raw);
+        }
+        let (n, z, cols) = (self.n, self.cells(), self.cols());
+        let mut a = Array2::zeros((raw.nrows(), cols));
+        a.as_slice_mut()
+            .expect("fresh arrays are contiguous")
+            .par_chunks_mut(cols)
+            .zip(
+                raw.as_slice()
+                    .expect("raw values are contiguous")
+                    .par_chunks(z.max(1)),
+            )
+            .zip(xs.par_chunks(n))
+            .with_min_len(16)
+            .for_each(|((o, r), x)| {
+                let out = &mut o[..z];
+                out.iter_mut().zip(r.iter()).for_each(|(o, v)| *o = *v);
+                if self.normalized {
+                    let sum: f64 = out.iter().sum();
+                    if sum > 0.0 {
+                        out.iter_mut().for_each(|v| *v /= sum);
+                    } else if z > 0 {
+                        let (mut nearest, mut nearest_d2) = (0, f64::INFINITY);
+                        for i in 0..z {
+                            let c = &self.centres[i * n..(i + 1) * n];
+                            let r2: f64 = c.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum();
+                            if r2 < nearest_d2 {
+                                (nearest, nearest_d2) = (i, r2);
+                            }
+                        }
+                        out[nearest] = 1.0;
+                    }
+                }
+                if self.affine {
+                    o[z] = 1.0;
+                    o[z + 1..z + 1 + n].copy_from_slice(x);
+                }
+            });
+        Cow::Owned(a)
+    }
+
     /// The design matrix of `rows` standardized inputs (rows × cols), rows in parallel.
     pub fn design(&self, mult: f64, xs: &[f64]) -> Array2<f64> {
         let cols = self.cols();
@@ -188,7 +259,7 @@ fn residual(blocks: &[Array2<f64>], w: &Array2<f64>, ys: ArrayView2<'_, f64>) ->
     let mut sum = 0.0;
     for a in blocks {
         let end = start + a.nrows();
-        let pred = a.dot(w);
+        let pred = mul_few(a.view(), w.view());
         let y = ys.slice_axis(Axis(0), Slice::from(start..end));
         sum += pred
             .iter()
@@ -313,6 +384,29 @@ fn gcv_at(
     Some((score, path.weights(relative), relative, dof))
 }
 
+/// The output layer at a fixed multiplier and relative ridge on the rows `xs` (N × n,
+/// standardized) with targets `ys`: the weights (cols × m) and the fitted values (N × m) from
+/// the same design matrix (one Cholesky solve; `None` when it fails). The growth rounds'
+/// residuals: predicting the rows again would compute every basis value twice.
+pub(crate) fn fit_fixed(
+    basis: &Basis,
+    mult: f64,
+    ridge: f64,
+    xs: &[f64],
+    ys: ArrayView2<'_, f64>,
+) -> Option<(Array2<f64>, Array2<f64>)> {
+    let (g, b, yy, blocks) = basis.normal_equations(mult, xs, ys, true);
+    let zero = Array2::zeros((basis.cols(), 0));
+    let fit = ridge_fit(&g, &b, yy, ridge, &zero)?;
+    let parts: Vec<Array2<f64>> = blocks
+        .iter()
+        .map(|a| mul_few(a.view(), fit.weights.view()))
+        .collect();
+    let views: Vec<_> = parts.iter().map(|p| p.view()).collect();
+    let fitted = ndarray::concatenate(Axis(0), &views).ok()?;
+    Some((fit.weights, fitted))
+}
+
 /// Chooses the width multiplier (unless given: a geometric walk by √2 from `start`, on at
 /// most `select_rows` rows) and the relative ridge (unless given) by leave-one-out, then
 /// refits on every row. `xs`/`ys` are standardized and in random row order; returns the
@@ -353,6 +447,9 @@ pub(crate) fn fit_best(
     let hold = (rows - sel).min(2 * sel);
     let use_holdout = ridge.is_none() && 2 * hold >= sel && hold >= HOLDOUT_MIN;
     let hy = ys.slice_axis(Axis(0), Slice::from(sel..sel + hold));
+    if use_holdout {
+        return fit_best_holdout(candidates, ys, mult, sel, hold, start);
+    }
     let eval = |&(basis, xs): &(&Basis, &[f64]), mult: f64, hint: Option<f64>| {
         let n = basis.n;
         let fit = if use_holdout {
@@ -502,16 +599,27 @@ fn refit_all(
     max: f64,
 ) -> Option<(Array2<f64>, f64, f64)> {
     let (g, b, yy, _) = basis.normal_equations(mult, xs, ys, false);
+    refit_solve(&g, &b, yy, start, max)
+}
+
+/// [`refit_all`] on given normal equations G W = B (Σ y² = `yy`).
+fn refit_solve(
+    g: &Array2<f64>,
+    b: &Array2<f64>,
+    yy: f64,
+    start: f64,
+    max: f64,
+) -> Option<(Array2<f64>, f64, f64)> {
     let probes = rademacher(g.nrows(), 24, 0x5eed);
     let mut r = start;
     loop {
-        if let Some(fit) = ridge_fit(&g, &b, yy, r, &probes) {
+        if let Some(fit) = ridge_fit(g, b, yy, r, &probes) {
             return Some((fit.weights, fit.relative, fit.dof));
         }
         if r >= max {
             return None;
         }
-        r = (r.max(f64::EPSILON) * 10f64.sqrt()).min(max);
+        r = (r.max(f64::EPSILON) * 10f64.powf(0.25)).min(max);
     }
 }
 
@@ -533,8 +641,22 @@ fn holdout_at(
     hold: (&[f64], ArrayView2<'_, f64>),
     hint: Option<f64>,
 ) -> Option<(f64, Array2<f64>, f64, f64)> {
-    let (g, b, yy, _) = basis.normal_equations(mult, fit.0, fit.1, false);
-    let a = basis.design(mult, hold.0);
+    let a_fit = basis.design(mult, fit.0);
+    let a_hold = basis.design(mult, hold.0);
+    holdout_solve(basis, a_fit.view(), fit.1, a_hold.view(), hold.1, hint)
+}
+
+/// [`holdout_at`] on given design matrices of the fitted rows and of the holdout rows.
+fn holdout_solve(
+    basis: &Basis,
+    a_fit: ArrayView2<'_, f64>,
+    y_fit: ArrayView2<'_, f64>,
+    a: ArrayView2<'_, f64>,
+    y_hold: ArrayView2<'_, f64>,
+    hint: Option<f64>,
+) -> Option<(f64, Array2<f64>, f64, f64)> {
+    let (g, b, yy) = normal_from(a_fit, y_fit, basis.cols());
+    let hold = ((), y_hold);
     let zero = Array2::zeros((basis.cols(), 0));
     let rows = hold.1.nrows().max(1) as f64;
     // (log10 ridge, error, weights) of the best ridge so far.
@@ -551,7 +673,10 @@ fn holdout_at(
         let Some(f) = ridge_fit(&g, &b, yy, 10f64.powf(e), &zero) else {
             return;
         };
-        let err = (&a.dot(&f.weights) - &hold.1).mapv(|v| v * v).sum() / rows;
+        let err = (&mul_few(a, f.weights.view()) - &hold.1)
+            .mapv(|v| v * v)
+            .sum()
+            / rows;
         if err.is_finite() && best.as_ref().is_none_or(|(_, s, _)| err < *s) {
             *best = Some((e, err, f.weights));
         }
@@ -596,6 +721,223 @@ fn holdout_at(
     }
     let (e, err, w) = best?;
     Some((err, w, 10f64.powf(e), f64::NAN))
+}
+
+/// G = AᵀA, B = AᵀY and Σ y² of a design matrix A (rows × cols) and targets Y.
+fn normal_from(
+    a: ArrayView2<'_, f64>,
+    ys: ArrayView2<'_, f64>,
+    cols: usize,
+) -> (Array2<f64>, Array2<f64>, f64) {
+    let mut g = Array2::zeros((cols, cols));
+    let mut b = Array2::zeros((cols, ys.ncols()));
+    gram_add(a, &mut g);
+    ndarray::linalg::general_mat_mul(1.0, &a.t(), &ys, 1.0, &mut b);
+    let yy = ys.iter().map(|v| v * v).sum();
+    (g, b, yy)
+}
+
+/// The raw Gaussians ([`Basis::raw`]) of the selection rows and of the holdout rows of one
+/// candidate geometry at the multiplier `mult`, kept along a width walk.
+#[derive(Clone)]
+struct RawRows {
+    mult: f64,
+    fit: Array2<f64>,
+    hold: Array2<f64>,
+}
+
+impl RawRows {
+    /// Moves the raw values to the multiplier `to`. Plain Gaussians at μ·√2 are the square
+    /// roots of those at μ (exp(−t/2μ²) = exp(−t/μ²)^½), at μ/√2 their squares (flushed below
+    /// e^−FLUSH like [`gaussian`]): a step of the walk costs one square root or product per
+    /// entry instead of a distance and an exponential. Other ratios are computed afresh.
+    fn move_to(&mut self, to: f64, basis: &Basis, xs_fit: &[f64], xs_hold: &[f64]) {
+        let k = 2.0 * (to / self.mult).log2();
+        let steps = k.round();
+        if (k - steps).abs() > 1e-9 || steps.abs() > 4.0 {
+            self.fit = basis.raw(to, xs_fit);
+            self.hold = basis.raw(to, xs_hold);
+        } else {
+            let steps = steps as i32;
+            let floor = (-FLUSH).exp();
+            for a in [&mut self.fit, &mut self.hold] {
+                a.as_slice_mut()
+                    .expect("raw values are contiguous")
+                    .par_chunks_mut(4096)
+                    .for_each(|chunk| {
+                        for v in chunk {
+                            for _ in 0..steps.max(0) {
+                                *v = v.sqrt();
+                            }
+                            for _ in 0..(-steps).max(0) {
+                                let sq = *v * *v;
+                                *v = if sq < floor { 0.0 } else { sq };
+                            }
+                        }
+                    });
+            }
+        }
+        self.mult = to;
+    }
+}
+
+/// [`fit_best`] scored on a holdout: `sel` fitted rows, the next `hold` rows scored. The raw
+/// Gaussians of the rows are computed once per candidate geometry (normalized and plain
+/// candidates on the same centres and rows share them) and moved along the width walk by
+/// [`RawRows::move_to`]; the refit on every row reuses the winner's raw values of the
+/// selection and holdout rows and computes only the remaining rows afresh.
+fn fit_best_holdout(
+    candidates: &[(&Basis, &[f64])],
+    ys: ArrayView2<'_, f64>,
+    mult: Option<f64>,
+    sel: usize,
+    hold: usize,
+    start: f64,
+) -> Option<(usize, Vec<f64>, Selected)> {
+    type Fit = (f64, Array2<f64>, f64, f64);
+    let rows = ys.nrows();
+    let sy = ys.slice_axis(Axis(0), Slice::from(..sel));
+    let hy = ys.slice_axis(Axis(0), Slice::from(sel..sel + hold));
+    fn split<'a>(c: &(&Basis, &'a [f64]), sel: usize, hold: usize) -> (&'a [f64], &'a [f64]) {
+        let n = c.0.n;
+        (&c.1[..sel * n], &c.1[sel * n..(sel + hold) * n])
+    }
+    let eval = |c: &(&Basis, &[f64]), raw: &RawRows, hint: Option<f64>| -> Option<Fit> {
+        let (xf, xh) = split(c, sel, hold);
+        let a_fit = c.0.design_of_raw(&raw.fit, xf);
+        let a_hold = c.0.design_of_raw(&raw.hold, xh);
+        holdout_solve(c.0, a_fit.view(), sy, a_hold.view(), hy, hint)
+    };
+    let first = mult.unwrap_or_else(|| start.clamp(MULT_RANGE.0, MULT_RANGE.1));
+    // Candidates with the same centres, widths and rows share their raw values.
+    let same = |a: &(&Basis, &[f64]), b: &(&Basis, &[f64])| {
+        std::ptr::eq(a.1, b.1) && a.0.centres == b.0.centres && a.0.base == b.0.base
+    };
+    let geometry: Vec<usize> = (0..candidates.len())
+        .map(|i| {
+            (0..i)
+                .find(|&j| same(&candidates[i], &candidates[j]))
+                .unwrap_or(i)
+        })
+        .collect();
+    let owners: Vec<usize> = (0..candidates.len())
+        .filter(|&i| geometry[i] == i)
+        .collect();
+    let raws: Vec<RawRows> = owners
+        .par_iter()
+        .map(|&i| {
+            let (xf, xh) = split(&candidates[i], sel, hold);
+            let basis = candidates[i].0;
+            RawRows {
+                mult: first,
+                fit: basis.raw(first, xf),
+                hold: basis.raw(first, xh),
+            }
+        })
+        .collect();
+    let raw_of = |i: usize| {
+        &raws[owners
+            .iter()
+            .position(|&o| o == geometry[i])
+            .expect("owner")]
+    };
+    // Every candidate at the first multiplier: the first one with the full ridge search,
+    // the others (in parallel) from its ridge as the hint (the ridge is the noise-to-signal
+    // ratio of the data, relative to the Gram's mean diagonal, so it carries over between
+    // bases; the hint's probes two decades to either side and the refinement still walk to
+    // a different optimum) …
+    let lead = eval(&candidates[0], raw_of(0), None);
+    let hint = lead.as_ref().map(|f| f.2);
+    let mut starts: Vec<Option<Fit>> = std::iter::once(lead)
+        .chain(
+            (1..candidates.len())
+                .into_par_iter()
+                .map(|i| eval(&candidates[i], raw_of(i), hint))
+                .collect::<Vec<_>>(),
+        )
+        .collect();
+    // … then the walk (module docs of `regressor`) only from the RACE_KEEP best of them.
+    let mut order: Vec<usize> = (0..candidates.len())
+        .filter(|&i| starts[i].is_some())
+        .collect();
+    let score_of = |i: usize| starts[i].as_ref().map_or(f64::INFINITY, |s| s.0);
+    order.sort_by(|&a, &b| score_of(a).total_cmp(&score_of(b)).then(a.cmp(&b)));
+    order.truncate(if mult.is_some() { 1 } else { RACE_KEEP });
+    let seeds: Vec<(usize, (f64, Fit), RawRows)> = order
+        .iter()
+        .filter_map(|&i| starts[i].take().map(|s| (i, (first, s), raw_of(i).clone())))
+        .collect();
+    drop(raws);
+    let walk = |(i, at, raw): (usize, (f64, Fit), RawRows)| {
+        let mut raw = raw;
+        if mult.is_some() {
+            return (i, at, raw);
+        }
+        let c = &candidates[i];
+        let (xf, xh) = split(c, sel, hold);
+        let step = std::f64::consts::SQRT_2;
+        let mut at = at;
+        for dir in [step, 1.0 / step] {
+            let mut next = at.0 * dir;
+            let mut improved = false;
+            while (MULT_RANGE.0..=MULT_RANGE.1).contains(&next) {
+                raw.move_to(next, c.0, xf, xh);
+                match eval(c, &raw, Some(at.1.2)) {
+                    Some(fit) if fit.0 < at.1.0 => {
+                        at = (next, fit);
+                        improved = true;
+                        next *= dir;
+                    }
+                    _ => break,
+                }
+            }
+            if improved {
+                break;
+            }
+        }
+        (i, at, raw)
+    };
+    let walks: Vec<(usize, (f64, Fit), RawRows)> = seeds.into_par_iter().map(walk).collect();
+    let (index, (mult, fit), mut raw) = walks
+        .into_iter()
+        .min_by(|a, b| a.1.1.0.total_cmp(&b.1.1.0).then(a.0.cmp(&b.0)))?;
+    // The refit on every row with the same absolute ridge (module docs of `regressor`): G and
+    // B from the selection and holdout rows' raw values at the chosen multiplier plus the
+    // remaining rows.
+    let c = &candidates[index];
+    let (basis, xs) = *c;
+    let (xf, xh) = split(c, sel, hold);
+    raw.move_to(mult, basis, xf, xh);
+    let n = basis.n;
+    let mut g = Array2::zeros((basis.cols(), basis.cols()));
+    let mut b = Array2::zeros((basis.cols(), ys.ncols()));
+    let rest = basis.design(mult, &xs[(sel + hold) * n..rows * n]);
+    let pieces = [
+        (basis.design_of_raw(&raw.fit, xf), sy),
+        (basis.design_of_raw(&raw.hold, xh), hy),
+        (
+            Cow::Owned(rest),
+            ys.slice_axis(Axis(0), Slice::from(sel + hold..)),
+        ),
+    ];
+    for (a, y) in &pieces {
+        gram_add(a.view(), &mut g);
+        ndarray::linalg::general_mat_mul(1.0, &a.t(), y, 1.0, &mut b);
+    }
+    drop(pieces);
+    let yy = ys.iter().map(|v| v * v).sum();
+    let r = (fit.2 * sel as f64 / rows as f64).max(holdout_floor());
+    let (weights, relative, dof) = refit_solve(&g, &b, yy, r, 1.0)?;
+    Some((
+        index,
+        weights.into_raw_vec_and_offset().0,
+        Selected {
+            mult,
+            ridge: relative,
+            dof,
+            score: fit.0,
+        },
+    ))
 }
 
 /// Candidates of [`fit_best`] whose multiplier is walked: the best ones at the first
@@ -645,7 +987,9 @@ pub(crate) fn fit_holdout(
             let err = if hy.nrows() == 0 {
                 fit.rss
             } else {
-                (&a.dot(&fit.weights) - &hy).mapv(|e| e * e).sum()
+                (&mul_few(a.view(), fit.weights.view()) - &hy)
+                    .mapv(|e| e * e)
+                    .sum()
             };
             if err.is_finite() && best.is_none_or(|(e, _, _)| err < e) {
                 best = Some((err, mult, r));
@@ -845,6 +1189,107 @@ mod tests {
         }
         // Clean targets: the holdout may go below the leave-one-out floor 10⁻¹², never below ε.
         assert!(r_clean >= f64::EPSILON * 0.999, "{r_clean}");
+    }
+
+    #[test]
+    fn raw_values_make_the_design_and_move_along_the_walk() {
+        // 2-D rows and 30 centres with unequal widths; one row far from every centre (all of
+        // its values flushed, so the normalized row falls back to its nearest centre).
+        let n = 2;
+        let mut xs: Vec<f64> = (0..200)
+            .flat_map(|i| {
+                let t = i as f64;
+                [
+                    (t * 0.618_034) % 1.0 * 4.0 - 2.0,
+                    (t * 0.414_214) % 1.0 * 4.0 - 2.0,
+                ]
+            })
+            .collect();
+        xs.extend([400.0, -300.0]);
+        let centres: Vec<f64> = (0..60)
+            .map(|i| ((i * 37) % 61) as f64 / 15.0 - 2.0)
+            .collect();
+        let base = nearest_widths(&centres, n, n + 1);
+        for (normalized, affine) in [(false, false), (true, false), (true, true), (false, true)] {
+            let basis = Basis {
+                n,
+                centres: centres.clone(),
+                base: base.clone(),
+                normalized,
+                affine,
+            };
+            let raw = basis.raw(1.7, &xs);
+            // The design from the raw values is the design, bit for bit.
+            assert_eq!(*basis.design_of_raw(&raw, &xs), basis.design(1.7, &xs));
+        }
+        let basis = Basis {
+            n,
+            centres,
+            base,
+            normalized: false,
+            affine: false,
+        };
+        let step = std::f64::consts::SQRT_2;
+        let (fit, hold) = xs.split_at(120 * n);
+        let mut moved = RawRows {
+            mult: 1.7,
+            fit: basis.raw(1.7, fit),
+            hold: basis.raw(1.7, hold),
+        };
+        // Up one and two steps (square roots), down four (squares, flushed), and a ratio
+        // that is no power of √2 (computed afresh).
+        for to in [1.7 * step, 1.7 * 2.0 * step, 1.7 / step, 0.9] {
+            moved.move_to(to, &basis, fit, hold);
+            for (got, rows) in [(&moved.fit, fit), (&moved.hold, hold)] {
+                let direct = basis.raw(to, rows);
+                for (g, d) in got.iter().zip(direct.iter()) {
+                    // Rounding of the exponent t = r²/w² (relative ε) scales the value's
+                    // relative error with t = −ln d; values below e^−150 may be 0 after a
+                    // square root of a flushed value.
+                    let tol = 1e-14 * (1.0 - d.ln().max(-FLUSH)) * d;
+                    let tiny = (-150.0f64).exp();
+                    assert!(
+                        (g - d).abs() <= tol || (*g == 0.0 && *d < tiny),
+                        "at {to}: {g} vs {d}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn fit_fixed_equals_the_fixed_selection_and_its_fitted_values_the_predictions() {
+        // y = sin 3x on 300 rows, 25 normalized Gaussians: the weights of `fit_fixed` are the
+        // fixed-multiplier, fixed-ridge selection's (`fit_gcv`), and its fitted values are the
+        // layer's predictions at the rows.
+        let rows = 300;
+        let xs: Vec<f64> = (0..rows)
+            .map(|i| -1.0 + 2.0 * ((i as f64 * 0.618_034) % 1.0))
+            .collect();
+        let ys: Vec<f64> = xs.iter().map(|x| (3.0 * x).sin()).collect();
+        let centres: Vec<f64> = (0..25).map(|i| -1.0 + 2.0 * i as f64 / 24.0).collect();
+        let basis = Basis {
+            n: 1,
+            base: nearest_widths(&centres, 1, 2),
+            centres,
+            normalized: true,
+            affine: false,
+        };
+        let yv = ArrayView2::from_shape((rows, 1), &ys).unwrap();
+        let (w, fitted) = fit_fixed(&basis, 1.5, 1e-6, &xs, yv).unwrap();
+        let (w_sel, _) = fit_gcv(&basis, &xs, yv, Some(1.5), Some(1e-6), rows, 1.5).unwrap();
+        assert_eq!(w.into_raw_vec_and_offset().0, w_sel);
+        let mut row = vec![0.0; basis.cols()];
+        for (r, x) in xs.iter().enumerate() {
+            basis.row(1.5, &[*x], &mut row);
+            let f: f64 = row.iter().zip(&w_sel).map(|(a, w)| a * w).sum();
+            assert!(
+                (f - fitted[[r, 0]]).abs() < 1e-12,
+                "row {r}: {f} vs {}",
+                fitted[[r, 0]]
+            );
+        }
+        assert!(fitted.iter().zip(&ys).all(|(f, y)| (f - y).abs() < 0.01));
     }
 
     #[test]

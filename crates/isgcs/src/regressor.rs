@@ -38,11 +38,15 @@
 //!    ε…1 (ε = machine epsilon) is the one with the lowest score (one Cholesky solve per
 //!    ridge: every second decade, then the best one's neighbours at ±1 decade; at the next μ
 //!    of a walk, the previous ridge and ±2 decades; then half decades around the best until
-//!    both neighbours are tried). Every candidate is scored at the pilot's multiplier (in
-//!    parallel); the two best then walk μ by √2 (in parallel) while the score falls. The
+//!    both neighbours are tried). Every candidate is scored at the pilot's multiplier (the
+//!    first with the full ridge search, the others in parallel from its ridge as the hint);
+//!    the two best then walk μ by √2 (in parallel) while the score falls. The raw Gaussians
+//!    of the selection and holdout rows are computed once per geometry and moved along the
+//!    walk (μ → √2 μ is an elementwise square root, μ → μ/√2 a square). The
 //!    candidate with the lowest score is refitted on all rows with the same absolute ridge
-//!    (relative ridge × S/N, floored at ε, raised by half decades while the factorisation
-//!    fails).
+//!    (relative ridge × S/N, floored at ε, raised by quarter decades while the
+//!    factorisation fails), its Gram matrix from the moved raw values of the selection and
+//!    holdout rows plus the remaining rows.
 //!
 //! Cost: growth O(steps · z · n); the output layer O(S · z²) per candidate multiplier (S
 //! selection rows; dense matrix products on two threads) plus O(z³/3 + H · z) per candidate
@@ -51,11 +55,14 @@
 pub use crate::data::RegressorError;
 use crate::data::check_data;
 use crate::kmeans::kmeans;
-use crate::readout::{Basis, Readout, Standardizer, egop, fit_best, fit_gcv, nearest_widths};
+use crate::readout::{
+    Basis, Readout, Standardizer, egop, fit_best, fit_fixed, fit_gcv, nearest_widths,
+};
 use crate::{GoalFunction, Isgcs, IsgcsError, Params, Termination};
 use ndarray::ArrayView2;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::ops::ControlFlow;
 
@@ -422,6 +429,11 @@ fn learn_metric(
     (best.1, best.2)
 }
 
+/// Width multiplier of the growth rounds' least-squares fits.
+const GROWTH_MULT: f64 = 1.5;
+/// Relative ridge of the growth rounds' least-squares fits.
+const GROWTH_RIDGE: f64 = 1e-6;
+
 /// Smallest scale of a direction in the learned metric, relative to the largest.
 const METRIC_FLOOR: f64 = 0.1;
 
@@ -547,42 +559,18 @@ impl Regressor {
                 affine: params.affine,
             };
             let yv = ArrayView2::from_shape((sample, m), &ys[..sample * m]).expect("shape");
-            let fitted = fit_gcv(
-                &basis,
-                &xs[..sample * n],
-                yv,
-                Some(1.5),
-                Some(1e-6),
-                sample,
-                1.5,
-            );
+            let fitted = fit_fixed(&basis, GROWTH_MULT, GROWTH_RIDGE, &xs[..sample * n], yv);
             tau.clear();
             tau.resize(z, 0.0);
-            if let Some((weights, sel)) = fitted {
-                let readout = Readout {
-                    basis,
-                    mult: sel.mult,
-                    weights,
-                    m,
-                    x: Standardizer {
-                        mean: vec![0.0; n],
-                        scale: vec![1.0; n],
-                    },
-                    y: Standardizer {
-                        mean: vec![0.0; m],
-                        scale: vec![1.0; m],
-                    },
-                    ridge: sel.ridge,
-                    transform: None,
-                };
-                let mut pred = vec![0.0; sample * m];
-                readout.predict(&xs[..sample * n], &mut pred);
-                for r in 0..sample {
-                    let x = &xs[r * n..(r + 1) * n];
-                    let e: f64 = (0..m)
-                        .map(|c| (pred[r * m + c] - ys[r * m + c]).powi(2))
-                        .sum();
-                    tau[net.bmu(x, None)] += e;
+            if let Some((_, pred)) = fitted {
+                let bmus: Vec<usize> = xs[..sample * n]
+                    .par_chunks(n)
+                    .with_min_len(64)
+                    .map(|x| net.bmu(x, None))
+                    .collect();
+                for (r, &bmu) in bmus.iter().enumerate() {
+                    let e: f64 = (0..m).map(|c| (pred[[r, c]] - ys[r * m + c]).powi(2)).sum();
+                    tau[bmu] += e;
                 }
             }
             let add = (z * 3 / 10).max(1).min(params.max_cells - z);

@@ -1113,25 +1113,38 @@ pub(crate) fn nearest_widths(centres: &[f64], n: usize, q: usize) -> Vec<f64> {
 mod tests {
     use super::*;
 
+    /// y = sin 3x at `rows` points spread over [−1, 1] (golden-ratio steps).
+    fn sine_rows(rows: usize) -> (Vec<f64>, Vec<f64>) {
+        let xs: Vec<f64> = (0..rows)
+            .map(|i| -1.0 + 2.0 * ((i as f64 * 0.618_034) % 1.0))
+            .collect();
+        let ys = xs.iter().map(|x| (3.0 * x).sin()).collect();
+        (xs, ys)
+    }
+
+    /// `count` Gaussians evenly spaced over [−1, 1] (1-D), widths from their nearest neighbours.
+    fn line_basis(count: usize, normalized: bool) -> Basis {
+        let centres: Vec<f64> = (0..count)
+            .map(|i| -1.0 + 2.0 * i as f64 / (count - 1) as f64)
+            .collect();
+        Basis {
+            n: 1,
+            base: nearest_widths(&centres, 1, 2),
+            centres,
+            normalized,
+            affine: false,
+        }
+    }
+
     #[test]
     fn fit_best_keeps_the_candidate_with_the_lower_leave_one_out_score() {
         // y = sin 3x on 400 rows in [-1, 1], 20 centres spread over the rows. Candidate 0 sees
         // the rows stretched by 5 (most rows far from every centre), candidate 1 the rows
         // themselves: candidate 1 must win, and its weights must reproduce the function.
         let rows = 400;
-        let xs: Vec<f64> = (0..rows)
-            .map(|i| -1.0 + 2.0 * ((i as f64 * 0.618_034) % 1.0))
-            .collect();
-        let ys: Vec<f64> = xs.iter().map(|x| (3.0 * x).sin()).collect();
+        let (xs, ys) = sine_rows(rows);
         let stretched: Vec<f64> = xs.iter().map(|x| 5.0 * x).collect();
-        let centres: Vec<f64> = (0..20).map(|i| -1.0 + 2.0 * i as f64 / 19.0).collect();
-        let basis = Basis {
-            n: 1,
-            base: nearest_widths(&centres, 1, 2),
-            centres,
-            normalized: false,
-            affine: false,
-        };
+        let basis = line_basis(20, false);
         let yv = ArrayView2::from_shape((rows, 1), &ys).unwrap();
         let candidates = [(&basis, &stretched[..]), (&basis, &xs[..])];
         let (index, weights, chosen) = fit_best(&candidates, yv, None, None, 200, 1.0).unwrap();
@@ -1163,14 +1176,7 @@ mod tests {
             .enumerate()
             .map(|(i, y)| y + 0.5 * (((i * 7919) % 1000) as f64 / 500.0 - 1.0))
             .collect();
-        let centres: Vec<f64> = (0..40).map(|i| -1.0 + 2.0 * i as f64 / 39.0).collect();
-        let basis = Basis {
-            n: 1,
-            base: nearest_widths(&centres, 1, 2),
-            centres,
-            normalized: false,
-            affine: false,
-        };
+        let basis = line_basis(40, false);
         let ridge = |ys: &[f64], hint: Option<f64>| {
             let yv = ArrayView2::from_shape((rows, 1), ys).unwrap();
             let (fy, hy) = yv.split_at(Axis(0), 400);
@@ -1263,18 +1269,8 @@ mod tests {
         // fixed-multiplier, fixed-ridge selection's (`fit_gcv`), and its fitted values are the
         // layer's predictions at the rows.
         let rows = 300;
-        let xs: Vec<f64> = (0..rows)
-            .map(|i| -1.0 + 2.0 * ((i as f64 * 0.618_034) % 1.0))
-            .collect();
-        let ys: Vec<f64> = xs.iter().map(|x| (3.0 * x).sin()).collect();
-        let centres: Vec<f64> = (0..25).map(|i| -1.0 + 2.0 * i as f64 / 24.0).collect();
-        let basis = Basis {
-            n: 1,
-            base: nearest_widths(&centres, 1, 2),
-            centres,
-            normalized: true,
-            affine: false,
-        };
+        let (xs, ys) = sine_rows(rows);
+        let basis = line_basis(25, true);
         let yv = ArrayView2::from_shape((rows, 1), &ys).unwrap();
         let (w, fitted) = fit_fixed(&basis, 1.5, 1e-6, &xs, yv).unwrap();
         let (w_sel, _) = fit_gcv(&basis, &xs, yv, Some(1.5), Some(1e-6), rows, 1.5).unwrap();
@@ -1298,10 +1294,7 @@ mod tests {
         // a zero (or rounding-negative) pivot. The refit must still return finite weights
         // with a ridge in [start, max]; a ridge that factorises is used as it is.
         let rows = 300;
-        let xs: Vec<f64> = (0..rows)
-            .map(|i| -1.0 + 2.0 * ((i as f64 * 0.618_034) % 1.0))
-            .collect();
-        let ys: Vec<f64> = xs.iter().map(|x| (3.0 * x).sin()).collect();
+        let (xs, ys) = sine_rows(rows);
         let centres: Vec<f64> = (0..20)
             .flat_map(|i| {
                 let c = -1.0 + 2.0 * i as f64 / 19.0;

@@ -473,12 +473,12 @@ pub(crate) fn fit_best(
         .collect();
     // … then the walk (module docs of `regressor`) only from the RACE_KEEP best of them: a
     // candidate that starts behind the leaders rarely overtakes both of them.
-    let mut order: Vec<usize> = (0..candidates.len())
-        .filter(|&i| starts[i].is_some())
-        .collect();
-    let score_of = |i: usize| starts[i].as_ref().map_or(f64::INFINITY, |s| s.1.0);
-    order.sort_by(|&a, &b| score_of(a).total_cmp(&score_of(b)).then(a.cmp(&b)));
-    order.truncate(if mult.is_some() { 1 } else { RACE_KEEP });
+    let keep = if mult.is_some() { 1 } else { RACE_KEEP };
+    let order = leaders(
+        candidates.len(),
+        |i| starts[i].as_ref().map(|s| s.1.0),
+        keep,
+    );
     let seeds: Vec<(usize, (f64, Fit))> = order
         .iter()
         .filter_map(|&i| starts[i].take().map(|s| (i, s)))
@@ -857,12 +857,8 @@ fn fit_best_holdout(
         )
         .collect();
     // … then the walk (module docs of `regressor`) only from the RACE_KEEP best of them.
-    let mut order: Vec<usize> = (0..candidates.len())
-        .filter(|&i| starts[i].is_some())
-        .collect();
-    let score_of = |i: usize| starts[i].as_ref().map_or(f64::INFINITY, |s| s.0);
-    order.sort_by(|&a, &b| score_of(a).total_cmp(&score_of(b)).then(a.cmp(&b)));
-    order.truncate(if mult.is_some() { 1 } else { RACE_KEEP });
+    let keep = if mult.is_some() { 1 } else { RACE_KEEP };
+    let order = leaders(candidates.len(), |i| starts[i].as_ref().map(|s| s.0), keep);
     let seeds: Vec<(usize, (f64, Fit), RawRows)> = order
         .iter()
         .filter_map(|&i| starts[i].take().map(|s| (i, (first, s), raw_of(i).clone())))
@@ -1107,6 +1103,16 @@ pub(crate) fn nearest_widths(centres: &[f64], n: usize, q: usize) -> Vec<f64> {
             if w > 0.0 { w } else { 1e-6 }
         })
         .collect()
+}
+
+/// The first `keep` of the `n` candidates that have a score (lower is better), best first; ties
+/// go to the lower index.
+fn leaders(n: usize, score: impl Fn(usize) -> Option<f64>, keep: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..n).filter(|&i| score(i).is_some()).collect();
+    let score_of = |i: usize| score(i).unwrap_or(f64::INFINITY);
+    order.sort_by(|&a, &b| score_of(a).total_cmp(&score_of(b)).then(a.cmp(&b)));
+    order.truncate(keep);
+    order
 }
 
 #[cfg(test)]

@@ -23,7 +23,7 @@ use super::raster::{Coverage, PinholeCamera, RadianceImage};
 use super::tonemap::{Exposure, srgb_encode};
 use crate::Trained;
 use crate::config::SolveConfig;
-use crate::config::{GatherMode, GatherSamples};
+use crate::config::GatherMode;
 use crate::domain::Domain;
 use crate::emitters::Emitters;
 use crate::gather::Gathered;
@@ -215,7 +215,7 @@ fn render_footprints(
         let (px, py) = pixel(p);
         pixel_seed(config.seed, px, py)
     };
-    let estimate = |p: usize, first: usize, samples: GatherSamples| {
+    let estimate = |p: usize, first: usize, rays: usize| {
         let (px, py) = pixel(p);
         let receiver = |u: [f64; 2]| {
             let sx = (px + u[0]) / f64::from(width);
@@ -225,33 +225,16 @@ fn render_footprints(
                 _ => None,
             }
         };
-        gather.estimate_footprint(
-            &receiver,
-            seed(p),
-            first,
-            samples.direct.max(samples.indirect),
-        )
+        gather.estimate_footprint(&receiver, seed(p), first, rays)
     };
+    let rays = (config.gather_samples.direct).max(config.gather_samples.indirect);
     let gathered: Vec<Gathered> = match config.paths.target_error {
-        Some(target) => super::adaptive::allocated_rounds(
-            n,
-            &|p, first, rays| {
-                let samples = GatherSamples {
-                    direct: rays,
-                    indirect: rays,
-                };
-                estimate(p, first, samples)
-            },
-            config
-                .gather_samples
-                .direct
-                .max(config.gather_samples.indirect),
-            target,
-            config.paths.max_rays,
-        ),
+        Some(target) => {
+            super::adaptive::allocated_rounds(n, &estimate, rays, target, config.paths.max_rays)
+        }
         None => (0..n)
             .into_par_iter()
-            .map(|p| estimate(p, 0, config.gather_samples).gathered())
+            .map(|p| estimate(p, 0, rays).gathered())
             .collect(),
     };
     PixelImage {
@@ -373,6 +356,7 @@ impl PixelImage {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::GatherSamples;
 
     /// Every pixel of a 256 × 256 image has its own seed (a first version keyed them by the pixel
     /// index at a coarse quantization: about 60 neighbours in a row shared one Sobol scrambling).

@@ -22,8 +22,8 @@
 use super::raster::{Coverage, PinholeCamera, RadianceImage};
 use super::tonemap::{Exposure, srgb_encode};
 use crate::Trained;
-use crate::config::SolveConfig;
 use crate::config::GatherMode;
+use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::emitters::Emitters;
 use crate::gather::Gathered;

@@ -1082,17 +1082,18 @@ pub(crate) fn fit_holdout(
 /// the fitted layer f (weights cols × m) over the rows `xs` (N × n, the basis' coordinates),
 /// from the analytic gradients of the Gaussians.
 pub(crate) fn egop(basis: &Basis, mult: f64, weights: &[f64], m: usize, xs: &[f64]) -> Vec<f64> {
-    let (n, z, cols) = (basis.n, basis.cells(), basis.cols());
+    let (n, z) = (basis.n, basis.cells());
     let rows = (xs.len() / n).max(1);
     // Fixed chunks of rows summed in order, so the result does not depend on the threads.
     let chunks: Vec<Vec<f64>> = xs
         .par_chunks(n * 64)
         .map(|chunk| {
-            let (mut e, mut phi, mut grad) = (vec![0.0; n * n], vec![0.0; cols], vec![0.0; n]);
+            let (mut e, mut grad) = (vec![0.0; n * n], vec![0.0; n]);
+            let (mut raw, mut phi) = (vec![0.0; z], vec![0.0; z]);
             for x in chunk.chunks_exact(n) {
-                basis.row(mult, x, &mut phi);
-                // Un-normalized values and their sum (the row is normalized when asked).
-                let mut raw = vec![0.0; z];
+                // Un-normalized values and their sum, and the basis values φ from them (the
+                // same numbers as `Basis::row`; its affine columns are not needed: f below
+                // is the Gaussians' part, and a row without any positive value adds nothing).
                 let mut sum = 0.0;
                 for i in 0..z {
                     let c = &basis.centres[i * n..(i + 1) * n];
@@ -1100,6 +1101,13 @@ pub(crate) fn egop(basis: &Basis, mult: f64, weights: &[f64], m: usize, xs: &[f6
                     let r2: f64 = c.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum();
                     raw[i] = gaussian(r2, w * w);
                     sum += raw[i];
+                }
+                for (p, &r) in phi.iter_mut().zip(&raw) {
+                    *p = if basis.normalized && sum > 0.0 {
+                        r / sum
+                    } else {
+                        r
+                    };
                 }
                 for out in 0..m {
                     let f: f64 = (0..z).map(|i| phi[i] * weights[i * m + out]).sum();

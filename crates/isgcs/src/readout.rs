@@ -696,10 +696,14 @@ fn holdout_at(
 ) -> Option<(f64, Array2<f64>, f64, f64)> {
     let a_fit = basis.design(mult, fit.0);
     let a_hold = basis.design(mult, hold.0);
-    holdout_solve(basis, a_fit.view(), fit.1, a_hold.view(), hold.1, hint)
+    holdout_solve(basis, a_fit.view(), fit.1, a_hold.view(), hold.1, hint).map(|(f, _)| f)
 }
 
-/// [`holdout_at`] on given design matrices of the fitted rows and of the holdout rows.
+/// G = AᵀA and B = AᵀY of the fitted rows.
+type Normal = (Array2<f64>, Array2<f64>);
+
+/// [`holdout_at`] on given design matrices of the fitted rows and of the holdout rows; also
+/// returns the fitted rows' G and B (the refit adds the other rows to them).
 fn holdout_solve(
     basis: &Basis,
     a_fit: ArrayView2<'_, f64>,
@@ -707,7 +711,7 @@ fn holdout_solve(
     a: ArrayView2<'_, f64>,
     y_hold: ArrayView2<'_, f64>,
     hint: Option<f64>,
-) -> Option<(f64, Array2<f64>, f64, f64)> {
+) -> Option<((f64, Array2<f64>, f64, f64), Normal)> {
     let (g, b, yy) = normal_from(a_fit, y_fit, basis.cols());
     let hold = ((), y_hold);
     let zero = Array2::zeros((basis.cols(), 0));
@@ -773,7 +777,7 @@ fn holdout_solve(
         }
     }
     let (e, err, w) = best?;
-    Some((err, w, 10f64.powf(e), f64::NAN))
+    Some(((err, w, 10f64.powf(e), f64::NAN), (g, b)))
 }
 
 /// G = AᵀA, B = AᵀY and Σ y² of a design matrix A (rows × cols) and targets Y.
@@ -865,7 +869,8 @@ fn fit_best_holdout(
     hold: usize,
     start: f64,
 ) -> Option<(usize, Vec<f64>, Selected)> {
-    type Fit = (f64, Array2<f64>, f64, f64);
+    // The selection's score, weights, relative ridge and tr H, with the fitted rows' G and B.
+    type Fit = ((f64, Array2<f64>, f64, f64), Normal);
     let rows = ys.nrows();
     let sy = ys.slice_axis(Axis(0), Slice::from(..sel));
     let hy = ys.slice_axis(Axis(0), Slice::from(sel..sel + hold));
@@ -918,7 +923,7 @@ fn fit_best_holdout(
     // bases; the hint's probes two decades to either side and the refinement still walk to
     // a different optimum) …
     let lead = eval(&candidates[0], raw_of(0), None);
-    let hint = lead.as_ref().map(|f| f.2);
+    let hint = lead.as_ref().map(|f| f.0.2);
     let mut starts: Vec<Option<Fit>> = std::iter::once(lead)
         .chain(
             (1..candidates.len())
@@ -929,7 +934,11 @@ fn fit_best_holdout(
         .collect();
     // … then the walk (module docs of `regressor`) only from the RACE_KEEP best of them.
     let keep = if mult.is_some() { 1 } else { RACE_KEEP };
-    let order = leaders(candidates.len(), |i| starts[i].as_ref().map(|s| s.0), keep);
+    let order = leaders(
+        candidates.len(),
+        |i| starts[i].as_ref().map(|s| s.0.0),
+        keep,
+    );
     let seeds: Vec<(usize, (f64, Fit), RawRows)> = order
         .iter()
         .filter_map(|&i| starts[i].take().map(|s| (i, (first, s), raw_of(i).clone())))
@@ -949,8 +958,8 @@ fn fit_best_holdout(
             let mut improved = false;
             while (MULT_RANGE.0..=MULT_RANGE.1).contains(&next) {
                 raw.move_to(next, c.0, xf, xh);
-                match eval(c, &raw, Some(at.1.2)) {
-                    Some(fit) if fit.0 < at.1.0 => {
+                match eval(c, &raw, Some(at.1.0.2)) {
+                    Some(fit) if fit.0.0 < at.1.0.0 => {
                         at = (next, fit);
                         improved = true;
                         next *= dir;
@@ -967,20 +976,18 @@ fn fit_best_holdout(
     let walks: Vec<(usize, (f64, Fit), RawRows)> = seeds.into_par_iter().map(walk).collect();
     let (index, (mult, fit), mut raw) = walks
         .into_iter()
-        .min_by(|a, b| a.1.1.0.total_cmp(&b.1.1.0).then(a.0.cmp(&b.0)))?;
+        .min_by(|a, b| a.1.1.0.0.total_cmp(&b.1.1.0.0).then(a.0.cmp(&b.0)))?;
+    let (fit, (mut g, mut b)) = fit;
     // The refit on every row with the same absolute ridge (module docs of `regressor`): G and
-    // B from the selection and holdout rows' raw values at the chosen multiplier plus the
-    // remaining rows.
+    // B of the selection rows as scored at the chosen multiplier, plus those of the holdout
+    // rows' raw values moved there and of the remaining rows.
     let c = &candidates[index];
     let (basis, xs) = *c;
     let (xf, xh) = split(c, sel, hold);
     raw.move_to(mult, basis, xf, xh);
     let n = basis.n;
-    let mut g = Array2::zeros((basis.cols(), basis.cols()));
-    let mut b = Array2::zeros((basis.cols(), ys.ncols()));
     let rest = basis.design(mult, &xs[(sel + hold) * n..rows * n]);
     let pieces = [
-        (basis.design_of_raw(&raw.fit, xf), sy),
         (basis.design_of_raw(&raw.hold, xh), hy),
         (
             Cow::Owned(rest),

@@ -45,8 +45,9 @@
 //!    walk (μ → √2 μ is an elementwise square root, μ → μ/√2 a square). The
 //!    candidate with the lowest score is refitted on all rows with the same absolute ridge
 //!    (relative ridge × S/N, floored at ε, raised by quarter decades while the
-//!    factorisation fails), its Gram matrix from the moved raw values of the selection and
-//!    holdout rows plus the remaining rows.
+//!    factorisation fails), its Gram matrix that of the selection rows as scored at the
+//!    chosen multiplier plus those of the holdout rows (moved raw values) and the remaining
+//!    rows.
 //!
 //! Cost: growth O(steps · z · n); the output layer O(S · z²) per candidate multiplier (S
 //! selection rows; dense matrix products on two threads) plus O(z³/3 + H · z) per candidate

@@ -983,8 +983,10 @@ fn fit_best_holdout(
     // rows' raw values moved there and of the remaining rows.
     let c = &candidates[index];
     let (basis, xs) = *c;
-    let (xf, xh) = split(c, sel, hold);
-    raw.move_to(mult, basis, xf, xh);
+    let (_, xh) = split(c, sel, hold);
+    // Only the holdout rows' raw values are needed.
+    raw.fit = Array2::zeros((0, basis.cells()));
+    raw.move_to(mult, basis, &[], xh);
     let n = basis.n;
     let rest = basis.design(mult, &xs[(sel + hold) * n..rows * n]);
     let pieces = [

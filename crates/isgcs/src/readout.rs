@@ -701,6 +701,8 @@ fn holdout_at(
 
 /// G = AᵀA and B = AᵀY of the fitted rows.
 type Normal = (Array2<f64>, Array2<f64>);
+/// A selection's score, weights (cols × m), relative ridge and tr H.
+type Scored = (f64, Array2<f64>, f64, f64);
 
 /// [`holdout_at`] on given design matrices of the fitted rows and of the holdout rows; also
 /// returns the fitted rows' G and B (the refit adds the other rows to them).
@@ -711,7 +713,7 @@ fn holdout_solve(
     a: ArrayView2<'_, f64>,
     y_hold: ArrayView2<'_, f64>,
     hint: Option<f64>,
-) -> Option<((f64, Array2<f64>, f64, f64), Normal)> {
+) -> Option<(Scored, Normal)> {
     let (g, b, yy) = normal_from(a_fit, y_fit, basis.cols());
     let hold = ((), y_hold);
     let zero = Array2::zeros((basis.cols(), 0));
@@ -870,7 +872,7 @@ fn fit_best_holdout(
     start: f64,
 ) -> Option<(usize, Vec<f64>, Selected)> {
     // The selection's score, weights, relative ridge and tr H, with the fitted rows' G and B.
-    type Fit = ((f64, Array2<f64>, f64, f64), Normal);
+    type Fit = (Scored, Normal);
     let rows = ys.nrows();
     let sy = ys.slice_axis(Axis(0), Slice::from(..sel));
     let hy = ys.slice_axis(Axis(0), Slice::from(sel..sel + hold));

@@ -45,8 +45,9 @@
 //!    walk (μ → √2 μ is an elementwise square root, μ → μ/√2 a square). The
 //!    candidate with the lowest score is refitted on all rows with the same absolute ridge
 //!    (relative ridge × S/N, floored at ε, raised by quarter decades while the
-//!    factorisation fails), its Gram matrix from the moved raw values of the selection and
-//!    holdout rows plus the remaining rows.
+//!    factorisation fails), its Gram matrix that of the selection rows as scored at the
+//!    chosen multiplier plus those of the holdout rows (moved raw values) and the remaining
+//!    rows.
 //!
 //! Cost: growth O(steps · z · n); the output layer O(S · z²) per candidate multiplier (S
 //! selection rows; dense matrix products on two threads) plus O(z³/3 + H · z) per candidate
@@ -357,6 +358,8 @@ fn inverse(t: &[f64], n: usize) -> Option<Vec<f64>> {
 const METRIC_ROWS: usize = 2000;
 /// Centres of the metric search's pilot networks.
 const METRIC_CELLS: usize = 100;
+/// Pilots of the metric search (the first in the identity metric).
+const METRIC_ROUNDS: usize = 3;
 
 /// The input metric (module docs, step 2): pilot Gaussian networks (k-means centres, output
 /// layer chosen by leave-one-out) in the identity metric and then, recursively, in the metric
@@ -381,7 +384,7 @@ fn learn_metric(
     let mut best: (f64, Option<Vec<f64>>, f64) = (f64::INFINITY, None, 1.0);
     let mut t: Option<Vec<f64>> = None;
     let mut start = 1.0;
-    for _ in 0..3 {
+    for round in 0..METRIC_ROUNDS {
         let tx = t
             .as_ref()
             .map_or_else(|| sx.to_vec(), |t| apply_transform(t, sx, n));
@@ -401,6 +404,10 @@ fn learn_metric(
         }
         start = sel.mult;
         best = (sel.score, t.clone(), sel.mult);
+        if round + 1 == METRIC_ROUNDS {
+            // No pilot would try the next metric.
+            break;
+        }
         // E in the original coordinates: ∇ₓf = Tᵀ ∇f(Tx), so E = Tᵀ E' T.
         let e1 = egop(&basis, sel.mult, &weights, m, &tx);
         let e = match &t {

@@ -35,12 +35,9 @@ use std::sync::Arc;
 
 impl Element {
     /// ∫_element exp(−a|x − c|²) dx, exactly (erf for segments, Owen's T for triangles).
+    /// Many Gaussians on one element: [`SceneSurface`] prepares it once.
     pub fn gaussian_integral(&self, c: DVec3, a: f64) -> f64 {
-        match *self {
-            Element::Segment([p, q]) => integrals::segment(c, a, p, q),
-            Element::Triangle([p, q, r]) => integrals::triangle(c, a, p, q, r),
-            Element::Quad(q) => integrals::quad(c, a, q),
-        }
+        Prepared::of(self).gaussian_integral(c, a)
     }
 }
 
@@ -195,7 +192,7 @@ impl Prepared {
         polygon.map_or(Self::Empty, Self::Polygon)
     }
 
-    /// The same value as [`Element::gaussian_integral`].
+    /// `∫ exp(−a|x − c|²) dx` over the element (erf for segments, the signed edge sum for polygons).
     #[inline]
     fn gaussian_integral(&self, c: DVec3, a: f64) -> f64 {
         match self {
@@ -921,18 +918,6 @@ mod integrals {
     /// ∫ over segment p–q of exp(−a|x − c|²).
     pub fn segment(c: DVec3, a: f64, p: DVec3, q: DVec3) -> f64 {
         gauss_integrals::segment(c.to_array(), a, p.to_array(), q.to_array())
-    }
-
-    /// ∫ over triangle p,q,r of exp(−a|x − c|²) (closed form; absolute accuracy is what a sum of
-    /// near elements needs).
-    pub fn triangle(c: DVec3, a: f64, p: DVec3, q: DVec3, r: DVec3) -> f64 {
-        gauss_integrals::triangle_fast(c.to_array(), a, p.to_array(), q.to_array(), r.to_array())
-    }
-
-    /// ∫ over the planar convex quadrilateral q of exp(−a|x − c|²) (closed form over its four
-    /// edges; absolute accuracy as [`triangle`]).
-    pub fn quad(c: DVec3, a: f64, q: [DVec3; 4]) -> f64 {
-        gauss_integrals::quad_fast(c.to_array(), a, q.map(|v| v.to_array()))
     }
 
     /// ∫ over a whole flat domain (plane if `surface_dim` = 2, line if 1) at distance `h`.

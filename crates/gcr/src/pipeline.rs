@@ -266,11 +266,6 @@ pub(crate) fn singletons(count: usize) -> Vec<Vec<usize>> {
 /// None when nothing was measured), its standard errors estimated with `dof` degrees of freedom
 /// in all: `error·√(dof/χ²₀.₁(dof))`. What rounds to a target compare with the target.
 pub(crate) fn error_bound(gathered: &[Gathered], dof: usize) -> Option<f64> {
-    let dof = dof.min(
-        (gathered.iter())
-            .filter(|g| g.std_error.iter().any(|s| *s != 0.0))
-            .count(),
-    );
     relative_std_error(gathered).map(|error| error * (dof as f64 / chi2_lower(dof)).sqrt())
 }
 

@@ -57,7 +57,7 @@ pub(super) fn allocated_rounds(
         .map(|p| estimate(p, 0, pilot))
         .collect();
     let pilot_gathered: Vec<Gathered> = pilot_estimates.iter().map(|e| e.gathered()).collect();
-    let Some(bound) = error_bound(&pilot_gathered, n) else {
+    let Some(bound) = error_bound(&pilot_gathered, measured(&pilot_gathered)) else {
         return pilot_gathered;
     };
     if bound <= target || pilot >= max_rays {
@@ -131,7 +131,7 @@ pub(super) fn allocated_rounds(
             })
             .collect();
         let capped = done.iter().all(|&d| d >= cap);
-        match error_bound(&gathered, n) {
+        match error_bound(&gathered, measured(&gathered)) {
             Some(bound) if bound > target && !capped => {
                 // variance ∝ 1/level: the next level covers the missing part, 2× to 4×
                 level *= (bound / target).powi(2).clamp(2.0, 4.0);
@@ -139,6 +139,13 @@ pub(super) fn allocated_rounds(
             _ => return gathered,
         }
     }
+}
+
+/// Degrees of freedom of the pixels' standard errors: one per pixel that has one (two replicates).
+fn measured(gathered: &[Gathered]) -> usize {
+    (gathered.iter())
+        .filter(|g| g.std_error.iter().any(|s| *s != 0.0))
+        .count()
 }
 
 /// The Sobol index (per replicate) a pixel's rays run to for `wanted` rays per replicate after

@@ -39,7 +39,7 @@ use crate::config::GatherSamples;
 use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
 use crate::gather::{emitter_geometry, geometry_3d};
-use crate::paths::{PathGather, PointEstimate, REPLICATES, Vertex, replicate_sobol};
+use crate::paths::{PathGather, PointEstimate, REPLICATES, SobolRay, Vertex};
 use glam::DVec3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -152,9 +152,9 @@ struct Group<'g> {
 }
 
 impl Group<'_> {
-    /// Member k's Sobol point i (dimension `dim`) from index `first` of its replicate's sequence.
-    fn qmc(&self, first: usize, k: usize, i: usize, dim: u32) -> f64 {
-        replicate_sobol(self.seeds[k], self.replicates, first, i, dim)
+    /// Member k's Sobol point i from index `first` of its replicate's sequence.
+    fn qmc(&self, first: usize, k: usize, i: usize) -> SobolRay {
+        SobolRay::new(self.seeds[k], self.replicates, first, i)
     }
 
     /// b̃(x) = c·Σ_a G(y_a, x): the shared cosine technique's count density at x, unoccluded.
@@ -247,13 +247,14 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
         let table = self.emitters.table();
         for (k, &(y, n, face)) in g.members.iter().enumerate() {
             for i in 0..g.n_e {
-                let Some(ef) = table.pick_by_power(g.qmc(g.first, k, i, 0)) else {
+                let a = g.qmc(g.first, k, i).set(0);
+                let Some(ef) = table.pick_by_power(a[0]) else {
                     continue;
                 };
                 if ef == face {
                     continue;
                 }
-                let u = [g.qmc(g.first, k, i, 1), g.qmc(g.first, k, i, 2)];
+                let u = [a[1], a[2]];
                 let Some((x, geo)) = emitter_geometry(self.domain, ef, u, y, n, face) else {
                     continue;
                 };
@@ -287,7 +288,9 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
         let mut weight = vec![0.0; g.members.len()];
         for (a, &(y, n, face)) in g.members.iter().enumerate() {
             for i in 0..g.c {
-                let u = [g.qmc(g.first_c, a, i, 3), g.qmc(g.first_c, a, i, 4)];
+                let sobol = g.qmc(g.first_c, a, i);
+                let (sa, sb) = (sobol.set(0), sobol.set(1));
+                let u = SobolRay::cosine(sa, sb);
                 let from = Domain::surface_point_3d(y, n, face);
                 let Some(h) = bvh.trace_from(&from, cosine_hemisphere(n, u)) else {
                     continue;
@@ -320,7 +323,7 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
                     n: nx,
                     face: hit.face,
                 };
-                let first = std::array::from_fn(|d| g.qmc(g.first_c, a, i, 5 + d as u32));
+                let first = SobolRay::path_vertex(sb, sobol.set(2));
                 let l = self.reflected(&vertex, Some(first), &mut rng);
                 let t: Bands = std::array::from_fn(|b| l[b] + mis * e[b]);
                 for (k, &w) in weight.iter().enumerate().filter(|(_, w)| **w > 0.0) {

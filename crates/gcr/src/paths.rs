@@ -50,19 +50,52 @@ const MAX_DEPTH: usize = 100_000;
 /// and little of the QMC gain lost (8 replicates cost 1.3–2× in variance, measured).
 pub(crate) const REPLICATES: usize = 2;
 
-/// Sample i's Sobol coordinate `dim` for a point seeded `seed`: sample i belongs to replicate
-/// i mod `replicates`, each replicate its own Owen scrambling of the sequence, continued from index
+/// Ray i's Owen-scrambled Sobol point for a point seeded `seed`: ray i belongs to replicate
+/// i mod `replicates`, each replicate its own scrambling of the sequence, continued from index
 /// `first` (per replicate) so that rounds take disjoint points.
-pub(crate) fn replicate_sobol(
-    seed: u64,
-    replicates: usize,
-    first: usize,
-    i: usize,
-    dim: u32,
-) -> f64 {
-    let (r, j) = (i % replicates, first + i / replicates);
-    let scramble = (seed ^ (r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) as u32;
-    f64::from(sobol_burley::sample(j as u32, dim, scramble)).min(1.0 - f64::EPSILON)
+///
+/// The dimensions, four at a time ([`SobolRay::set`]): 0 the emitter, 1–2 the point on it, 3–4
+/// the cosine ray, 5–9 a path's first vertex (as 0–4), 10–11 the point in a pixel.
+///
+/// `sobol_burley` reads 16 bits of the index: index j and j + 2¹⁶ would be the same point, so
+/// each block of 2¹⁶ indices takes its own scrambling (block 0 the replicate's): the blocks are
+/// independent randomized nets, not one longer one.
+#[derive(Clone, Copy)]
+pub(crate) struct SobolRay {
+    index: u32,
+    scramble: u32,
+}
+
+impl SobolRay {
+    pub(crate) fn new(seed: u64, replicates: usize, first: usize, i: usize) -> Self {
+        let (r, j) = (i % replicates, first + i / replicates);
+        let block = (j >> 16) as u64;
+        let scramble = (seed
+            ^ (r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            ^ block.wrapping_mul(0xD6E8_FEB8_6659_FD93)) as u32;
+        Self {
+            index: (j & 0xFFFF) as u32,
+            scramble,
+        }
+    }
+
+    /// Dimensions 4·set … 4·set + 3, in [0, 1): one SIMD evaluation, the same values as four of
+    /// `sobol_burley::sample`.
+    pub(crate) fn set(&self, set: u32) -> [f64; 4] {
+        sobol_burley::sample_4d(self.index, set, self.scramble)
+            .map(|v| f64::from(v).min(1.0 - f64::EPSILON))
+    }
+
+    /// Dimensions 3–4 (the cosine ray) from sets 0 and 1.
+    pub(crate) fn cosine(a: [f64; 4], b: [f64; 4]) -> [f64; 2] {
+        [a[3], b[0]]
+    }
+
+    /// Dimensions 5–9 (a path's first vertex beyond the point, in [`PathGather::reflected`]'s
+    /// order) from sets 1 and 2.
+    pub(crate) fn path_vertex(b: [f64; 4], c: [f64; 4]) -> [f64; 5] {
+        [b[1], b[2], b[3], c[0], c[1]]
+    }
 }
 
 /// Everything the consistent gather needs, built once per set of output points.
@@ -252,7 +285,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             n_c: n_c as f64,
         };
         // ⟨Ray i belongs to replicate i mod R: each replicate is its own Owen scrambling⟩
-        let qmc = |i: usize, dim: u32| replicate_sobol(seed, replicates, first, i, dim);
+        let qmc = |i: usize| SobolRay::new(seed, replicates, first, i);
         // Per replicate, its share of ρ·(D̂ + mean C + mean correction).
         let mut share = [[0.0; BANDS]; REPLICATES];
         let mut from_networks = [0.0; BANDS];
@@ -263,18 +296,17 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         };
         // ⟨Direct light: shadow rays, MIS with the cosine rays⟩
         for i in 0..n_e {
-            add(
-                i,
-                self.next_event(&z, &mis, (qmc(i, 0), [qmc(i, 1), qmc(i, 2)])),
-                1.0,
-            );
+            let a = qmc(i).set(0);
+            add(i, self.next_event(&z, &mis, (a[0], [a[1], a[2]])), 1.0);
         }
         // ⟨Cosine rays: the networks' C at each hit, the correction L̂ − C at the first ones⟩
         let corrected = self.settings.corrections.min(n_c);
         // With every ray corrected C cancels exactly: not evaluated.
         let networks_read = corrected < n_c;
         for i in 0..n_c {
-            let (c, d, hit) = self.cosine_ray(&z, &mis, networks_read, [qmc(i, 3), qmc(i, 4)]);
+            let u = qmc(i);
+            let (a, b) = (u.set(0), u.set(1));
+            let (c, d, hit) = self.cosine_ray(&z, &mis, networks_read, SobolRay::cosine(a, b));
             add(i, d, 1.0);
             add(i, c, 1.0 / n_c as f64);
             for k in 0..BANDS {
@@ -282,7 +314,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             }
             if i < corrected {
                 if let Some(x) = hit {
-                    let first = std::array::from_fn(|d| qmc(i, 5 + d as u32));
+                    let first = SobolRay::path_vertex(b, u.set(2));
                     let l = self.reflected(&x, Some(first), &mut rng);
                     let t: Bands = std::array::from_fn(|k| l[k] - c[k]);
                     add(i, t, 1.0 / corrected as f64);
@@ -310,7 +342,6 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         let mut rng =
             ChaCha8Rng::seed_from_u64(seed ^ (first as u64).wrapping_mul(0xD1B5_4A32_D192_ED03));
         let replicates = REPLICATES.min(rays).max(1);
-        let qmc = |i: usize, dim: u32| replicate_sobol(seed, replicates, first, i, dim);
         // One shadow ray and one cosine ray per sample.
         let mis = Mis {
             emitters: self.emitters,
@@ -320,7 +351,9 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         let mut share = [[0.0; BANDS]; REPLICATES];
         let mut ray_square = [0.0; BANDS];
         for i in 0..rays {
-            let Some((y, n, face)) = receiver([qmc(i, 10), qmc(i, 11)]) else {
+            let u = SobolRay::new(seed, replicates, first, i);
+            let pixel = u.set(2);
+            let Some((y, n, face)) = receiver([pixel[2], pixel[3]]) else {
                 continue;
             };
             let z = Vertex { p: y, n, face };
@@ -330,11 +363,12 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             );
             let mut b = e;
             if rho.iter().any(|r| *r != 0.0) {
-                let mut light = self.next_event(&z, &mis, (qmc(i, 0), [qmc(i, 1), qmc(i, 2)]));
-                let (_, d, hit) = self.cosine_ray(&z, &mis, false, [qmc(i, 3), qmc(i, 4)]);
+                let (s0, s1) = (u.set(0), u.set(1));
+                let mut light = self.next_event(&z, &mis, (s0[0], [s0[1], s0[2]]));
+                let (_, d, hit) = self.cosine_ray(&z, &mis, false, SobolRay::cosine(s0, s1));
                 let l = match hit {
                     Some(x) => {
-                        let first = std::array::from_fn(|d| qmc(i, 5 + d as u32));
+                        let first = SobolRay::path_vertex(s1, pixel);
                         self.reflected(&x, Some(first), &mut rng)
                     }
                     None => [0.0; BANDS],
@@ -460,6 +494,35 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
 mod tests {
     use super::*;
     use scene_sampler::{AnyScene, KernelSampler, SceneBvh, builtin};
+
+    /// Four dimensions at once are `sobol_burley::sample`'s values; index j and j + 2¹⁶ of a
+    /// replicate are different points (the library reads 16 bits of the index: without the
+    /// block's own scrambling they were the same point), and within a block of 2¹⁶ the points of
+    /// one replicate are a balanced net (each of 16 strata of dimension 3 gets 1/16 of them).
+    #[test]
+    fn sobol_rays_are_distinct_beyond_the_16_bit_index() {
+        let (seed, reps) = (0x1234_5678_9ABC, 2);
+        for i in [0, 1, 7, 1000] {
+            let u = SobolRay::new(seed, reps, 3, i);
+            let (r, j) = (i % reps, 3 + i / reps);
+            let scramble = (seed ^ (r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) as u32;
+            for (d, v) in u.set(1).iter().enumerate() {
+                let one = f64::from(sobol_burley::sample(j as u32, 4 + d as u32, scramble));
+                assert_eq!(*v, one.min(1.0 - f64::EPSILON));
+            }
+        }
+        let (a, b) = (
+            SobolRay::new(seed, 1, 5, 0),
+            SobolRay::new(seed, 1, 5 + (1 << 16), 0),
+        );
+        assert_ne!(a.set(0), b.set(0));
+        let mut strata = [0usize; 16];
+        for i in 0..1 << 12 {
+            let v = SobolRay::new(seed, 1, 1 << 16, i).set(0)[3];
+            strata[(v * 16.0) as usize] += 1;
+        }
+        assert!(strata.iter().all(|&c| c == 1 << 8), "{strata:?}");
+    }
 
     /// The furnace as a domain (leaked: tests only), its emitters, the exact B = E/(1 − ρ) and E.
     fn furnace() -> (Domain<'static>, Emitters, f64, f64) {

@@ -559,14 +559,14 @@ impl Isgcs {
         }
         let mut d2 = std::mem::take(&mut self.scratch_d2);
         d2.clear();
-        let mut b = 0;
-        let mut best = f64::INFINITY;
-        for i in 0..self.len() {
-            let di = self.dist2(i, x);
-            d2.push(di);
+        d2.resize(self.len(), 0.0);
+        let (mut b, mut best) = (0, f64::INFINITY);
+        for (i, (c, slot)) in self.centres.chunks_exact(self.n).zip(&mut d2).enumerate() {
+            // as `dist2`: the same terms summed in the same order
+            let di: f64 = c.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum();
+            *slot = di;
             if di < best {
-                best = di;
-                b = i;
+                (best, b) = (di, i);
             }
         }
         self.steps += 1;
@@ -594,30 +594,30 @@ impl Isgcs {
         }
         self.scratch_nb = nb;
         // Supervised: delta rule over the cells whose Gaussian reaches x (as `support`).
+        // The cells in reach (as `support`), gathered without a branch per cell (about half of
+        // them are in reach: a branch would be mispredicted at every other cell), then their
+        // Gaussians.
         let mut support = std::mem::take(&mut self.scratch_support);
         support.clear();
+        support.resize(self.len(), (0, 0.0));
+        let mut k = 0;
         for (i, (&d, &r2)) in self.widths.iter().zip(&d2).enumerate() {
-            if d > 0.0 && r2 < 16.0 * d * d {
-                support.push((i, (-r2 / (d * d)).exp()));
-            }
+            support[k] = (i, -r2 / (d * d));
+            k += usize::from(d > 0.0 && r2 < 16.0 * d * d);
         }
+        support.truncate(k);
+        support.iter_mut().for_each(|(_, a)| *a = a.exp());
         self.scratch_d2 = d2;
         if self.params.normalized {
             normalize(&mut support, || b);
         }
-        let mut psi = vec![0.0; self.m];
-        for &(i, a) in &support {
-            for c in 0..self.m {
-                psi[c] += self.outputs[i * self.m + c] * a;
-            }
-        }
-        let err: Vec<f64> = target.iter().zip(&psi).map(|(t, p)| t - p).collect();
-        let eta = self.params.eta;
-        for &(i, a) in &support {
-            for c in 0..self.m {
-                self.outputs[i * self.m + c] += eta * err[c] * a;
-            }
-        }
+        let sq_err = match self.m {
+            1 => self.delta_rule::<1>(&support, target),
+            2 => self.delta_rule::<2>(&support, target),
+            3 => self.delta_rule::<3>(&support, target),
+            4 => self.delta_rule::<4>(&support, target),
+            _ => self.delta_rule_any(&support, target),
+        };
         self.scratch_support = support;
         // Resources (eq. 2.15–2.18): decay, then accumulate at the BMU.
         let keep = 1.0 - self.params.alpha;
@@ -635,11 +635,50 @@ impl Isgcs {
             }
             self.hit_rate[b] += 1.0;
         }
-        let sq_err = err.iter().map(|e| e * e).sum::<f64>();
         self.tau_sl[b] += sq_err;
         self.tau_usl[b] += q_err;
         self.after_step();
         (b, sq_err)
+    }
+
+    /// The delta rule (eq. 2.8) over the weighted cells `support` for M = m outputs, the output
+    /// in registers; returns |target − Ψ|² before the update.
+    fn delta_rule<const M: usize>(&mut self, support: &[(usize, f64)], target: &[f64]) -> f64 {
+        let mut psi = [0.0; M];
+        for &(i, a) in support {
+            let o = &self.outputs[i * M..(i + 1) * M];
+            for c in 0..M {
+                psi[c] += o[c] * a;
+            }
+        }
+        let err: [f64; M] = std::array::from_fn(|c| target[c] - psi[c]);
+        let eta = self.params.eta;
+        for &(i, a) in support {
+            let o = &mut self.outputs[i * M..(i + 1) * M];
+            for c in 0..M {
+                o[c] += eta * err[c] * a;
+            }
+        }
+        err.iter().map(|e| e * e).sum::<f64>()
+    }
+
+    /// [`Isgcs::delta_rule`] for any m.
+    fn delta_rule_any(&mut self, support: &[(usize, f64)], target: &[f64]) -> f64 {
+        let m = self.m;
+        let mut psi = vec![0.0; m];
+        for &(i, a) in support {
+            for c in 0..m {
+                psi[c] += self.outputs[i * m + c] * a;
+            }
+        }
+        let err: Vec<f64> = target.iter().zip(&psi).map(|(t, p)| t - p).collect();
+        let eta = self.params.eta;
+        for &(i, a) in support {
+            for c in 0..m {
+                self.outputs[i * m + c] += eta * err[c] * a;
+            }
+        }
+        err.iter().map(|e| e * e).sum::<f64>()
     }
 
     /// The step of [`Isgcs::set_unsupervised_only`]: BMU (as `bmu`), the moves of the BMU and

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Mitsuba 3 radiosity at surface points, for `cargo xtask bench --only field` (issue 16).
 
-Usage: mitsuba_field.py FACES POINTS OUT SPP [SPP ...]
+Usage: mitsuba_field.py [--sampler NAME] FACES POINTS OUT SPP [SPP ...]
 
 FACES:  one triangle per line, `x0 y0 z0 x1 y1 z1 x2 y2 z2 rho_r rho_g rho_b Ke_r Ke_g Ke_b`
         (Ke = emitted radiance, E = pi*Ke; winding gives the front side, as in scene-sampler).
@@ -12,7 +12,7 @@ OUT:    for each SPP, OUT.<spp> gets one line `B_r B_g B_b` per point, and the s
 One `batch` sensor of `radiancemeter`s, one per point, each 10⁻³ of the scene diagonal along the normal (Mitsuba skips hits closer than ~10⁻⁴ to a ray origin) and looking back at
 the surface (direction -n): it measures the radiance L leaving the point toward +n; for a Lambertian surface
 the exitance is B = pi*L. Integrator `path` (unbounded depth, Russian roulette from depth 5), sampler
-`ldsampler` (low-discrepancy; falls back to `multijitter`), variant `scalar_rgb`, one render call per SPP.
+`ldsampler` by default (low-discrepancy; falls back to `multijitter`; `--sampler`: see mitsuba_scene.py), variant `scalar_rgb`, one render call per SPP.
 Exit code 3 when mitsuba is not importable.
 """
 import sys
@@ -27,11 +27,12 @@ except ImportError as e:  # the bench skips Mitsuba with a note
 import numpy as np
 
 mi.set_variant("scalar_rgb")
-from mitsuba_scene import read_textures, scene_dict  # noqa: E402  (after the variant)
+from mitsuba_scene import load_with_sampler, read_textures, scene_dict, split_sampler  # noqa: E402
 
 
 def main():
-    faces_path, points_path, out, *spps = sys.argv[1:]
+    sampler, args = split_sampler(sys.argv[1:])
+    faces_path, points_path, out, *spps = args
     spps = [int(s) for s in spps]
     t0 = time.perf_counter()
     tri = np.loadtxt(faces_path, ndmin=2)
@@ -53,21 +54,14 @@ def main():
                 "film": {"type": "hdrfilm", "width": 1, "height": 1, "rfilter": {"type": "box"},
                          "pixel_format": "rgb"},
             }
-        sampler = "ldsampler"
-        try:
-            sd = dict(scene)
-            sd["sensor"] = {
-                "type": "batch",
-                "sampler": {"type": sampler, "sample_count": spp},
-                "film": {"type": "hdrfilm", "width": n, "height": 1, "rfilter": {"type": "box"},
-                         "pixel_format": "rgb"},
-                **sensors,
-            }
-            s = mi.load_dict(sd)
-        except Exception:  # ldsampler wants a power of two
-            sampler = "multijitter"
-            sd["sensor"]["sampler"] = {"type": sampler, "sample_count": spp}
-            s = mi.load_dict(sd)
+        sd = dict(scene)
+        sd["sensor"] = {
+            "type": "batch",
+            "film": {"type": "hdrfilm", "width": n, "height": 1, "rfilter": {"type": "box"},
+                     "pixel_format": "rgb"},
+            **sensors,
+        }
+        s, used = load_with_sampler(sd, lambda smp: sd["sensor"].update(sampler=smp), sampler, spp)
         t_load = time.perf_counter() - t0
         t0 = time.perf_counter()
         img = np.array(mi.render(s, spp=spp))
@@ -75,7 +69,7 @@ def main():
         b = np.pi * img.reshape(-1, img.shape[-1])[:n, :3]
         np.savetxt(f"{out}.{spp}", b, fmt="%.9g")
         print(
-            f"spp={spp} sampler={sampler} scene={t_scene:.3f} load={t_load:.3f} render={t_render:.3f} "
+            f"spp={spp} sampler={used} scene={t_scene:.3f} load={t_load:.3f} render={t_render:.3f} "
             f"import={t0 - t_start:.3f}",
             flush=True,
         )

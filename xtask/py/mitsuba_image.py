@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Mitsuba 3 images of a scene, for `cargo xtask bench --only images` (issue 18).
 
-Usage: mitsuba_image.py FACES CAMERA OUT SPP [SPP ...]
+Usage: mitsuba_image.py [--sampler NAME] FACES CAMERA OUT SPP [SPP ...]
 
 FACES:  one triangle per line, `x0 y0 z0 x1 y1 z1 x2 y2 z2 rho_r rho_g rho_b Ke_r Ke_g Ke_b`
         (Ke = emitted radiance; the format of mitsuba_field.py).
@@ -10,8 +10,8 @@ CAMERA: one line `ex ey ez tx ty tz ux uy uz fov_y width height` (Mitsuba's `per
 OUT:    for each SPP, OUT.<spp> gets the linear radiance, one line `L_r L_g L_b` per pixel, row-major,
         top row first; the script prints `spp=<spp> scene=<s> load=<s> render=<s>` per render.
 
-Integrator `path` (unbounded depth), sampler `ldsampler` (falls back to `multijitter` where it refuses
-the count), box reconstruction filter (the pixel's mean, as `gcr --image-mode pixel --pixel-samples`),
+Integrator `path` (unbounded depth), sampler `ldsampler` by default (falls back to `multijitter` where it
+refuses the count; `--sampler`: see mitsuba_scene.py), box reconstruction filter (the pixel's mean, as `gcr --image-mode pixel --pixel-samples`),
 variant `scalar_rgb`. Exit code 3 when mitsuba is not importable.
 """
 import sys
@@ -25,11 +25,12 @@ except ImportError as e:  # the bench skips Mitsuba with a note
 import numpy as np
 
 mi.set_variant("scalar_rgb")
-from mitsuba_scene import read_textures, scene_dict  # noqa: E402  (after the variant)
+from mitsuba_scene import load_with_sampler, read_textures, scene_dict, split_sampler  # noqa: E402
 
 
 def main():
-    faces_path, camera_path, out, *spps = sys.argv[1:]
+    sampler, args = split_sampler(sys.argv[1:])
+    faces_path, camera_path, out, *spps = args
     t0 = time.perf_counter()
     tri = np.loadtxt(faces_path, ndmin=2)
     cam = np.loadtxt(camera_path)
@@ -47,22 +48,17 @@ def main():
             "film": {"type": "hdrfilm", "width": width, "height": height,
                      "rfilter": {"type": "box"}, "pixel_format": "rgb"},
         }
-        sampler = "ldsampler"
         sd = dict(scene)
-        try:
-            sd["sensor"] = dict(sensor, sampler={"type": sampler, "sample_count": spp})
-            s = mi.load_dict(sd)
-        except Exception:  # ldsampler wants a power of two
-            sampler = "multijitter"
-            sd["sensor"] = dict(sensor, sampler={"type": sampler, "sample_count": spp})
-            s = mi.load_dict(sd)
+        s, used = load_with_sampler(
+            sd, lambda smp: sd.update(sensor=dict(sensor, sampler=smp)), sampler, spp
+        )
         t_load = time.perf_counter() - t0
         t0 = time.perf_counter()
         img = np.array(mi.render(s, spp=spp))
         t_render = time.perf_counter() - t0
         np.savetxt(f"{out}.{spp}", img.reshape(-1, img.shape[-1])[:, :3], fmt="%.7g")
         print(
-            f"spp={spp} sampler={sampler} scene={t_scene:.3f} load={t_load:.3f} render={t_render:.3f}",
+            f"spp={spp} sampler={used} scene={t_scene:.3f} load={t_load:.3f} render={t_render:.3f}",
             flush=True,
         )
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Mitsuba 3 irradiance at points (Radiance's `rtrace -I`), for `cargo xtask bench --only irradiance`.
 
-Usage: mitsuba_irradiance.py FACES POINTS OUT SPP [SPP ...]
+Usage: mitsuba_irradiance.py [--sampler NAME] FACES POINTS OUT SPP [SPP ...]
 
 FACES:  one triangle per line, as mitsuba_field.py.
 POINTS: one point per line, `x y z nx ny nz`: in the air, n the unit normal of the hemisphere whose
@@ -12,7 +12,8 @@ OUT:    for each SPP, OUT.<spp> gets one line `E_r E_g E_b se_r se_g se_b` per p
 Each point gets a white (ρ = 1) diffuse square of half-size 10⁻⁴ of the scene's diagonal, facing n, and a
 `radiancemeter` 10⁻³ of the diagonal above it looking down at it (Mitsuba skips hits closer than ~10⁻⁴ to a
 ray origin): the square's exitance is πL = ρ·E = E, estimated by Mitsuba's own path tracer at the square
-(next-event estimation and BSDF sampling, unbounded depth, `ldsampler`). The squares block and reflect a
+(next-event estimation and BSDF sampling, unbounded depth, `ldsampler` by default; `--sampler`: see
+mitsuba_scene.py). The squares block and reflect a
 negligible 10⁻⁸ of the diagonal² each. The scene is loaded once per SPP and rendered with two seeds: E is their mean, the
 standard error half their difference. Exit code 3 when mitsuba or numpy is not importable.
 """
@@ -28,7 +29,7 @@ except ImportError as e:  # the bench skips Mitsuba with a note
     sys.exit(3)
 
 mi.set_variant("scalar_rgb")
-from mitsuba_scene import read_textures, scene_dict  # noqa: E402  (after the variant)
+from mitsuba_scene import load_with_sampler, read_textures, scene_dict, split_sampler  # noqa: E402
 
 
 def frame(n):
@@ -40,7 +41,8 @@ def frame(n):
 
 
 def main():
-    faces_path, points_path, out, *spps = sys.argv[1:]
+    sampler, args = split_sampler(sys.argv[1:])
+    faces_path, points_path, out, *spps = args
     spps = [int(s) for s in spps]
     t0 = time.perf_counter()
     tri = np.loadtxt(faces_path, ndmin=2)
@@ -73,12 +75,11 @@ def main():
         sd = dict(scene)
         sd["sensor"] = {
             "type": "batch",
-            "sampler": {"type": "ldsampler", "sample_count": spp},
             "film": {"type": "hdrfilm", "width": n, "height": 1, "rfilter": {"type": "box"},
                      "pixel_format": "rgb"},
             **sensors,
         }
-        s = mi.load_dict(sd)
+        s, used = load_with_sampler(sd, lambda smp: sd["sensor"].update(sampler=smp), sampler, spp)
         t_load = time.perf_counter() - t0
         t0 = time.perf_counter()
         renders = []
@@ -89,7 +90,7 @@ def main():
         e, se = 0.5 * (renders[0] + renders[1]), 0.5 * np.abs(renders[0] - renders[1])
         np.savetxt(f"{out}.{spp}", np.hstack([e, se]), fmt="%.9g")
         print(
-            f"spp={spp} sampler=ldsampler scene={t_scene:.3f} load={t_load:.3f} render={t_render:.3f} "
+            f"spp={spp} sampler={used} scene={t_scene:.3f} load={t_load:.3f} render={t_render:.3f} "
             f"import={t0 - t_start:.3f}",
             flush=True,
         )

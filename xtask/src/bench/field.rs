@@ -304,10 +304,12 @@ pub(super) fn write_mitsuba_faces(scene: &Scene, path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Runs `xtask/py/<script>` with `files` and the sample counts: its stdout, or why Mitsuba is
-/// missing (the script's exit code 3).
+/// Runs `xtask/py/<script>` with Mitsuba's `sampler`, `files` and the sample counts: its stdout,
+/// or why Mitsuba is missing (the script's exit code 3). `ldsampler` had the lowest error at equal
+/// spp but is biased (a furnace 0.4 % too bright, `xtask/py/mitsuba_scene.py`); `multijitter` is not.
 pub(super) fn run_mitsuba(
     script: &str,
+    sampler: &str,
     files: &[&Path],
     spp: &[usize],
 ) -> Result<std::result::Result<Vec<u8>, String>> {
@@ -316,6 +318,7 @@ pub(super) fn run_mitsuba(
         .join(script);
     let out = std::process::Command::new("python3")
         .arg(&path)
+        .args(["--sampler", sampler])
         .args(files)
         .args(spp.iter().map(|s| s.to_string()))
         .output()
@@ -391,7 +394,7 @@ fn mitsuba(
     let (ff, pf, of) = (dir.join("faces.txt"), dir.join("points.txt"), dir.join("b"));
     write_mitsuba_faces(scene, &ff)?;
     std::fs::write(&pf, pts)?;
-    let stdout = match run_mitsuba("mitsuba_field.py", &[&ff, &pf, &of], spp)? {
+    let stdout = match run_mitsuba("mitsuba_field.py", "ldsampler", &[&ff, &pf, &of], spp)? {
         Ok(o) => o,
         Err(why) => return Ok(Err(why)),
     };

@@ -86,7 +86,7 @@ fn mitsuba(
         .map(|(p, n)| format!("{} {} {} {} {} {}\n", p.x, p.y, p.z, n.x, n.y, n.z))
         .collect();
     std::fs::write(&pf, text)?;
-    let stdout = match run_mitsuba("mitsuba_irradiance.py", &[&ff, &pf, &of], spp)? {
+    let stdout = match run_mitsuba("mitsuba_irradiance.py", "ldsampler", &[&ff, &pf, &of], spp)? {
         Ok(o) => o,
         Err(why) => return Ok(Err(why)),
     };

@@ -458,7 +458,7 @@ pub(crate) fn fit_gcv(
     select_rows: usize,
     start: f64,
 ) -> Option<(Vec<f64>, Selected)> {
-    fit_best(&[(basis, xs)], ys, mult, ridge, select_rows, start).map(|(_, w, s)| (w, s))
+    fit_best(&[(basis, xs)], ys, mult, ridge, select_rows, start).map(|(_, w, s, _)| (w, s))
 }
 
 /// [`fit_gcv`] for several candidate bases, each with its own copy of the rows (`xs` in
@@ -467,7 +467,10 @@ pub(crate) fn fit_gcv(
 /// multiplier from there (in parallel), and the one with the lowest score (the lowest index
 /// on ties) is refitted on every row. The score is the error on the rows after the selection
 /// rows ([`holdout_at`]) when there are enough of them, else the leave-one-out error on the
-/// selection rows (`gcv_at`). Returns the winner's index in `candidates`, weights and choice.
+/// selection rows (`gcv_at`). Returns the winner's index in `candidates`, weights and choice,
+/// and with the holdout score the second walked candidate and its share α when the blend
+/// (1 − α)·winner + α·second ([`blend_share`]) has the lower holdout error (its score is then
+/// the blend's).
 pub(crate) fn fit_best(
     candidates: &[(&Basis, &[f64])],
     ys: ArrayView2<'_, f64>,
@@ -475,7 +478,7 @@ pub(crate) fn fit_best(
     ridge: Option<f64>,
     select_rows: usize,
     start: f64,
-) -> Option<(usize, Vec<f64>, Selected)> {
+) -> Option<Choice> {
     type Fit = (f64, Array2<f64>, f64, f64);
     let rows = ys.nrows();
     let sel = select_rows.min(rows).max(1);
@@ -637,6 +640,7 @@ pub(crate) fn fit_best(
             dof,
             score,
         },
+        None,
     ))
 }
 
@@ -698,6 +702,11 @@ fn holdout_at(
     let a_hold = basis.design(mult, hold.0);
     holdout_solve(basis, a_fit.view(), fit.1, a_hold.view(), hold.1, hint).map(|(f, _)| f)
 }
+
+/// A refitted candidate: its index, weights (cols × m) and what was chosen.
+pub(crate) type Picked = (usize, Vec<f64>, Selected);
+/// [`fit_best`]'s choice: the winner and, when blended, the second candidate with its share.
+pub(crate) type Choice = (usize, Vec<f64>, Selected, Option<(Picked, f64)>);
 
 /// G = AᵀA and B = AᵀY of the fitted rows.
 type Normal = (Array2<f64>, Array2<f64>);
@@ -870,7 +879,7 @@ fn fit_best_holdout(
     sel: usize,
     hold: usize,
     start: f64,
-) -> Option<(usize, Vec<f64>, Selected)> {
+) -> Option<Choice> {
     // The selection's score, weights, relative ridge and tr H, with the fitted rows' G and B.
     type Fit = (Scored, Normal);
     let rows = ys.nrows();
@@ -976,47 +985,108 @@ fn fit_best_holdout(
         (i, at, raw)
     };
     let walks: Vec<(usize, (f64, Fit), RawRows)> = seeds.into_par_iter().map(walk).collect();
-    let (index, (mult, fit), mut raw) = walks
-        .into_iter()
-        .min_by(|a, b| a.1.1.0.0.total_cmp(&b.1.1.0.0).then(a.0.cmp(&b.0)))?;
-    let (fit, (mut g, mut b)) = fit;
+    let mut walks = walks;
+    walks.sort_by(|a, b| a.1.1.0.0.total_cmp(&b.1.1.0.0).then(a.0.cmp(&b.0)));
+    // Holdout predictions of every walked candidate at its chosen multiplier (only the
+    // holdout rows' raw values are needed from here on: the refit reuses them).
+    let preds: Vec<Array2<f64>> = walks
+        .par_iter_mut()
+        .map(|(i, (mult, fit), raw)| {
+            let c = &candidates[*i];
+            let (_, xh) = split(c, sel, hold);
+            raw.fit = Array2::zeros((0, c.0.cells()));
+            raw.move_to(*mult, c.0, &[], xh);
+            mul_few(c.0.design_of_raw(&raw.hold, xh).view(), fit.0.1.view())
+        })
+        .collect();
+    let share = if BLEND && walks.len() > 1 {
+        blend_share(preds[0].view(), preds[1].view(), hy)
+    } else {
+        None
+    };
+    let used = if share.is_some() { 2 } else { 1 };
+    walks.truncate(used);
+    let score = match share {
+        Some((_, err)) => err,
+        None => walks[0].1.1.0.0,
+    };
     // The refit on every row with the same absolute ridge (module docs of `regressor`): G and
     // B of the selection rows as scored at the chosen multiplier, plus those of the holdout
     // rows' raw values moved there and of the remaining rows.
-    let c = &candidates[index];
-    let (basis, xs) = *c;
-    let (_, xh) = split(c, sel, hold);
-    // Only the holdout rows' raw values are needed.
-    raw.fit = Array2::zeros((0, basis.cells()));
-    raw.move_to(mult, basis, &[], xh);
-    let n = basis.n;
-    let rest = basis.design(mult, &xs[(sel + hold) * n..rows * n]);
-    let pieces = [
-        (basis.design_of_raw(&raw.hold, xh), hy),
-        (
-            Cow::Owned(rest),
-            ys.slice_axis(Axis(0), Slice::from(sel + hold..)),
-        ),
-    ];
-    for (a, y) in &pieces {
-        gram_add(a.view(), &mut g);
-        ndarray::linalg::general_mat_mul(1.0, &a.t(), y, 1.0, &mut b);
-    }
-    drop(pieces);
-    let yy = ys.iter().map(|v| v * v).sum();
-    let r = (fit.2 * sel as f64 / rows as f64).max(holdout_floor());
-    let (weights, relative, dof) = refit_solve(&g, &b, yy, r, 1.0)?;
-    Some((
-        index,
-        weights.into_raw_vec_and_offset().0,
-        Selected {
-            mult,
-            ridge: relative,
-            dof,
-            score: fit.0,
-        },
-    ))
+    let yy: f64 = ys.iter().map(|v| v * v).sum();
+    let refit = |(index, (mult, fit), raw): (usize, (f64, Fit), RawRows)| {
+        let (fit, (mut g, mut b)) = fit;
+        let c = &candidates[index];
+        let (basis, xs) = *c;
+        let (_, xh) = split(c, sel, hold);
+        let n = basis.n;
+        let rest = basis.design(mult, &xs[(sel + hold) * n..rows * n]);
+        let pieces = [
+            (basis.design_of_raw(&raw.hold, xh), hy),
+            (
+                Cow::Owned(rest),
+                ys.slice_axis(Axis(0), Slice::from(sel + hold..)),
+            ),
+        ];
+        for (a, y) in &pieces {
+            gram_add(a.view(), &mut g);
+            ndarray::linalg::general_mat_mul(1.0, &a.t(), y, 1.0, &mut b);
+        }
+        drop(pieces);
+        let r = (fit.2 * sel as f64 / rows as f64).max(holdout_floor());
+        let (weights, relative, dof) = refit_solve(&g, &b, yy, r, 1.0)?;
+        Some((
+            index,
+            weights.into_raw_vec_and_offset().0,
+            Selected {
+                mult,
+                ridge: relative,
+                dof,
+                score,
+            },
+        ))
+    };
+    let mut fits: Vec<Option<Picked>> = walks.into_par_iter().map(refit).collect();
+    let (index, weights, chosen) = fits[0].take()?;
+    let partner = match (share, fits.get_mut(1).and_then(Option::take)) {
+        (Some((alpha, _)), Some(p)) => Some((p, alpha)),
+        _ => None,
+    };
+    Some((index, weights, chosen, partner))
 }
+
+/// The share α ∈ (0, 1] of the second prediction in the blend (1 − α)·p₁ + α·p₂ that
+/// minimises the squared error against `y` (holdout rows), with that blend's mean squared
+/// error per row; `None` when the best share is 0 (the first prediction alone) or not finite.
+fn blend_share(
+    p1: ArrayView2<'_, f64>,
+    p2: ArrayView2<'_, f64>,
+    y: ArrayView2<'_, f64>,
+) -> Option<(f64, f64)> {
+    let (mut dd, mut dr) = (0.0, 0.0);
+    for ((a, b), t) in p1.iter().zip(p2.iter()).zip(y.iter()) {
+        let (d, r) = (b - a, t - a);
+        dd += d * d;
+        dr += d * r;
+    }
+    let alpha = (dr / dd).clamp(0.0, 1.0);
+    if !(alpha > 0.0 && alpha.is_finite()) {
+        return None;
+    }
+    let err: f64 = p1
+        .iter()
+        .zip(p2.iter())
+        .zip(y.iter())
+        .map(|((a, b), t)| {
+            let e = (1.0 - alpha) * a + alpha * b - t;
+            e * e
+        })
+        .sum();
+    Some((alpha, err / y.nrows().max(1) as f64))
+}
+
+/// Blend the two best candidates of the holdout selection (`fit_best`).
+const BLEND: bool = true;
 
 /// Candidates of [`fit_best`] whose multiplier is walked: the best ones at the first
 /// multiplier.
@@ -1247,7 +1317,7 @@ mod tests {
         for normalized in [true, false] {
             let basis = line_basis(20, normalized);
             let start = 0.25;
-            let (_, _, chosen) =
+            let (_, _, chosen, _) =
                 fit_best(&[(&basis, &xs[..])], yv, None, None, rows, start).expect("a fit");
             let steps = (2.0 * (chosen.mult / start).log2()).round();
             assert!(steps >= 2.0, "walked {steps} steps from {start}");
@@ -1280,7 +1350,7 @@ mod tests {
         let basis = line_basis(20, false);
         let yv = ArrayView2::from_shape((rows, 1), &ys).unwrap();
         let candidates = [(&basis, &stretched[..]), (&basis, &xs[..])];
-        let (index, weights, chosen) = fit_best(&candidates, yv, None, None, 200, 1.0).unwrap();
+        let (index, weights, chosen, _) = fit_best(&candidates, yv, None, None, 200, 1.0).unwrap();
         assert_eq!(index, 1, "chose the stretched rows ({chosen:?})");
         let mut row = vec![0.0; basis.cols()];
         for x in [-0.9, -0.3, 0.2, 0.7] {
@@ -1419,6 +1489,28 @@ mod tests {
             );
         }
         assert!(fitted.iter().zip(&ys).all(|(f, y)| (f - y).abs() < 0.01));
+    }
+
+    #[test]
+    fn blend_share_is_the_least_squares_share_in_0_1() {
+        let y = ndarray::array![[1.0], [2.0], [-1.0], [0.5]];
+        let e = ndarray::array![[0.1], [-0.3], [0.2], [0.05]];
+        // Errors of opposite sign and equal size: half of each, no error left.
+        let (p1, p2) = (&y + &e, &y - &e);
+        let (a, err) = blend_share(p1.view(), p2.view(), y.view()).unwrap();
+        assert!((a - 0.5).abs() < 1e-12 && err < 1e-24, "{a} {err}");
+        // Errors in a 2 : 1 ratio, opposite sign: α = 2/3 (1/3·2e − 2/3·e = 0).
+        let p2 = &y - &(&e * 0.5);
+        let p1 = &y + &e;
+        let (a, _) = blend_share(p1.view(), p2.view(), y.view()).unwrap();
+        assert!((a - 2.0 / 3.0).abs() < 1e-12, "{a}");
+        // The first exact, or the second worse in the same direction: the first alone.
+        assert!(blend_share(y.view(), p1.view(), y.view()).is_none());
+        let worse = &y + &(&e * 2.0);
+        assert!(blend_share(p1.view(), worse.view(), y.view()).is_none());
+        // The second exact: all of it (clamped at 1, not beyond).
+        let (a, err) = blend_share(p1.view(), y.view(), y.view()).unwrap();
+        assert!(a == 1.0 && err < 1e-24, "{a} {err}");
     }
 
     #[test]

@@ -732,32 +732,44 @@ fn holdout_solve(
     let mut tried: Vec<f64> = Vec::new();
     let lo = holdout_floor().log10();
     type Best = Option<(f64, f64, Array2<f64>)>;
-    let try_one = |e: f64, best: &mut Best, tried: &mut Vec<f64>| {
-        let e = e.clamp(lo, 0.0);
-        if tried.iter().any(|t| (t - e).abs() < 1e-9) {
-            return;
+    // The ridges `es` not tried yet, factorised in parallel (independent solves), then taken
+    // in the order given: the same choice as trying them one after the other.
+    let try_all = |es: &[f64], best: &mut Best, tried: &mut Vec<f64>| {
+        let mut todo: Vec<f64> = Vec::with_capacity(es.len());
+        for &e in es {
+            let e = e.clamp(lo, 0.0);
+            if !tried.iter().chain(&todo).any(|t| (t - e).abs() < 1e-9) {
+                todo.push(e);
+            }
         }
-        tried.push(e);
-        let Some(f) = ridge_fit(&g, &b, yy, 10f64.powf(e), &zero) else {
-            return;
-        };
-        let err = (&mul_few(a, f.weights.view()) - &hold.1)
-            .mapv(|v| v * v)
-            .sum()
-            / rows;
-        if err.is_finite() && best.as_ref().is_none_or(|(_, s, _)| err < *s) {
-            *best = Some((e, err, f.weights));
+        tried.extend(&todo);
+        let fits: Vec<Option<(f64, Array2<f64>)>> = todo
+            .par_iter()
+            .map(|&e| {
+                let f = ridge_fit(&g, &b, yy, 10f64.powf(e), &zero)?;
+                let err = (&mul_few(a, f.weights.view()) - &hold.1)
+                    .mapv(|v| v * v)
+                    .sum()
+                    / rows;
+                Some((err, f.weights))
+            })
+            .collect();
+        for (&e, fit) in todo.iter().zip(fits) {
+            if let Some((err, w)) = fit
+                && err.is_finite()
+                && best.as_ref().is_none_or(|(_, s, _)| err < *s)
+            {
+                *best = Some((e, err, w));
+            }
         }
     };
     match hint {
         None => {
             let decades = (-lo / 2.0).ceil() as usize;
-            for e in (0..=decades).map(|i| -2.0 * i as f64) {
-                try_one(e, &mut best, &mut tried);
-            }
+            let sweep: Vec<f64> = (0..=decades).map(|i| -2.0 * i as f64).collect();
+            try_all(&sweep, &mut best, &mut tried);
             let centre = best.as_ref()?.0;
-            try_one(centre - 1.0, &mut best, &mut tried);
-            try_one(centre + 1.0, &mut best, &mut tried);
+            try_all(&[centre - 1.0, centre + 1.0], &mut best, &mut tried);
         }
         Some(h) => {
             // The hint and probes two decades to either side (then the refinement below):
@@ -766,14 +778,12 @@ fn holdout_solve(
             // at 10⁻⁵, rms/σ 4.8 × the k-means RBF's, against a deeper minimum near 10⁻⁹;
             // 0.91 with the probes; probes at ±4 decades as well changed no result).
             let e0 = h.log10().clamp(lo, 0.0);
-            for d in [0.0, -2.0, 2.0] {
-                try_one(e0 + d, &mut best, &mut tried);
-            }
+            try_all(&[e0, e0 - 2.0, e0 + 2.0], &mut best, &mut tried);
             // Every factorisation failed (ridges below G's rounding): upwards from the top.
             let mut e = tried.iter().fold(lo, |a, &t| a.max(t));
             while best.is_none() && e < 0.0 {
                 e = (e + 0.5).min(0.0);
-                try_one(e, &mut best, &mut tried);
+                try_all(&[e], &mut best, &mut tried);
             }
         }
     }
@@ -781,8 +791,7 @@ fn holdout_solve(
     loop {
         let e = best.as_ref()?.0;
         let before = tried.len();
-        try_one(e - 0.5, &mut best, &mut tried);
-        try_one(e + 0.5, &mut best, &mut tried);
+        try_all(&[e - 0.5, e + 0.5], &mut best, &mut tried);
         if tried.len() == before {
             break;
         }

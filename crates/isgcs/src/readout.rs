@@ -583,25 +583,11 @@ pub(crate) fn fit_best(
                 return (i, at);
             }
             let c = &candidates[i];
-            let step = std::f64::consts::SQRT_2;
-            let mut at = at;
-            for dir in [step, 1.0 / step] {
-                let mut next = at.0 * dir;
-                let mut improved = false;
-                while (MULT_RANGE.0..=MULT_RANGE.1).contains(&next) {
-                    match eval(c, next, Some(at.1.2)) {
-                        Some(fit) if fit.1.0 < at.1.0 => {
-                            at = fit;
-                            improved = true;
-                            next *= dir;
-                        }
-                        _ => break,
-                    }
-                }
-                if improved {
-                    break;
-                }
-            }
+            let at = walk_width(
+                at,
+                |f: &Fit| f.0,
+                |m, f: &Fit| eval(c, m, Some(f.2)).map(|(_, fit)| fit),
+            );
             (i, at)
         };
         seeds.into_par_iter().map(walk).collect()
@@ -631,17 +617,27 @@ pub(crate) fn fit_best(
     } else {
         gcv_at(basis, mult, ridge, xs, ys, sel)?
     };
-    Some((
-        index,
-        weights.into_raw_vec_and_offset().0,
-        Selected {
-            mult,
-            ridge: relative,
-            dof,
-            score,
-        },
-        None,
-    ))
+    let (index, weights, chosen) = picked(index, weights, mult, relative, dof, score);
+    Some((index, weights, chosen, None))
+}
+
+/// A refitted candidate's [`Picked`] from its weights (cols × m) and choice.
+fn picked(
+    index: usize,
+    weights: Array2<f64>,
+    mult: f64,
+    ridge: f64,
+    dof: f64,
+    score: f64,
+) -> Picked {
+    let weights = weights.into_raw_vec_and_offset().0;
+    let chosen = Selected {
+        mult,
+        ridge,
+        dof,
+        score,
+    };
+    (index, weights, chosen)
 }
 
 /// The refit of [`fit_best`] on every row: the relative ridge `start`, raised by half
@@ -971,26 +967,14 @@ fn fit_best_holdout(
         }
         let c = &candidates[i];
         let (xf, xh) = split(c, sel, hold);
-        let step = std::f64::consts::SQRT_2;
-        let mut at = at;
-        for dir in [step, 1.0 / step] {
-            let mut next = at.0 * dir;
-            let mut improved = false;
-            while (MULT_RANGE.0..=MULT_RANGE.1).contains(&next) {
-                raw.move_to(next, c.0, xf, xh);
-                match eval(c, &raw, Some(at.1.0.2)) {
-                    Some(fit) if fit.0.0 < at.1.0.0 => {
-                        at = (next, fit);
-                        improved = true;
-                        next *= dir;
-                    }
-                    _ => break,
-                }
-            }
-            if improved {
-                break;
-            }
-        }
+        let at = walk_width(
+            at,
+            |f: &Fit| f.0.0,
+            |m, f: &Fit| {
+                raw.move_to(m, c.0, xf, xh);
+                eval(c, &raw, Some(f.0.2))
+            },
+        );
         (i, at, raw)
     };
     let walks: Vec<(usize, (f64, Fit), RawRows)> = seeds.into_par_iter().map(walk).collect();
@@ -1044,16 +1028,7 @@ fn fit_best_holdout(
         drop(pieces);
         let r = (fit.2 * sel as f64 / rows as f64).max(holdout_floor());
         let (weights, relative, dof) = refit_solve(&g, &b, yy, r, 1.0)?;
-        Some((
-            index,
-            weights.into_raw_vec_and_offset().0,
-            Selected {
-                mult,
-                ridge: relative,
-                dof,
-                score,
-            },
-        ))
+        Some(picked(index, weights, mult, relative, dof, score))
     };
     let mut fits: Vec<Option<Picked>> = walks.into_par_iter().map(refit).collect();
     let (index, weights, chosen) = fits[0].take()?;
@@ -1096,6 +1071,36 @@ fn blend_share(
 
 /// Blend the two best candidates of the holdout selection (`fit_best`).
 const BLEND: bool = true;
+
+/// The width walk of [`fit_best`] (module docs of `regressor`) from `at` (multiplier, fit):
+/// by √2 upwards while the `score` falls, else downwards, within [`MULT_RANGE`]; `eval`
+/// fits at a multiplier given the current best fit (whose ridge is the hint).
+fn walk_width<F>(
+    at: (f64, F),
+    score: impl Fn(&F) -> f64,
+    mut eval: impl FnMut(f64, &F) -> Option<F>,
+) -> (f64, F) {
+    let step = std::f64::consts::SQRT_2;
+    let mut at = at;
+    for dir in [step, 1.0 / step] {
+        let mut next = at.0 * dir;
+        let mut improved = false;
+        while (MULT_RANGE.0..=MULT_RANGE.1).contains(&next) {
+            match eval(next, &at.1) {
+                Some(fit) if score(&fit) < score(&at.1) => {
+                    at = (next, fit);
+                    improved = true;
+                    next *= dir;
+                }
+                _ => break,
+            }
+        }
+        if improved {
+            break;
+        }
+    }
+    at
+}
 
 /// Candidates of [`fit_best`] whose multiplier is walked: the best ones at the first
 /// multiplier.

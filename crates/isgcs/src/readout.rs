@@ -132,6 +132,25 @@ impl Basis {
         }
     }
 
+    /// Completes a row of raw Gaussians (the first `cells` entries of `row`, length `cols`)
+    /// at the input x into the basis values of [`Basis::row`]: normalized by their sum (a row
+    /// without any positive value gets its `nearest` cell) and the affine columns.
+    pub fn finish_row(&self, row: &mut [f64], x: &[f64], nearest: usize) {
+        let z = self.cells();
+        if self.normalized {
+            let sum: f64 = row[..z].iter().sum();
+            if sum > 0.0 {
+                row[..z].iter_mut().for_each(|v| *v /= sum);
+            } else if z > 0 {
+                row[nearest] = 1.0;
+            }
+        }
+        if self.affine {
+            row[z] = 1.0;
+            row[z + 1..z + 1 + self.n].copy_from_slice(x);
+        }
+    }
+
     /// The raw Gaussians exp(−|x − c_i|²/(μ d_i)²) of `rows` standardized inputs (rows ×
     /// cells, flushed to 0 below e^−FLUSH as in [`Basis::row`]; neither normalized nor with
     /// the affine columns), rows in parallel. [`Basis::design_of_raw`] makes the design matrix.
@@ -322,6 +341,111 @@ impl Readout {
                             }
                         }
                         o[c] = self.y.mean[c] + self.y.scale[c] * s;
+                    }
+                },
+            );
+    }
+}
+
+impl Readout {
+    /// The blend (1 − `share`)·self + `share`·other of two layers' predictions for N raw
+    /// inputs into `out` (N × m). When both layers have the same centres, base widths and
+    /// metric and their multipliers differ by a power of √2 (the walks' grid; at most four
+    /// steps), each row's distances are computed once and the wider layer's Gaussians are the
+    /// narrower one's moved up by square roots, as along the width walk ([`move_raw`]: an
+    /// entry flushed at the narrower width is computed afresh); otherwise the two layers
+    /// predict separately.
+    pub fn predict_blend(&self, other: &Readout, share: f64, inputs: &[f64], out: &mut [f64]) {
+        let steps = 2.0 * (other.mult / self.mult).log2();
+        let k = steps.round();
+        let shared = self.basis.centres == other.basis.centres
+            && self.basis.base == other.basis.base
+            && self.transform == other.transform
+            && self.basis.n == other.basis.n
+            && self.m == other.m
+            && (steps - k).abs() < 1e-9
+            && k.abs() <= 4.0;
+        if !shared {
+            self.predict(inputs, out);
+            let mut second = vec![0.0; out.len()];
+            other.predict(inputs, &mut second);
+            for (o, s) in out.iter_mut().zip(&second) {
+                *o = (1.0 - share) * *o + share * s;
+            }
+            return;
+        }
+        // The narrower layer first: its values are moved up to the wider one's.
+        let (lo, hi, lo_share) = if k >= 0.0 {
+            (self, other, 1.0 - share)
+        } else {
+            (other, self, share)
+        };
+        let k = k.abs() as usize;
+        let (n, m, z) = (self.basis.n, self.m, self.basis.cells());
+        let w2 = |r: &Readout| -> Vec<f64> {
+            r.basis
+                .base
+                .iter()
+                .map(|b| (r.mult * b) * (r.mult * b))
+                .collect()
+        };
+        let (w2_lo, w2_hi) = (w2(lo), w2(hi));
+        out.par_chunks_mut(m)
+            .zip(inputs.par_chunks(n))
+            .with_min_len(32)
+            .for_each_init(
+                || {
+                    let cols = self.basis.cols();
+                    (vec![0.0; n], vec![0.0; n], vec![0.0; cols], vec![0.0; cols])
+                },
+                |(xs, ts, r_lo, r_hi), (o, x)| {
+                    if x.iter().any(|v| !v.is_finite()) {
+                        o.fill(f64::NAN);
+                        return;
+                    }
+                    for a in 0..n {
+                        xs[a] = (x[a] - self.x.mean[a]) / self.x.scale[a];
+                    }
+                    if let Some(t) = &self.transform {
+                        for (a, ta) in ts.iter_mut().enumerate() {
+                            *ta = (0..n).map(|b| t[a * n + b] * xs[b]).sum();
+                        }
+                        std::mem::swap(xs, ts);
+                    }
+                    let (mut nearest, mut nearest_d2) = (0, f64::INFINITY);
+                    for i in 0..z {
+                        let c = &self.basis.centres[i * n..(i + 1) * n];
+                        let r2: f64 = c
+                            .iter()
+                            .zip(xs.iter())
+                            .map(|(a, b)| (a - b) * (a - b))
+                            .sum();
+                        if r2 < nearest_d2 {
+                            (nearest, nearest_d2) = (i, r2);
+                        }
+                        let v = gaussian(r2, w2_lo[i]);
+                        r_lo[i] = v;
+                        r_hi[i] = if v > 0.0 {
+                            (0..k).fold(v, |v, _| v.sqrt())
+                        } else {
+                            gaussian(r2, w2_hi[i])
+                        };
+                    }
+                    lo.basis.finish_row(r_lo, xs, nearest);
+                    hi.basis.finish_row(r_hi, xs, nearest);
+                    let value = |r: &Readout, row: &[f64], c: usize| -> f64 {
+                        let mut s = 0.0;
+                        for (j, v) in row.iter().enumerate() {
+                            if *v != 0.0 {
+                                s += v * r.weights[j * m + c];
+                            }
+                        }
+                        s
+                    };
+                    for c in 0..m {
+                        let f_lo = self.y.mean[c] + self.y.scale[c] * value(lo, r_lo, c);
+                        let f_hi = self.y.mean[c] + self.y.scale[c] * value(hi, r_hi, c);
+                        o[c] = lo_share * f_lo + (1.0 - lo_share) * f_hi;
                     }
                 },
             );
@@ -1503,6 +1627,61 @@ mod tests {
             );
         }
         assert!(fitted.iter().zip(&ys).all(|(f, y)| (f - y).abs() < 0.01));
+    }
+
+    #[test]
+    fn a_blend_on_one_geometry_predicts_as_its_two_layers_do() {
+        // Two layers on the same centres and widths (normalized at μ = 0.5, plain at 2 and at
+        // 0.7): the shared pass (square roots of the narrower layer's values; fresh values
+        // where those are flushed) must give the separate predictions' blend to rounding, in
+        // either order; a ratio off the √2 grid takes the separate path.
+        let basis = line_basis(30, true);
+        let weights: Vec<f64> = (0..30).map(|i| ((i * 7) % 11) as f64 - 5.0).collect();
+        let layer = |normalized: bool, mult: f64| Readout {
+            basis: Basis {
+                normalized,
+                ..basis.clone()
+            },
+            mult,
+            weights: weights.clone(),
+            m: 1,
+            x: Standardizer {
+                mean: vec![0.1],
+                scale: vec![2.0],
+            },
+            y: Standardizer {
+                mean: vec![3.0],
+                scale: vec![0.5],
+            },
+            ridge: 0.0,
+            transform: None,
+        };
+        // Inputs inside and far outside the centres (every value flushed at μ = 0.5).
+        let xs: Vec<f64> = (0..400)
+            .map(|i| -3.0 + 0.02 * i as f64)
+            .chain([90.0])
+            .collect();
+        let separate = |a: &Readout, b: &Readout, share: f64| -> Vec<f64> {
+            let (mut pa, mut pb) = (vec![0.0; xs.len()], vec![0.0; xs.len()]);
+            a.predict(&xs, &mut pa);
+            b.predict(&xs, &mut pb);
+            pa.iter()
+                .zip(&pb)
+                .map(|(u, v)| (1.0 - share) * u + share * v)
+                .collect()
+        };
+        for (a, b) in [
+            (layer(true, 0.5), layer(false, 2.0)),
+            (layer(false, 2.0), layer(true, 0.5)),
+            (layer(true, 0.5), layer(false, 0.7)),
+        ] {
+            let mut got = vec![0.0; xs.len()];
+            a.predict_blend(&b, 0.3, &xs, &mut got);
+            let want = separate(&a, &b, 0.3);
+            for (g, w) in got.iter().zip(&want) {
+                assert!((g - w).abs() <= 1e-9 * w.abs().max(1.0), "{g} vs {w}");
+            }
+        }
     }
 
     #[test]

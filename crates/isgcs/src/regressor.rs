@@ -713,13 +713,9 @@ impl Regressor {
                 out.len()
             )));
         }
-        self.readout.predict(inputs, out);
-        if let Some(b) = &self.blend {
-            let mut second = vec![0.0; out.len()];
-            b.readout.predict(inputs, &mut second);
-            for (o, s) in out.iter_mut().zip(&second) {
-                *o = (1.0 - b.share) * *o + b.share * s;
-            }
+        match &self.blend {
+            Some(b) => self.readout.predict_blend(&b.readout, b.share, inputs, out),
+            None => self.readout.predict(inputs, out),
         }
         Ok(())
     }

@@ -132,6 +132,25 @@ impl Basis {
         }
     }
 
+    /// Completes a row of raw Gaussians (the first `cells` entries of `row`, length `cols`)
+    /// at the input x into the basis values of [`Basis::row`]: normalized by their sum (a row
+    /// without any positive value gets its `nearest` cell) and the affine columns.
+    pub fn finish_row(&self, row: &mut [f64], x: &[f64], nearest: usize) {
+        let z = self.cells();
+        if self.normalized {
+            let sum: f64 = row[..z].iter().sum();
+            if sum > 0.0 {
+                row[..z].iter_mut().for_each(|v| *v /= sum);
+            } else if z > 0 {
+                row[nearest] = 1.0;
+            }
+        }
+        if self.affine {
+            row[z] = 1.0;
+            row[z + 1..z + 1 + self.n].copy_from_slice(x);
+        }
+    }
+
     /// The raw Gaussians exp(−|x − c_i|²/(μ d_i)²) of `rows` standardized inputs (rows ×
     /// cells, flushed to 0 below e^−FLUSH as in [`Basis::row`]; neither normalized nor with
     /// the affine columns), rows in parallel. [`Basis::design_of_raw`] makes the design matrix.
@@ -328,6 +347,111 @@ impl Readout {
     }
 }
 
+impl Readout {
+    /// The blend (1 − `share`)·self + `share`·other of two layers' predictions for N raw
+    /// inputs into `out` (N × m). When both layers have the same centres, base widths and
+    /// metric and their multipliers differ by a power of √2 (the walks' grid; at most four
+    /// steps), each row's distances are computed once and the wider layer's Gaussians are the
+    /// narrower one's moved up by square roots, as along the width walk ([`move_raw`]: an
+    /// entry flushed at the narrower width is computed afresh); otherwise the two layers
+    /// predict separately.
+    pub fn predict_blend(&self, other: &Readout, share: f64, inputs: &[f64], out: &mut [f64]) {
+        let steps = 2.0 * (other.mult / self.mult).log2();
+        let k = steps.round();
+        let shared = self.basis.centres == other.basis.centres
+            && self.basis.base == other.basis.base
+            && self.transform == other.transform
+            && self.basis.n == other.basis.n
+            && self.m == other.m
+            && (steps - k).abs() < 1e-9
+            && k.abs() <= 4.0;
+        if !shared {
+            self.predict(inputs, out);
+            let mut second = vec![0.0; out.len()];
+            other.predict(inputs, &mut second);
+            for (o, s) in out.iter_mut().zip(&second) {
+                *o = (1.0 - share) * *o + share * s;
+            }
+            return;
+        }
+        // The narrower layer first: its values are moved up to the wider one's.
+        let (lo, hi, lo_share) = if k >= 0.0 {
+            (self, other, 1.0 - share)
+        } else {
+            (other, self, share)
+        };
+        let k = k.abs() as usize;
+        let (n, m, z) = (self.basis.n, self.m, self.basis.cells());
+        let w2 = |r: &Readout| -> Vec<f64> {
+            r.basis
+                .base
+                .iter()
+                .map(|b| (r.mult * b) * (r.mult * b))
+                .collect()
+        };
+        let (w2_lo, w2_hi) = (w2(lo), w2(hi));
+        out.par_chunks_mut(m)
+            .zip(inputs.par_chunks(n))
+            .with_min_len(32)
+            .for_each_init(
+                || {
+                    let cols = self.basis.cols();
+                    (vec![0.0; n], vec![0.0; n], vec![0.0; cols], vec![0.0; cols])
+                },
+                |(xs, ts, r_lo, r_hi), (o, x)| {
+                    if x.iter().any(|v| !v.is_finite()) {
+                        o.fill(f64::NAN);
+                        return;
+                    }
+                    for a in 0..n {
+                        xs[a] = (x[a] - self.x.mean[a]) / self.x.scale[a];
+                    }
+                    if let Some(t) = &self.transform {
+                        for (a, ta) in ts.iter_mut().enumerate() {
+                            *ta = (0..n).map(|b| t[a * n + b] * xs[b]).sum();
+                        }
+                        std::mem::swap(xs, ts);
+                    }
+                    let (mut nearest, mut nearest_d2) = (0, f64::INFINITY);
+                    for i in 0..z {
+                        let c = &self.basis.centres[i * n..(i + 1) * n];
+                        let r2: f64 = c
+                            .iter()
+                            .zip(xs.iter())
+                            .map(|(a, b)| (a - b) * (a - b))
+                            .sum();
+                        if r2 < nearest_d2 {
+                            (nearest, nearest_d2) = (i, r2);
+                        }
+                        let v = gaussian(r2, w2_lo[i]);
+                        r_lo[i] = v;
+                        r_hi[i] = if v > 0.0 {
+                            (0..k).fold(v, |v, _| v.sqrt())
+                        } else {
+                            gaussian(r2, w2_hi[i])
+                        };
+                    }
+                    lo.basis.finish_row(r_lo, xs, nearest);
+                    hi.basis.finish_row(r_hi, xs, nearest);
+                    let value = |r: &Readout, row: &[f64], c: usize| -> f64 {
+                        let mut s = 0.0;
+                        for (j, v) in row.iter().enumerate() {
+                            if *v != 0.0 {
+                                s += v * r.weights[j * m + c];
+                            }
+                        }
+                        s
+                    };
+                    for c in 0..m {
+                        let f_lo = self.y.mean[c] + self.y.scale[c] * value(lo, r_lo, c);
+                        let f_hi = self.y.mean[c] + self.y.scale[c] * value(hi, r_hi, c);
+                        o[c] = lo_share * f_lo + (1.0 - lo_share) * f_hi;
+                    }
+                },
+            );
+    }
+}
+
 /// What a selection measured.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Selected {
@@ -458,7 +582,7 @@ pub(crate) fn fit_gcv(
     select_rows: usize,
     start: f64,
 ) -> Option<(Vec<f64>, Selected)> {
-    fit_best(&[(basis, xs)], ys, mult, ridge, select_rows, start).map(|(_, w, s)| (w, s))
+    fit_best(&[(basis, xs)], ys, mult, ridge, select_rows, start).map(|(_, w, s, _)| (w, s))
 }
 
 /// [`fit_gcv`] for several candidate bases, each with its own copy of the rows (`xs` in
@@ -467,7 +591,10 @@ pub(crate) fn fit_gcv(
 /// multiplier from there (in parallel), and the one with the lowest score (the lowest index
 /// on ties) is refitted on every row. The score is the error on the rows after the selection
 /// rows ([`holdout_at`]) when there are enough of them, else the leave-one-out error on the
-/// selection rows (`gcv_at`). Returns the winner's index in `candidates`, weights and choice.
+/// selection rows (`gcv_at`). Returns the winner's index in `candidates`, weights and choice,
+/// and with the holdout score the second walked candidate and its share α when the blend
+/// (1 − α)·winner + α·second ([`blend_share`]) has the lower holdout error (its score is then
+/// the blend's).
 pub(crate) fn fit_best(
     candidates: &[(&Basis, &[f64])],
     ys: ArrayView2<'_, f64>,
@@ -475,7 +602,7 @@ pub(crate) fn fit_best(
     ridge: Option<f64>,
     select_rows: usize,
     start: f64,
-) -> Option<(usize, Vec<f64>, Selected)> {
+) -> Option<Choice> {
     type Fit = (f64, Array2<f64>, f64, f64);
     let rows = ys.nrows();
     let sel = select_rows.min(rows).max(1);
@@ -580,25 +707,11 @@ pub(crate) fn fit_best(
                 return (i, at);
             }
             let c = &candidates[i];
-            let step = std::f64::consts::SQRT_2;
-            let mut at = at;
-            for dir in [step, 1.0 / step] {
-                let mut next = at.0 * dir;
-                let mut improved = false;
-                while (MULT_RANGE.0..=MULT_RANGE.1).contains(&next) {
-                    match eval(c, next, Some(at.1.2)) {
-                        Some(fit) if fit.1.0 < at.1.0 => {
-                            at = fit;
-                            improved = true;
-                            next *= dir;
-                        }
-                        _ => break,
-                    }
-                }
-                if improved {
-                    break;
-                }
-            }
+            let at = walk_width(
+                at,
+                |f: &Fit| f.0,
+                |m, f: &Fit| eval(c, m, Some(f.2)).map(|(_, fit)| fit),
+            );
             (i, at)
         };
         seeds.into_par_iter().map(walk).collect()
@@ -628,16 +741,27 @@ pub(crate) fn fit_best(
     } else {
         gcv_at(basis, mult, ridge, xs, ys, sel)?
     };
-    Some((
-        index,
-        weights.into_raw_vec_and_offset().0,
-        Selected {
-            mult,
-            ridge: relative,
-            dof,
-            score,
-        },
-    ))
+    let (index, weights, chosen) = picked(index, weights, mult, relative, dof, score);
+    Some((index, weights, chosen, None))
+}
+
+/// A refitted candidate's [`Picked`] from its weights (cols × m) and choice.
+fn picked(
+    index: usize,
+    weights: Array2<f64>,
+    mult: f64,
+    ridge: f64,
+    dof: f64,
+    score: f64,
+) -> Picked {
+    let weights = weights.into_raw_vec_and_offset().0;
+    let chosen = Selected {
+        mult,
+        ridge,
+        dof,
+        score,
+    };
+    (index, weights, chosen)
 }
 
 /// The refit of [`fit_best`] on every row: the relative ridge `start`, raised by half
@@ -699,6 +823,11 @@ fn holdout_at(
     holdout_solve(basis, a_fit.view(), fit.1, a_hold.view(), hold.1, hint).map(|(f, _)| f)
 }
 
+/// A refitted candidate: its index, weights (cols × m) and what was chosen.
+pub(crate) type Picked = (usize, Vec<f64>, Selected);
+/// [`fit_best`]'s choice: the winner and, when blended, the second candidate with its share.
+pub(crate) type Choice = (usize, Vec<f64>, Selected, Option<(Picked, f64)>);
+
 /// G = AᵀA and B = AᵀY of the fitted rows.
 type Normal = (Array2<f64>, Array2<f64>);
 /// A selection's score, weights (cols × m), relative ridge and tr H.
@@ -723,32 +852,44 @@ fn holdout_solve(
     let mut tried: Vec<f64> = Vec::new();
     let lo = holdout_floor().log10();
     type Best = Option<(f64, f64, Array2<f64>)>;
-    let try_one = |e: f64, best: &mut Best, tried: &mut Vec<f64>| {
-        let e = e.clamp(lo, 0.0);
-        if tried.iter().any(|t| (t - e).abs() < 1e-9) {
-            return;
+    // The ridges `es` not tried yet, factorised in parallel (independent solves), then taken
+    // in the order given: the same choice as trying them one after the other.
+    let try_all = |es: &[f64], best: &mut Best, tried: &mut Vec<f64>| {
+        let mut todo: Vec<f64> = Vec::with_capacity(es.len());
+        for &e in es {
+            let e = e.clamp(lo, 0.0);
+            if !tried.iter().chain(&todo).any(|t| (t - e).abs() < 1e-9) {
+                todo.push(e);
+            }
         }
-        tried.push(e);
-        let Some(f) = ridge_fit(&g, &b, yy, 10f64.powf(e), &zero) else {
-            return;
-        };
-        let err = (&mul_few(a, f.weights.view()) - &hold.1)
-            .mapv(|v| v * v)
-            .sum()
-            / rows;
-        if err.is_finite() && best.as_ref().is_none_or(|(_, s, _)| err < *s) {
-            *best = Some((e, err, f.weights));
+        tried.extend(&todo);
+        let fits: Vec<Option<(f64, Array2<f64>)>> = todo
+            .par_iter()
+            .map(|&e| {
+                let f = ridge_fit(&g, &b, yy, 10f64.powf(e), &zero)?;
+                let err = (&mul_few(a, f.weights.view()) - &hold.1)
+                    .mapv(|v| v * v)
+                    .sum()
+                    / rows;
+                Some((err, f.weights))
+            })
+            .collect();
+        for (&e, fit) in todo.iter().zip(fits) {
+            if let Some((err, w)) = fit
+                && err.is_finite()
+                && best.as_ref().is_none_or(|(_, s, _)| err < *s)
+            {
+                *best = Some((e, err, w));
+            }
         }
     };
     match hint {
         None => {
             let decades = (-lo / 2.0).ceil() as usize;
-            for e in (0..=decades).map(|i| -2.0 * i as f64) {
-                try_one(e, &mut best, &mut tried);
-            }
+            let sweep: Vec<f64> = (0..=decades).map(|i| -2.0 * i as f64).collect();
+            try_all(&sweep, &mut best, &mut tried);
             let centre = best.as_ref()?.0;
-            try_one(centre - 1.0, &mut best, &mut tried);
-            try_one(centre + 1.0, &mut best, &mut tried);
+            try_all(&[centre - 1.0, centre + 1.0], &mut best, &mut tried);
         }
         Some(h) => {
             // The hint and probes two decades to either side (then the refinement below):
@@ -757,14 +898,12 @@ fn holdout_solve(
             // at 10⁻⁵, rms/σ 4.8 × the k-means RBF's, against a deeper minimum near 10⁻⁹;
             // 0.91 with the probes; probes at ±4 decades as well changed no result).
             let e0 = h.log10().clamp(lo, 0.0);
-            for d in [0.0, -2.0, 2.0] {
-                try_one(e0 + d, &mut best, &mut tried);
-            }
+            try_all(&[e0, e0 - 2.0, e0 + 2.0], &mut best, &mut tried);
             // Every factorisation failed (ridges below G's rounding): upwards from the top.
             let mut e = tried.iter().fold(lo, |a, &t| a.max(t));
             while best.is_none() && e < 0.0 {
                 e = (e + 0.5).min(0.0);
-                try_one(e, &mut best, &mut tried);
+                try_all(&[e], &mut best, &mut tried);
             }
         }
     }
@@ -772,8 +911,7 @@ fn holdout_solve(
     loop {
         let e = best.as_ref()?.0;
         let before = tried.len();
-        try_one(e - 0.5, &mut best, &mut tried);
-        try_one(e + 0.5, &mut best, &mut tried);
+        try_all(&[e - 0.5, e + 0.5], &mut best, &mut tried);
         if tried.len() == before {
             break;
         }
@@ -870,7 +1008,7 @@ fn fit_best_holdout(
     sel: usize,
     hold: usize,
     start: f64,
-) -> Option<(usize, Vec<f64>, Selected)> {
+) -> Option<Choice> {
     // The selection's score, weights, relative ridge and tr H, with the fitted rows' G and B.
     type Fit = (Scored, Normal);
     let rows = ys.nrows();
@@ -953,69 +1091,139 @@ fn fit_best_holdout(
         }
         let c = &candidates[i];
         let (xf, xh) = split(c, sel, hold);
-        let step = std::f64::consts::SQRT_2;
-        let mut at = at;
-        for dir in [step, 1.0 / step] {
-            let mut next = at.0 * dir;
-            let mut improved = false;
-            while (MULT_RANGE.0..=MULT_RANGE.1).contains(&next) {
-                raw.move_to(next, c.0, xf, xh);
-                match eval(c, &raw, Some(at.1.0.2)) {
-                    Some(fit) if fit.0.0 < at.1.0.0 => {
-                        at = (next, fit);
-                        improved = true;
-                        next *= dir;
-                    }
-                    _ => break,
-                }
-            }
-            if improved {
-                break;
-            }
-        }
+        let at = walk_width(
+            at,
+            |f: &Fit| f.0.0,
+            |m, f: &Fit| {
+                raw.move_to(m, c.0, xf, xh);
+                eval(c, &raw, Some(f.0.2))
+            },
+        );
         (i, at, raw)
     };
     let walks: Vec<(usize, (f64, Fit), RawRows)> = seeds.into_par_iter().map(walk).collect();
-    let (index, (mult, fit), mut raw) = walks
-        .into_iter()
-        .min_by(|a, b| a.1.1.0.0.total_cmp(&b.1.1.0.0).then(a.0.cmp(&b.0)))?;
-    let (fit, (mut g, mut b)) = fit;
+    let mut walks = walks;
+    walks.sort_by(|a, b| a.1.1.0.0.total_cmp(&b.1.1.0.0).then(a.0.cmp(&b.0)));
+    // Holdout predictions of every walked candidate at its chosen multiplier (only the
+    // holdout rows' raw values are needed from here on: the refit reuses them).
+    let preds: Vec<Array2<f64>> = walks
+        .par_iter_mut()
+        .map(|(i, (mult, fit), raw)| {
+            let c = &candidates[*i];
+            let (_, xh) = split(c, sel, hold);
+            raw.fit = Array2::zeros((0, c.0.cells()));
+            raw.move_to(*mult, c.0, &[], xh);
+            mul_few(c.0.design_of_raw(&raw.hold, xh).view(), fit.0.1.view())
+        })
+        .collect();
+    let share = if BLEND && walks.len() > 1 {
+        blend_share(preds[0].view(), preds[1].view(), hy)
+    } else {
+        None
+    };
+    let used = if share.is_some() { 2 } else { 1 };
+    walks.truncate(used);
+    let score = match share {
+        Some((_, err)) => err,
+        None => walks[0].1.1.0.0,
+    };
     // The refit on every row with the same absolute ridge (module docs of `regressor`): G and
     // B of the selection rows as scored at the chosen multiplier, plus those of the holdout
     // rows' raw values moved there and of the remaining rows.
-    let c = &candidates[index];
-    let (basis, xs) = *c;
-    let (_, xh) = split(c, sel, hold);
-    // Only the holdout rows' raw values are needed.
-    raw.fit = Array2::zeros((0, basis.cells()));
-    raw.move_to(mult, basis, &[], xh);
-    let n = basis.n;
-    let rest = basis.design(mult, &xs[(sel + hold) * n..rows * n]);
-    let pieces = [
-        (basis.design_of_raw(&raw.hold, xh), hy),
-        (
-            Cow::Owned(rest),
-            ys.slice_axis(Axis(0), Slice::from(sel + hold..)),
-        ),
-    ];
-    for (a, y) in &pieces {
-        gram_add(a.view(), &mut g);
-        ndarray::linalg::general_mat_mul(1.0, &a.t(), y, 1.0, &mut b);
+    let yy: f64 = ys.iter().map(|v| v * v).sum();
+    let refit = |(index, (mult, fit), raw): (usize, (f64, Fit), RawRows)| {
+        let (fit, (mut g, mut b)) = fit;
+        let c = &candidates[index];
+        let (basis, xs) = *c;
+        let (_, xh) = split(c, sel, hold);
+        let n = basis.n;
+        let rest = basis.design(mult, &xs[(sel + hold) * n..rows * n]);
+        let pieces = [
+            (basis.design_of_raw(&raw.hold, xh), hy),
+            (
+                Cow::Owned(rest),
+                ys.slice_axis(Axis(0), Slice::from(sel + hold..)),
+            ),
+        ];
+        for (a, y) in &pieces {
+            gram_add(a.view(), &mut g);
+            ndarray::linalg::general_mat_mul(1.0, &a.t(), y, 1.0, &mut b);
+        }
+        drop(pieces);
+        let r = (fit.2 * sel as f64 / rows as f64).max(holdout_floor());
+        let (weights, relative, dof) = refit_solve(&g, &b, yy, r, 1.0)?;
+        Some(picked(index, weights, mult, relative, dof, score))
+    };
+    let mut fits: Vec<Option<Picked>> = walks.into_par_iter().map(refit).collect();
+    let (index, weights, chosen) = fits[0].take()?;
+    let partner = match (share, fits.get_mut(1).and_then(Option::take)) {
+        (Some((alpha, _)), Some(p)) => Some((p, alpha)),
+        _ => None,
+    };
+    Some((index, weights, chosen, partner))
+}
+
+/// The share α ∈ (0, 1] of the second prediction in the blend (1 − α)·p₁ + α·p₂ that
+/// minimises the squared error against `y` (holdout rows), with that blend's mean squared
+/// error per row; `None` when the best share is 0 (the first prediction alone) or not finite.
+fn blend_share(
+    p1: ArrayView2<'_, f64>,
+    p2: ArrayView2<'_, f64>,
+    y: ArrayView2<'_, f64>,
+) -> Option<(f64, f64)> {
+    let (mut dd, mut dr) = (0.0, 0.0);
+    for ((a, b), t) in p1.iter().zip(p2.iter()).zip(y.iter()) {
+        let (d, r) = (b - a, t - a);
+        dd += d * d;
+        dr += d * r;
     }
-    drop(pieces);
-    let yy = ys.iter().map(|v| v * v).sum();
-    let r = (fit.2 * sel as f64 / rows as f64).max(holdout_floor());
-    let (weights, relative, dof) = refit_solve(&g, &b, yy, r, 1.0)?;
-    Some((
-        index,
-        weights.into_raw_vec_and_offset().0,
-        Selected {
-            mult,
-            ridge: relative,
-            dof,
-            score: fit.0,
-        },
-    ))
+    let alpha = (dr / dd).clamp(0.0, 1.0);
+    if !(alpha > 0.0 && alpha.is_finite()) {
+        return None;
+    }
+    let err: f64 = p1
+        .iter()
+        .zip(p2.iter())
+        .zip(y.iter())
+        .map(|((a, b), t)| {
+            let e = (1.0 - alpha) * a + alpha * b - t;
+            e * e
+        })
+        .sum();
+    Some((alpha, err / y.nrows().max(1) as f64))
+}
+
+/// Blend the two best candidates of the holdout selection (`fit_best`).
+const BLEND: bool = true;
+
+/// The width walk of [`fit_best`] (module docs of `regressor`) from `at` (multiplier, fit):
+/// by √2 upwards while the `score` falls, else downwards, within [`MULT_RANGE`]; `eval`
+/// fits at a multiplier given the current best fit (whose ridge is the hint).
+fn walk_width<F>(
+    at: (f64, F),
+    score: impl Fn(&F) -> f64,
+    mut eval: impl FnMut(f64, &F) -> Option<F>,
+) -> (f64, F) {
+    let step = std::f64::consts::SQRT_2;
+    let mut at = at;
+    for dir in [step, 1.0 / step] {
+        let mut next = at.0 * dir;
+        let mut improved = false;
+        while (MULT_RANGE.0..=MULT_RANGE.1).contains(&next) {
+            match eval(next, &at.1) {
+                Some(fit) if score(&fit) < score(&at.1) => {
+                    at = (next, fit);
+                    improved = true;
+                    next *= dir;
+                }
+                _ => break,
+            }
+        }
+        if improved {
+            break;
+        }
+    }
+    at
 }
 
 /// Candidates of [`fit_best`] whose multiplier is walked: the best ones at the first
@@ -1247,7 +1455,7 @@ mod tests {
         for normalized in [true, false] {
             let basis = line_basis(20, normalized);
             let start = 0.25;
-            let (_, _, chosen) =
+            let (_, _, chosen, _) =
                 fit_best(&[(&basis, &xs[..])], yv, None, None, rows, start).expect("a fit");
             let steps = (2.0 * (chosen.mult / start).log2()).round();
             assert!(steps >= 2.0, "walked {steps} steps from {start}");
@@ -1280,7 +1488,7 @@ mod tests {
         let basis = line_basis(20, false);
         let yv = ArrayView2::from_shape((rows, 1), &ys).unwrap();
         let candidates = [(&basis, &stretched[..]), (&basis, &xs[..])];
-        let (index, weights, chosen) = fit_best(&candidates, yv, None, None, 200, 1.0).unwrap();
+        let (index, weights, chosen, _) = fit_best(&candidates, yv, None, None, 200, 1.0).unwrap();
         assert_eq!(index, 1, "chose the stretched rows ({chosen:?})");
         let mut row = vec![0.0; basis.cols()];
         for x in [-0.9, -0.3, 0.2, 0.7] {
@@ -1419,6 +1627,83 @@ mod tests {
             );
         }
         assert!(fitted.iter().zip(&ys).all(|(f, y)| (f - y).abs() < 0.01));
+    }
+
+    #[test]
+    fn a_blend_on_one_geometry_predicts_as_its_two_layers_do() {
+        // Two layers on the same centres and widths (normalized at μ = 0.5, plain at 2 and at
+        // 0.7): the shared pass (square roots of the narrower layer's values; fresh values
+        // where those are flushed) must give the separate predictions' blend to rounding, in
+        // either order; a ratio off the √2 grid takes the separate path.
+        let basis = line_basis(30, true);
+        let weights: Vec<f64> = (0..30).map(|i| ((i * 7) % 11) as f64 - 5.0).collect();
+        let layer = |normalized: bool, mult: f64| Readout {
+            basis: Basis {
+                normalized,
+                ..basis.clone()
+            },
+            mult,
+            weights: weights.clone(),
+            m: 1,
+            x: Standardizer {
+                mean: vec![0.1],
+                scale: vec![2.0],
+            },
+            y: Standardizer {
+                mean: vec![3.0],
+                scale: vec![0.5],
+            },
+            ridge: 0.0,
+            transform: None,
+        };
+        // Inputs inside and far outside the centres (every value flushed at μ = 0.5).
+        let xs: Vec<f64> = (0..400)
+            .map(|i| -3.0 + 0.02 * i as f64)
+            .chain([90.0])
+            .collect();
+        let separate = |a: &Readout, b: &Readout, share: f64| -> Vec<f64> {
+            let (mut pa, mut pb) = (vec![0.0; xs.len()], vec![0.0; xs.len()]);
+            a.predict(&xs, &mut pa);
+            b.predict(&xs, &mut pb);
+            pa.iter()
+                .zip(&pb)
+                .map(|(u, v)| (1.0 - share) * u + share * v)
+                .collect()
+        };
+        for (a, b) in [
+            (layer(true, 0.5), layer(false, 2.0)),
+            (layer(false, 2.0), layer(true, 0.5)),
+            (layer(true, 0.5), layer(false, 0.7)),
+        ] {
+            let mut got = vec![0.0; xs.len()];
+            a.predict_blend(&b, 0.3, &xs, &mut got);
+            let want = separate(&a, &b, 0.3);
+            for (g, w) in got.iter().zip(&want) {
+                assert!((g - w).abs() <= 1e-9 * w.abs().max(1.0), "{g} vs {w}");
+            }
+        }
+    }
+
+    #[test]
+    fn blend_share_is_the_least_squares_share_in_0_1() {
+        let y = ndarray::array![[1.0], [2.0], [-1.0], [0.5]];
+        let e = ndarray::array![[0.1], [-0.3], [0.2], [0.05]];
+        // Errors of opposite sign and equal size: half of each, no error left.
+        let (p1, p2) = (&y + &e, &y - &e);
+        let (a, err) = blend_share(p1.view(), p2.view(), y.view()).unwrap();
+        assert!((a - 0.5).abs() < 1e-12 && err < 1e-24, "{a} {err}");
+        // Errors in a 2 : 1 ratio, opposite sign: α = 2/3 (1/3·2e − 2/3·e = 0).
+        let p2 = &y - &(&e * 0.5);
+        let p1 = &y + &e;
+        let (a, _) = blend_share(p1.view(), p2.view(), y.view()).unwrap();
+        assert!((a - 2.0 / 3.0).abs() < 1e-12, "{a}");
+        // The first exact, or the second worse in the same direction: the first alone.
+        assert!(blend_share(y.view(), p1.view(), y.view()).is_none());
+        let worse = &y + &(&e * 2.0);
+        assert!(blend_share(p1.view(), worse.view(), y.view()).is_none());
+        // The second exact: all of it (clamped at 1, not beyond).
+        let (a, err) = blend_share(p1.view(), y.view(), y.view()).unwrap();
+        assert!(a == 1.0 && err < 1e-24, "{a} {err}");
     }
 
     #[test]

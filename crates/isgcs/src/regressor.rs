@@ -43,11 +43,18 @@
 //!    the two best then walk μ by √2 (in parallel) while the score falls. The raw Gaussians
 //!    of the selection and holdout rows are computed once per geometry and moved along the
 //!    walk (μ → √2 μ is an elementwise square root, μ → μ/√2 a square). The
-//!    candidate with the lowest score is refitted on all rows with the same absolute ridge
+//!    two walked candidates are then **blended**: the prediction (1 − α)·f₁ + α·f₂ of the
+//!    best (f₁) and the second (f₂), with the share α ∈ [0, 1] that minimises the squared
+//!    error on the holdout rows (one least-squares parameter; stacked regression). Two
+//!    output layers of different bases (normalized and plain Gaussians, or two metrics)
+//!    err in partly different places, so their blend is more accurate than either when
+//!    both are about equally good (measured in `docs/isgcs.md`, round eight), and α = 0
+//!    leaves the best one alone. Each
+//!    layer used is refitted on all rows with its own absolute ridge
 //!    (relative ridge × S/N, floored at ε, raised by quarter decades while the
 //!    factorisation fails), its Gram matrix that of the selection rows as scored at the
 //!    chosen multiplier plus those of the holdout rows (moved raw values) and the remaining
-//!    rows.
+//!    rows. The leave-one-out selection (too few rows for a holdout) does not blend.
 //!
 //! Cost: growth O(steps · z · n); the output layer O(S · z²) per candidate multiplier (S
 //! selection rows; dense matrix products on two threads) plus O(z³/3 + H · z) per candidate
@@ -57,7 +64,7 @@ pub use crate::data::RegressorError;
 use crate::data::check_data;
 use crate::kmeans::kmeans;
 use crate::readout::{
-    Basis, Readout, Standardizer, egop, fit_best, fit_fixed, fit_gcv, nearest_widths,
+    Basis, Readout, Selected, Standardizer, egop, fit_best, fit_fixed, fit_gcv, nearest_widths,
 };
 use crate::{GoalFunction, Isgcs, IsgcsError, Params, Termination};
 use ndarray::ArrayView2;
@@ -139,6 +146,10 @@ pub struct RegressorReport {
     pub ridge: f64,
     /// Effective degrees of freedom tr H of the output layer (estimated).
     pub dof: f64,
+    /// Share α of the second output layer in a blended fit (module docs, step 4): the
+    /// predictions are (1 − α)·first + α·second; 0 when the first layer alone is used.
+    #[serde(default)]
+    pub blend_share: f64,
 }
 
 /// A fitted regressor: the grown network (in standardized input coordinates) and its
@@ -148,6 +159,17 @@ pub struct Regressor {
     net: Isgcs,
     readout: Readout,
     report: RegressorReport,
+    /// The second output layer of a blend (module docs, step 4).
+    #[serde(default)]
+    blend: Option<Blend>,
+}
+
+/// The second output layer of a blended fit and its share α: predictions are
+/// (1 − α)·first + α·second.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Blend {
+    share: f64,
+    readout: Readout,
 }
 
 /// Training rows in shuffled epochs.
@@ -635,7 +657,7 @@ impl Regressor {
             .iter()
             .map(|(b, in_metric)| (b, if *in_metric { &xs[..] } else { &xs_plain[..] }))
             .collect();
-        let (index, weights, chosen) = fit_best(
+        let (index, weights, chosen, partner) = fit_best(
             &candidates,
             yv,
             params.width_multiplier,
@@ -644,21 +666,29 @@ impl Regressor {
             pilot_mult,
         )
         .ok_or_else(|| RegressorError::Solve("no row activates any cell".into()))?;
-        let (basis, in_metric) = bases.swap_remove(index);
-        let transform = if in_metric { transform } else { None };
-        let readout = Readout {
-            basis,
-            mult: chosen.mult,
-            weights,
-            m,
-            x: xstd,
-            y: ystd,
-            ridge: chosen.ridge,
-            transform,
+        let readout_of = |index: usize, weights: Vec<f64>, chosen: &Selected| {
+            let (basis, in_metric) = bases[index].clone();
+            Readout {
+                basis,
+                mult: chosen.mult,
+                weights,
+                m,
+                x: xstd.clone(),
+                y: ystd.clone(),
+                ridge: chosen.ridge,
+                transform: if in_metric { transform.clone() } else { None },
+            }
         };
+        let readout = readout_of(index, weights, &chosen);
+        let blend = partner.map(|((i, w, c), share)| Blend {
+            share,
+            readout: readout_of(i, w, &c),
+        });
+        let blend_share = blend.as_ref().map_or(0.0, |b| b.share);
         Ok(Self {
             net,
             readout,
+            blend,
             report: RegressorReport {
                 topology_dim: k,
                 lambda,
@@ -667,6 +697,7 @@ impl Regressor {
                 width_multiplier: chosen.mult,
                 ridge: chosen.ridge,
                 dof: chosen.dof,
+                blend_share,
             },
         })
     }
@@ -682,7 +713,10 @@ impl Regressor {
                 out.len()
             )));
         }
-        self.readout.predict(inputs, out);
+        match &self.blend {
+            Some(b) => self.readout.predict_blend(&b.readout, b.share, inputs, out),
+            None => self.readout.predict(inputs, out),
+        }
         Ok(())
     }
 

@@ -140,6 +140,43 @@ fn save_and_load_give_the_same_predictions() {
 }
 
 #[test]
+fn a_blended_fit_saves_and_loads_and_is_about_as_accurate_as_its_first_layer() {
+    // Enough rows for the holdout selection (1500 fitted, 900 scored): the two walked output
+    // layers are blended. Save/load keeps the blend (without it the predictions differ), and
+    // on fresh points the blend is within the holdout's sampling error (α is fitted on 900
+    // rows) of the share α = 0, the first layer alone (here 0.224 against 0.220 rms/σ).
+    let p = suite().into_iter().find(|p| p.name == "ishigami").unwrap();
+    let (x, y) = p.sample(2400, false, 8);
+    let model = Regressor::fit(&params(80, 1), &x, &y, 3, 1).unwrap();
+    let share = model.report().blend_share;
+    assert!(share > 0.0 && share <= 1.0, "not blended: {share}");
+    let json = serde_json::to_string(&model).unwrap();
+    let back: Regressor = serde_json::from_str(&json).unwrap();
+    let (tx, ty) = p.sample(3000, false, 9);
+    let (a, b) = (predict(&model, &tx), predict(&back, &tx));
+    // serde_json's float parsing may be off by an ulp; at this fit's relative ridge (~10⁻¹⁵)
+    // the weights amplify that to ~10⁻⁹ of the outputs' spread, far below the blend's effect.
+    let spread = ty.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    assert!(
+        a.iter()
+            .zip(&b)
+            .all(|(u, v)| (u - v).abs() <= 1e-7 * spread)
+    );
+    assert_eq!(back.report().blend_share, share);
+    // A model saved before blends existed (no `blend` entry) loads as the first layer alone.
+    let mut old: serde_json::Value = serde_json::from_str(&json).unwrap();
+    old.as_object_mut().unwrap().remove("blend");
+    let first: Regressor = serde_json::from_value(old).unwrap();
+    let (eb, e1) = (
+        rms_over_sd(&a, &ty),
+        rms_over_sd(&predict(&first, &tx), &ty),
+    );
+    eprintln!("blend {share:.3}: rms/σ {eb:.2e}, first layer alone {e1:.2e}");
+    assert!(eb != e1, "the blend changed nothing");
+    assert!(eb < 1.05 * e1, "blend {eb} vs first layer {e1}");
+}
+
+#[test]
 fn misuse_is_an_error() {
     let x = vec![0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 0.5, 0.5];
     let y = vec![0.0, 1.0, 1.0, 2.0, 1.0];

@@ -337,7 +337,11 @@ pub(super) fn run_mitsuba(
 pub(super) fn mitsuba_runs(stdout: &[u8]) -> Result<Vec<(usize, f64)>> {
     let mut runs = Vec::new();
     for line in String::from_utf8_lossy(stdout).lines() {
-        let kv: std::collections::HashMap<&str, &str> = line
+        // Mitsuba's log may end its colour codes on the same line, before `spp=`.
+        let Some(at) = line.find("spp=") else {
+            continue;
+        };
+        let kv: std::collections::HashMap<&str, &str> = line[at..]
             .split_whitespace()
             .filter_map(|t| t.split_once('='))
             .collect();

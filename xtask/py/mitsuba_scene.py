@@ -10,10 +10,9 @@ renderers read the same texels; bilinear, repeat) of texels × factor.
 The caller imports mitsuba and sets the variant first.
 
 Samplers (`--sampler NAME` before the positional arguments, `split_sampler`): `ldsampler` (default, the
-one that measured the lowest error at equal spp) or any other Mitsuba sampler. Measured with Mitsuba 3.9.1
-(`scalar_rgb`, `path`): in a closed furnace (E = 1, rho = 0.5 on every face, exact L = 2/pi) `ldsampler`
-renders 0.42-0.44 % too bright at 256, 1024 and 4096 spp, `multijitter` and `independent` agree within
-0.01-0.03 %; references use `multijitter`."""
+one that measured the lowest error at equal spp) or any other Mitsuba sampler. `ldsampler` is biased: a
+closed furnace renders 0.42-0.44 % too bright at 256-4096 spp (mitsuba_furnace.py, Mitsuba 3.9.1), where
+`multijitter` and `independent` agree with the exact value; references use `multijitter`."""
 import os
 
 import mitsuba as mi

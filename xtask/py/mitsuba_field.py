@@ -27,7 +27,7 @@ except ImportError as e:  # the bench skips Mitsuba with a note
 import numpy as np
 
 mi.set_variant("scalar_rgb")
-from mitsuba_scene import load_with_sampler, read_textures, scene_dict, split_sampler  # noqa: E402
+from mitsuba_scene import load_batch, read_textures, scene_dict, split_sampler  # noqa: E402
 
 
 def main():
@@ -54,14 +54,7 @@ def main():
                 "film": {"type": "hdrfilm", "width": 1, "height": 1, "rfilter": {"type": "box"},
                          "pixel_format": "rgb"},
             }
-        sd = dict(scene)
-        sd["sensor"] = {
-            "type": "batch",
-            "film": {"type": "hdrfilm", "width": n, "height": 1, "rfilter": {"type": "box"},
-                     "pixel_format": "rgb"},
-            **sensors,
-        }
-        s, used = load_with_sampler(sd, lambda smp: sd["sensor"].update(sampler=smp), sampler, spp)
+        s, used = load_batch(scene, sensors, sampler, spp)
         t_load = time.perf_counter() - t0
         t0 = time.perf_counter()
         img = np.array(mi.render(s, spp=spp))

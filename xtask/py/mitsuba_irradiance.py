@@ -29,7 +29,7 @@ except ImportError as e:  # the bench skips Mitsuba with a note
     sys.exit(3)
 
 mi.set_variant("scalar_rgb")
-from mitsuba_scene import load_with_sampler, read_textures, scene_dict, split_sampler  # noqa: E402
+from mitsuba_scene import load_batch, read_textures, scene_dict, split_sampler  # noqa: E402
 
 
 def frame(n):
@@ -72,14 +72,7 @@ def main():
     t_scene = time.perf_counter() - t0
     for spp in spps:
         t0 = time.perf_counter()
-        sd = dict(scene)
-        sd["sensor"] = {
-            "type": "batch",
-            "film": {"type": "hdrfilm", "width": n, "height": 1, "rfilter": {"type": "box"},
-                     "pixel_format": "rgb"},
-            **sensors,
-        }
-        s, used = load_with_sampler(sd, lambda smp: sd["sensor"].update(sampler=smp), sampler, spp)
+        s, used = load_batch(scene, sensors, sampler, spp)
         t_load = time.perf_counter() - t0
         t0 = time.perf_counter()
         renders = []

@@ -93,3 +93,16 @@ def load_with_sampler(sd, place, sampler, spp):
             raise
         place({"type": "multijitter", "sample_count": spp})
         return mi.load_dict(sd), "multijitter"
+
+
+def load_batch(scene, sensors, sampler, spp):
+    """Loads `scene` with one `batch` sensor of the `radiancemeter`s `sensors` (a dict of sensor
+    dicts, one film pixel each) and `sampler` (`load_with_sampler`). Returns (scene, sampler used)."""
+    sd = dict(scene)
+    sd["sensor"] = {
+        "type": "batch",
+        "film": {"type": "hdrfilm", "width": len(sensors), "height": 1, "rfilter": {"type": "box"},
+                 "pixel_format": "rgb"},
+        **sensors,
+    }
+    return load_with_sampler(sd, lambda smp: sd["sensor"].update(sampler=smp), sampler, spp)

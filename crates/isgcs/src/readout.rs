@@ -310,6 +310,25 @@ pub(crate) struct Readout {
 }
 
 impl Readout {
+    /// The basis's view of raw input `x` in `xs` (standardized, then through the learned metric;
+    /// `ts` scratch of the same length n); false when `x` is not finite (its prediction is NaN).
+    fn basis_input(&self, x: &[f64], xs: &mut [f64], ts: &mut [f64]) -> bool {
+        if x.iter().any(|v| !v.is_finite()) {
+            return false;
+        }
+        let n = xs.len();
+        for a in 0..n {
+            xs[a] = (x[a] - self.x.mean[a]) / self.x.scale[a];
+        }
+        if let Some(t) = &self.transform {
+            for (a, ta) in ts.iter_mut().enumerate() {
+                *ta = (0..n).map(|b| t[a * n + b] * xs[b]).sum();
+            }
+            xs.copy_from_slice(ts);
+        }
+        true
+    }
+
     /// Predictions for N raw inputs (N × n) into `out` (N × m), rows in parallel.
     pub fn predict(&self, inputs: &[f64], out: &mut [f64]) {
         let (n, m, cols) = (self.basis.n, self.m, self.basis.cols());
@@ -319,18 +338,9 @@ impl Readout {
             .for_each_init(
                 || (vec![0.0; n], vec![0.0; n], vec![0.0; cols]),
                 |(xs, ts, row), (o, x)| {
-                    if x.iter().any(|v| !v.is_finite()) {
+                    if !self.basis_input(x, xs, ts) {
                         o.fill(f64::NAN);
                         return;
-                    }
-                    for a in 0..n {
-                        xs[a] = (x[a] - self.x.mean[a]) / self.x.scale[a];
-                    }
-                    if let Some(t) = &self.transform {
-                        for (a, ta) in ts.iter_mut().enumerate() {
-                            *ta = (0..n).map(|b| t[a * n + b] * xs[b]).sum();
-                        }
-                        std::mem::swap(xs, ts);
                     }
                     self.basis.row(self.mult, xs, row);
                     for c in 0..m {
@@ -399,18 +409,9 @@ impl Readout {
                     (vec![0.0; n], vec![0.0; n], vec![0.0; cols], vec![0.0; cols])
                 },
                 |(xs, ts, r_lo, r_hi), (o, x)| {
-                    if x.iter().any(|v| !v.is_finite()) {
+                    if !self.basis_input(x, xs, ts) {
                         o.fill(f64::NAN);
                         return;
-                    }
-                    for a in 0..n {
-                        xs[a] = (x[a] - self.x.mean[a]) / self.x.scale[a];
-                    }
-                    if let Some(t) = &self.transform {
-                        for (a, ta) in ts.iter_mut().enumerate() {
-                            *ta = (0..n).map(|b| t[a * n + b] * xs[b]).sum();
-                        }
-                        std::mem::swap(xs, ts);
                     }
                     let (mut nearest, mut nearest_d2) = (0, f64::INFINITY);
                     for i in 0..z {

@@ -119,17 +119,7 @@ impl Basis {
             out[i] = gaussian(r2, w2);
             sum += out[i];
         }
-        if self.normalized {
-            if sum > 0.0 {
-                out[..z].iter_mut().for_each(|v| *v /= sum);
-            } else if z > 0 {
-                out[nearest] = 1.0;
-            }
-        }
-        if self.affine {
-            out[z] = 1.0;
-            out[z + 1..z + 1 + self.n].copy_from_slice(x);
-        }
+        self.finish(out, x, nearest, sum);
     }
 
     /// Completes a row of raw Gaussians (the first `cells` entries of `row`, length `cols`)
@@ -137,8 +127,19 @@ impl Basis {
     /// without any positive value gets its `nearest` cell) and the affine columns.
     pub fn finish_row(&self, row: &mut [f64], x: &[f64], nearest: usize) {
         let z = self.cells();
+        let sum = if self.normalized {
+            row[..z].iter().sum()
+        } else {
+            0.0
+        };
+        self.finish(row, x, nearest, sum);
+    }
+
+    /// The end of [`Basis::row`] and [`Basis::finish_row`]: the raw Gaussians (summing to `sum`)
+    /// normalized, or the `nearest` cell where none is positive, and the affine columns.
+    fn finish(&self, row: &mut [f64], x: &[f64], nearest: usize, sum: f64) {
+        let z = self.cells();
         if self.normalized {
-            let sum: f64 = row[..z].iter().sum();
             if sum > 0.0 {
                 row[..z].iter_mut().for_each(|v| *v /= sum);
             } else if z > 0 {

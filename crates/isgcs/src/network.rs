@@ -304,11 +304,7 @@ impl Isgcs {
     }
 
     fn dist2(&self, i: usize, x: &[f64]) -> f64 {
-        self.centre(i)
-            .iter()
-            .zip(x)
-            .map(|(a, b)| (a - b) * (a - b))
-            .sum()
+        squared_distance(self.centre(i), x)
     }
 
     fn refresh_width(&mut self, i: usize) {
@@ -562,8 +558,7 @@ impl Isgcs {
         d2.resize(self.len(), 0.0);
         let (mut b, mut best) = (0, f64::INFINITY);
         for (i, (c, slot)) in self.centres.chunks_exact(self.n).zip(&mut d2).enumerate() {
-            // as `dist2`: the same terms summed in the same order
-            let di: f64 = c.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum();
+            let di = squared_distance(c, x);
             *slot = di;
             if di < best {
                 (best, b) = (di, i);
@@ -593,10 +588,9 @@ impl Isgcs {
             d2[j as usize] = self.dist2(j as usize, x);
         }
         self.scratch_nb = nb;
-        // Supervised: delta rule over the cells whose Gaussian reaches x (as `support`).
-        // The cells in reach (as `support`), gathered without a branch per cell (about half of
-        // them are in reach: a branch would be mispredicted at every other cell), then their
-        // Gaussians.
+        // Supervised: delta rule over the cells whose Gaussian reaches x (as `support`), gathered
+        // without a branch per cell (about half of them are in reach: a branch would be
+        // mispredicted at every other cell), then their Gaussians.
         let mut support = std::mem::take(&mut self.scratch_support);
         support.clear();
         support.resize(self.len(), (0, 0.0));
@@ -1137,6 +1131,12 @@ impl Isgcs {
 
 /// Divides the weights by their sum; an empty or zero support becomes the fallback cell with
 /// weight 1.
+/// |c − x|², summed in coordinate order (the scan and `dist2` must agree bit for bit).
+#[inline]
+fn squared_distance(c: &[f64], x: &[f64]) -> f64 {
+    c.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum()
+}
+
 fn normalize(cells: &mut Vec<(usize, f64)>, fallback: impl FnOnce() -> usize) {
     let sum: f64 = cells.iter().map(|&(_, a)| a).sum();
     if sum > 0.0 {

@@ -48,10 +48,7 @@ def main():
             "film": {"type": "hdrfilm", "width": width, "height": height,
                      "rfilter": {"type": "box"}, "pixel_format": "rgb"},
         }
-        sd = dict(scene)
-        s, used = load_with_sampler(
-            sd, lambda smp: sd.update(sensor=dict(sensor, sampler=smp)), sampler, spp
-        )
+        s, used = load_with_sampler(scene, sensor, sampler, spp)
         t_load = time.perf_counter() - t0
         t0 = time.perf_counter()
         img = np.array(mi.render(s, spp=spp))

@@ -82,27 +82,26 @@ def split_sampler(argv):
     return sampler, args
 
 
-def load_with_sampler(sd, place, sampler, spp):
-    """Loads scene dict `sd` after `place(sampler_dict)` put the sampler in its sensor; `ldsampler`
-    wants a power of two and falls back to `multijitter`. Returns (scene, the sampler used)."""
+def load_with_sampler(scene, sensor, sampler, spp):
+    """Loads scene dict `scene` with `sensor` sampled by `sampler` at `spp`; `ldsampler` falls
+    back to `multijitter` where it refuses the count. Returns (scene, the sampler used)."""
+    def load(name):
+        return mi.load_dict(dict(scene, sensor=dict(sensor, sampler={"type": name, "sample_count": spp})))
     try:
-        place({"type": sampler, "sample_count": spp})
-        return mi.load_dict(sd), sampler
+        return load(sampler), sampler
     except Exception:
         if sampler != "ldsampler":
             raise
-        place({"type": "multijitter", "sample_count": spp})
-        return mi.load_dict(sd), "multijitter"
+        return load("multijitter"), "multijitter"
 
 
 def load_batch(scene, sensors, sampler, spp):
     """Loads `scene` with one `batch` sensor of the `radiancemeter`s `sensors` (a dict of sensor
     dicts, one film pixel each) and `sampler` (`load_with_sampler`). Returns (scene, sampler used)."""
-    sd = dict(scene)
-    sd["sensor"] = {
+    batch = {
         "type": "batch",
         "film": {"type": "hdrfilm", "width": len(sensors), "height": 1, "rfilter": {"type": "box"},
                  "pixel_format": "rgb"},
         **sensors,
     }
-    return load_with_sampler(sd, lambda smp: sd["sensor"].update(sampler=smp), sampler, spp)
+    return load_with_sampler(scene, batch, sampler, spp)

@@ -9,8 +9,9 @@
 //! * **Error**: relative MSE, Σ (L − L_ref)² / Σ L_ref² over pixels and bands (linear radiance).
 //! * **Solvers**: `gcr solve --image-mode pixel` as the library runs it (the default paths gather to the
 //!   target errors 10, 5, 2, 1 % of the pixels, no networks: a path tracer over each pixel's footprint), and
-//!   Mitsuba at 4–1024 spp (`multijitter` also 2304) with each of its two best samplers, `ldsampler` (lower error at low spp,
-//!   biased) and `multijitter`; GCR is compared with the better of the two at its time. Every
+//!   Mitsuba at 4–1024 spp (`multijitter` also 2304) with each of its two best samplers,
+//!   `ldsampler` (lower error at low spp, biased) and `multijitter`; GCR is compared with the
+//!   better of the two at its time. Every
 //!   time includes building the scene (GCR: its BVH; Mitsuba: its meshes and sensor, not the interpreter).
 //!   The reference's own error is estimated from the 1024-spp render's (noise falls as 1/spp in MSE).
 //!

@@ -18,6 +18,8 @@
 //! * With the cargo feature `linfa`, `isgcs::linfa` wraps the network as a regressor
 //!   behind linfa's `Fit` / `Predict` traits (ndarray records, `Array1` or `Array2` targets).
 //! * [`rbf::GaussianRbf`] is the reference fit the network is measured against.
+//! * [`gaussian`] is the cells' factor e^(−e) the network evaluates (within an ulp or two of
+//!   `f64::exp`, vectorizable), for callers that sum the same Gaussians themselves.
 //!
 //! ```
 //! use isgcs::{Isgcs, Params};
@@ -34,6 +36,7 @@
 
 mod data;
 mod driver;
+mod gaussian;
 mod kmeans;
 mod linalg;
 #[cfg(feature = "linfa")]
@@ -47,5 +50,6 @@ mod resample;
 pub mod test_functions;
 
 pub use driver::{Event, GoalFunction, Stopped, Termination};
+pub use gaussian::gaussian;
 pub use network::{Isgcs, IsgcsError};
 pub use params::Params;

@@ -1,5 +1,6 @@
 //! The network: cells, their simplicial complex, training, insertion and evaluation.
 
+use crate::gaussian::gaussian;
 use crate::params::Params;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -52,7 +53,7 @@ pub struct Isgcs {
     #[serde(skip)]
     scratch_nb: Vec<u32>,
     #[serde(skip)]
-    scratch_support: Vec<(usize, f64)>,
+    scratch_support: Vec<usize>,
 }
 
 impl Isgcs {
@@ -372,7 +373,7 @@ impl Isgcs {
         if d <= 0.0 {
             return 0.0;
         }
-        (-self.dist2(i, x) / (d * d)).exp()
+        gaussian(self.dist2(i, x) / (d * d))
     }
 
     /// Ψ(x) evaluated over every cell (the global reference).
@@ -408,7 +409,7 @@ impl Isgcs {
             let d = self.widths[i];
             let r2 = self.dist2(i, x);
             if d > 0.0 && r2 < 16.0 * d * d {
-                out.push((i, (-r2 / (d * d)).exp()));
+                out.push((i, gaussian(r2 / (d * d))));
             }
         }
     }
@@ -419,7 +420,7 @@ impl Isgcs {
     pub fn weights(&self, x: &[f64], out: &mut Vec<(usize, f64)>) {
         self.support(x, out);
         if self.params.normalized {
-            normalize(out, || self.bmu(x, None));
+            normalize_pairs(out, || self.bmu(x, None));
         }
     }
 
@@ -543,7 +544,22 @@ impl Isgcs {
 
     /// [`Isgcs::train`], also returning the squared output error |y − Ψ(x)|² of the step
     /// (before the delta rule's update).
+    ///
+    /// On x86-64 processors with AVX2 the step runs compiled for it (`pulp`'s runtime dispatch):
+    /// the same IEEE operations in the same order (Rust never fuses a multiply and an add on its
+    /// own, nor reassociates), four lanes wide where the compiler vectorizes (the Gaussians, the
+    /// decays), so the result is bit-identical to the baseline build's.
     pub(crate) fn train_step(&mut self, x: &[f64], target: &[f64]) -> (usize, f64) {
+        pulp::Arch::new().dispatch(Step {
+            net: self,
+            x,
+            target,
+        })
+    }
+
+    /// The training step itself (eq. 2.6–2.8, 2.15–2.18).
+    #[inline(always)]
+    fn train_step_body(&mut self, x: &[f64], target: &[f64]) -> (usize, f64) {
         debug_assert_eq!(x.len(), self.n);
         debug_assert_eq!(target.len(), self.m);
         // One scan computes every |x − w_i|² for the BMU (as `bmu`: first strict minimum) and
@@ -556,14 +572,13 @@ impl Isgcs {
         let mut d2 = std::mem::take(&mut self.scratch_d2);
         d2.clear();
         d2.resize(self.len(), 0.0);
-        let (mut b, mut best) = (0, f64::INFINITY);
-        for (i, (c, slot)) in self.centres.chunks_exact(self.n).zip(&mut d2).enumerate() {
-            let di = squared_distance(c, x);
-            *slot = di;
-            if di < best {
-                (best, b) = (di, i);
-            }
-        }
+        let b = match self.n {
+            2 => scan::<2>(&self.centres, x, &mut d2),
+            3 => scan::<3>(&self.centres, x, &mut d2),
+            4 => scan::<4>(&self.centres, x, &mut d2),
+            6 => scan::<6>(&self.centres, x, &mut d2),
+            n => scan_any(&self.centres, n, x, &mut d2),
+        };
         self.steps += 1;
         self.hits[b] += 1;
         // Unsupervised: move the BMU and its neighbours towards x.
@@ -590,29 +605,39 @@ impl Isgcs {
         self.scratch_nb = nb;
         // Supervised: delta rule over the cells whose Gaussian reaches x (as `support`), gathered
         // without a branch per cell (about half of them are in reach: a branch would be
-        // mispredicted at every other cell), then their Gaussians.
-        let mut support = std::mem::take(&mut self.scratch_support);
-        support.clear();
-        support.resize(self.len(), (0, 0.0));
+        // mispredicted at every other cell), then their Gaussians (the division too only for
+        // the cells in reach).
+        // The support is kept as two arrays (cell, weight), compacted in place over the
+        // distances, so that the Gaussians are one straight loop over a slice.
+        let mut cells = std::mem::take(&mut self.scratch_support);
+        cells.clear();
+        cells.resize(self.len(), 0);
         let mut k = 0;
-        for (i, (&d, &r2)) in self.widths.iter().zip(&d2).enumerate() {
-            support[k] = (i, -r2 / (d * d));
+        for (i, &d) in self.widths.iter().enumerate() {
+            let r2 = d2[i];
+            (cells[k], d2[k]) = (i, r2);
             k += usize::from(d > 0.0 && r2 < 16.0 * d * d);
         }
-        support.truncate(k);
-        support.iter_mut().for_each(|(_, a)| *a = a.exp());
-        self.scratch_d2 = d2;
-        if self.params.normalized {
-            normalize(&mut support, || b);
+        cells.truncate(k);
+        let mut w = d2;
+        w.truncate(k);
+        for (a, &i) in w.iter_mut().zip(&cells) {
+            let d = self.widths[i];
+            *a /= d * d;
+        }
+        w.iter_mut().for_each(|a| *a = gaussian(*a));
+        if self.params.normalized && !normalize(&mut w) {
+            (cells, w) = (vec![b], vec![1.0]);
         }
         let sq_err = match self.m {
-            1 => self.delta_rule::<1>(&support, target),
-            2 => self.delta_rule::<2>(&support, target),
-            3 => self.delta_rule::<3>(&support, target),
-            4 => self.delta_rule::<4>(&support, target),
-            _ => self.delta_rule_any(&support, target),
+            1 => self.delta_rule::<1>(&cells, &w, target),
+            2 => self.delta_rule::<2>(&cells, &w, target),
+            3 => self.delta_rule::<3>(&cells, &w, target),
+            4 => self.delta_rule::<4>(&cells, &w, target),
+            _ => self.delta_rule_any(&cells, &w, target),
         };
-        self.scratch_support = support;
+        self.scratch_support = cells;
+        self.scratch_d2 = w;
         // Resources (eq. 2.15–2.18): decay, then accumulate at the BMU.
         let keep = 1.0 - self.params.alpha;
         for t in self.tau_sl.iter_mut() {
@@ -637,9 +662,9 @@ impl Isgcs {
 
     /// The delta rule (eq. 2.8) over the weighted cells `support` for M = m outputs, the output
     /// in registers; returns |target − Ψ|² before the update.
-    fn delta_rule<const M: usize>(&mut self, support: &[(usize, f64)], target: &[f64]) -> f64 {
+    fn delta_rule<const M: usize>(&mut self, cells: &[usize], w: &[f64], target: &[f64]) -> f64 {
         let mut psi = [0.0; M];
-        for &(i, a) in support {
+        for (&i, &a) in cells.iter().zip(w) {
             let o = &self.outputs[i * M..(i + 1) * M];
             for c in 0..M {
                 psi[c] += o[c] * a;
@@ -647,7 +672,7 @@ impl Isgcs {
         }
         let err: [f64; M] = std::array::from_fn(|c| target[c] - psi[c]);
         let eta = self.params.eta;
-        for &(i, a) in support {
+        for (&i, &a) in cells.iter().zip(w) {
             let o = &mut self.outputs[i * M..(i + 1) * M];
             for c in 0..M {
                 o[c] += eta * err[c] * a;
@@ -657,17 +682,17 @@ impl Isgcs {
     }
 
     /// [`Isgcs::delta_rule`] for any m.
-    fn delta_rule_any(&mut self, support: &[(usize, f64)], target: &[f64]) -> f64 {
+    fn delta_rule_any(&mut self, cells: &[usize], w: &[f64], target: &[f64]) -> f64 {
         let m = self.m;
         let mut psi = vec![0.0; m];
-        for &(i, a) in support {
+        for (&i, &a) in cells.iter().zip(w) {
             for c in 0..m {
                 psi[c] += self.outputs[i * m + c] * a;
             }
         }
         let err: Vec<f64> = target.iter().zip(&psi).map(|(t, p)| t - p).collect();
         let eta = self.params.eta;
-        for &(i, a) in support {
+        for (&i, &a) in cells.iter().zip(w) {
             for c in 0..m {
                 self.outputs[i * m + c] += eta * err[c] * a;
             }
@@ -758,7 +783,7 @@ impl Isgcs {
         let mut support = Vec::new();
         self.support(x, &mut support);
         if self.params.normalized {
-            normalize(&mut support, || b);
+            normalize_pairs(&mut support, || b);
         }
         let mut psi = vec![0.0; self.m];
         for &(i, a) in &support {
@@ -1129,18 +1154,72 @@ impl Isgcs {
     }
 }
 
-/// Divides the weights by their sum; an empty or zero support becomes the fallback cell with
-/// weight 1.
+/// One [`Isgcs::train_step`] as an operation `pulp` compiles for the processor's vector unit.
+struct Step<'a> {
+    net: &'a mut Isgcs,
+    x: &'a [f64],
+    target: &'a [f64],
+}
+
+impl pulp::WithSimd for Step<'_> {
+    type Output = (usize, f64);
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> Self::Output {
+        self.net.train_step_body(self.x, self.target)
+    }
+}
+
 /// |c − x|², summed in coordinate order (the scan and `dist2` must agree bit for bit).
 #[inline]
 fn squared_distance(c: &[f64], x: &[f64]) -> f64 {
     c.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum()
 }
 
-fn normalize(cells: &mut Vec<(usize, f64)>, fallback: impl FnOnce() -> usize) {
-    let sum: f64 = cells.iter().map(|&(_, a)| a).sum();
+/// Fills `d2[i] = |x − w_i|²` for every cell (`centres` holds N coordinates per cell) and
+/// returns the best-matching unit, the first strict minimum (as [`Isgcs::bmu`]). N fixed at
+/// compile time unrolls [`squared_distance`] with its order kept.
+fn scan<const N: usize>(centres: &[f64], x: &[f64], d2: &mut [f64]) -> usize {
+    let x: &[f64; N] = x.try_into().expect("input of the network's dimension");
+    let (mut b, mut best) = (0, f64::INFINITY);
+    for (i, (c, slot)) in centres.chunks_exact(N).zip(d2).enumerate() {
+        let di = squared_distance(c, x);
+        *slot = di;
+        if di < best {
+            (best, b) = (di, i);
+        }
+    }
+    b
+}
+
+/// [`scan`] for any input dimension `n`.
+fn scan_any(centres: &[f64], n: usize, x: &[f64], d2: &mut [f64]) -> usize {
+    let (mut b, mut best) = (0, f64::INFINITY);
+    for (i, (c, slot)) in centres.chunks_exact(n).zip(d2).enumerate() {
+        let di = squared_distance(c, x);
+        *slot = di;
+        if di < best {
+            (best, b) = (di, i);
+        }
+    }
+    b
+}
+
+/// Divides the weights by their sum; false (weights untouched) when the sum is not positive.
+fn normalize(w: &mut [f64]) -> bool {
+    let sum: f64 = w.iter().sum();
     if sum > 0.0 {
-        cells.iter_mut().for_each(|(_, a)| *a /= sum);
+        w.iter_mut().for_each(|a| *a /= sum);
+    }
+    sum > 0.0
+}
+
+/// [`normalize`] for a support of (cell, weight) pairs; an empty or zero support becomes the
+/// fallback cell with weight 1.
+fn normalize_pairs(cells: &mut Vec<(usize, f64)>, fallback: impl FnOnce() -> usize) {
+    let mut w: Vec<f64> = cells.iter().map(|&(_, a)| a).collect();
+    if normalize(&mut w) {
+        cells.iter_mut().zip(w).for_each(|((_, a), v)| *a = v);
     } else {
         cells.clear();
         cells.push((fallback(), 1.0));

@@ -746,21 +746,9 @@ fn half_integrals(
 /// B_refl(y) = Σ_o v_o c_o exp(−|y − w_o^y|²/d_o²): the final collection through the kernel
 /// network (fig. 4.13c), with `sender` from [`sender_integrals`], at a surface point y with unit
 /// normal `n` (only cells whose receiver half faces like `n` contribute; a zero `n` takes all).
+/// For many points, prepare the cells once: [`crate::cell_lanes::Collection`] (which this calls).
 pub fn reflected_from_kernel(kernel: &KernelCells, sender: &[f64], y: DVec3, n: DVec3) -> Bands {
-    let mut out = [0.0; BANDS];
-    for o in 0..kernel.len() {
-        if !kernel.accepts_receiver(o, n) {
-            continue;
-        }
-        let g = sender[o]
-            * (-kernel.wy[o].distance_squared(y) / (kernel.width[o] * kernel.width[o])).exp();
-        if g != 0.0 {
-            for band in 0..BANDS {
-                out[band] += kernel.v[o][band] * g;
-            }
-        }
-    }
-    out
+    crate::cell_lanes::Collection::new(kernel, sender).at(y, n)
 }
 
 /// With [`BaseDomain::Scene`], a cell is integrated in closed form when its exact norm over its

@@ -27,6 +27,7 @@
 //!
 //! Where things are: `docs/architecture.md`.
 
+mod cell_lanes;
 mod cluster;
 mod config;
 mod domain;

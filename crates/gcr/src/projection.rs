@@ -25,6 +25,7 @@
 //! Cholesky factorization of MATH.md §5 ([`gauss_integrals::Orthonormal`]), which drops nearly
 //! dependent cells instead of amplifying the Monte-Carlo noise in b.
 
+use crate::cell_lanes::CellLanes;
 use crate::cluster::Mask;
 use crate::element::{BANDS, Bands};
 use crate::fem::{KernelCells, SceneSurface};
@@ -170,12 +171,13 @@ pub fn kernel_moments(
 ) -> Vec<Bands> {
     let n = kernel.len();
     let cut = (1.0 / tol).ln();
-    let a: Vec<f64> = kernel.width.iter().map(|d| 1.0 / (d * d)).collect();
+    let lanes = CellLanes::new(kernel, excluded);
     let chunk = 1024;
     let partial: Vec<Vec<Bands>> = samples
         .par_chunks(chunk)
         .map(|part| {
             let mut b = vec![[0.0; BANDS]; n];
+            let mut g = vec![0.0; n];
             for smp in part {
                 if smp.inv_px == 0.0 {
                     continue;
@@ -192,11 +194,12 @@ pub fn kernel_moments(
                 if !any {
                     continue;
                 }
-                for_each_cell_at(kernel, (&a, cut), excluded, smp, |o, g| {
+                gaussians_at(&lanes, smp, cut, &mut g);
+                for (acc, &g) in b.iter_mut().zip(&g) {
                     for k in 0..BANDS {
-                        b[o][k] += g * w[k];
+                        acc[k] += g * w[k];
                     }
-                });
+                }
             }
             b
         })
@@ -218,30 +221,11 @@ pub fn kernel_moments(
     b
 }
 
-/// Calls `f(o, g_o(ξ))` for every kernel cell `o` not flagged in `excluded` whose Gaussian
-/// (`a[o] = 1/d_o²`) exceeds `exp(−cut)` at the sample's ray ξ = (x, y) and whose facing masks
-/// accept it.
-fn for_each_cell_at(
-    kernel: &KernelCells,
-    (a, cut): (&[f64], f64),
-    excluded: &[bool],
-    smp: &Sample,
-    mut f: impl FnMut(usize, f64),
-) {
-    for o in 0..kernel.len() {
-        if excluded.get(o) == Some(&true) || !kernel.accepts(o, smp.ray.nx, smp.ray.ny) {
-            continue;
-        }
-        let dx = kernel.wx[o].distance_squared(smp.ray.x);
-        if a[o] * dx > cut {
-            continue;
-        }
-        let e = a[o] * (dx + kernel.wy[o].distance_squared(smp.ray.y));
-        if e > cut {
-            continue;
-        }
-        f(o, (-e).exp());
-    }
+/// Every cell's Gaussian g_o(ξ) at the sample's ray ξ = (x, y), 0 beyond `exp(−cut)`, for cells
+/// left out and where the facing masks refuse the ray's normals ([`CellLanes::pair_gaussians`]).
+fn gaussians_at(lanes: &CellLanes, smp: &Sample, cut: f64, out: &mut [f64]) {
+    let r = &smp.ray;
+    lanes.pair_gaussians((r.x, r.nx), (r.y, r.ny), cut, out);
 }
 
 /// The sample support of every kernel cell, `n_o = Σ_i g_o(ξ_i)` over the shot samples: how many
@@ -251,13 +235,17 @@ fn for_each_cell_at(
 pub fn kernel_support(kernel: &KernelCells, samples: &[Sample], tol: f64) -> Vec<f64> {
     let n = kernel.len();
     let cut = (1.0 / tol).ln();
-    let a: Vec<f64> = kernel.width.iter().map(|d| 1.0 / (d * d)).collect();
+    let lanes = CellLanes::new(kernel, &[]);
     let partial: Vec<Vec<f64>> = samples
         .par_chunks(1024)
         .map(|part| {
             let mut c = vec![0.0; n];
+            let mut g = vec![0.0; n];
             for smp in part.iter().filter(|smp| smp.inv_px != 0.0) {
-                for_each_cell_at(kernel, (&a, cut), &[], smp, |o, g| c[o] += g);
+                gaussians_at(&lanes, smp, cut, &mut g);
+                for (c, g) in c.iter_mut().zip(&g) {
+                    *c += g;
+                }
             }
             c
         })
@@ -399,25 +387,16 @@ pub struct BounceOperator {
     pub ue: Bands,
 }
 
-/// Per sample, the cells `p` whose receiver half covers its sender x_i, with `A_ip = c_p·g_p^y(x_i)`
-/// (the kernel collection, fig. 4.13c, cut where `g_p^y < tol`; facing masks apply).
-fn collection_at(
-    kernel: &KernelCells,
-    sender: &[f64],
-    (a, cut): (&[f64], f64),
-    smp: &Sample,
-) -> Vec<(u32, f64)> {
-    let mut out = Vec::new();
-    for p in 0..kernel.len() {
-        if sender[p] == 0.0 || !kernel.accepts_receiver(p, smp.ray.nx) {
-            continue;
-        }
-        let e = a[p] * kernel.wy[p].distance_squared(smp.ray.x);
-        if e <= cut {
-            out.push((p as u32, sender[p] * (-e).exp()));
-        }
-    }
-    out
+/// The cells `p` with a non-zero factor `g[p]`, with `f(p, g[p])`: per sample, the moments' cells
+/// at ξ_i, and the collection's `A_ip = c_p·g_p^y(x_i)` (fig. 4.13c, cut where `g_p^y < tol`;
+/// facing masks apply).
+fn nonzero(g: &[f64], f: impl Fn(usize, f64) -> f64) -> Vec<(u32, f64)> {
+    g.iter()
+        .enumerate()
+        .filter(|&(_, &g)| g != 0.0)
+        .map(|(p, &g)| (p as u32, f(p, g)))
+        .filter(|&(_, v)| v != 0.0)
+        .collect()
 }
 
 /// The sampled-power weights `w_k,i·N = ρ_k(y_i)·inv_px_i` of a sample (0 in bands without
@@ -446,7 +425,10 @@ pub fn bounce_operator(
 ) -> BounceOperator {
     let m = kernel.len();
     let cut = (1.0 / tol).ln();
-    let a: Vec<f64> = kernel.width.iter().map(|d| 1.0 / (d * d)).collect();
+    let (pairs, receivers) = (
+        CellLanes::new(kernel, excluded),
+        CellLanes::new(kernel, &[]),
+    );
     let inv = 1.0 / shots.max(1) as f64;
     // ⟨Per sample: its power weights, the cells at ξ_i (moments), the cells at x_i (collection)⟩
     let shot: Vec<usize> = (0..samples.len())
@@ -458,11 +440,11 @@ pub fn bounce_operator(
         .map(|&i| {
             let smp = &samples[i];
             let w = power_weights(smp, reflectance(smp.ray.face_y, smp.ray.y));
-            let mut at = Vec::new();
-            for_each_cell_at(kernel, (&a, cut), excluded, smp, |o, g| {
-                at.push((o as u32, g))
-            });
-            (w, at, collection_at(kernel, sender, (&a, cut), smp))
+            let mut g = vec![0.0; m];
+            gaussians_at(&pairs, smp, cut, &mut g);
+            let at = nonzero(&g, |_, g| g);
+            receivers.receiver_gaussians((smp.ray.x, smp.ray.nx), cut, &mut g);
+            (w, at, nonzero(&g, |p, g| sender[p] * g))
         })
         .collect();
     // ⟨Invert the moments' lists: per cell o, the samples in its support⟩

@@ -25,12 +25,11 @@ mod training;
 pub use networks::{freeze_kernel, freeze_shading, make_networks};
 pub use samples::Sample;
 
+use crate::cell_lanes::Collection;
 use crate::config::{OutputFit, SolveConfig};
 use crate::domain::Domain;
 use crate::element::Bands;
-use crate::fem::{
-    Base, FemSettings, FemSolution, KernelCells, SceneSurface, fem_step, reflected_from_kernel,
-};
+use crate::fem::{Base, FemSettings, FemSolution, KernelCells, SceneSurface, fem_step};
 use crate::metrics::Metrics;
 use crate::network::GrowingNetwork;
 use crate::shooting::SenderDensity;
@@ -98,6 +97,8 @@ pub struct Trained {
     /// Metrics of the solve (`gcr::output::write_outputs` completes them with the gather and
     /// output phases).
     pub metrics: Metrics,
+    /// The kernel collection through `kernel` and `sender`, prepared for many points.
+    collection: Collection,
 }
 
 impl Trained {
@@ -121,6 +122,7 @@ impl Trained {
                 rejected: 0,
             },
             samples: Vec::new(),
+            collection: Collection::default(),
             metrics: Metrics {
                 bands: domain.bands(),
                 seed: config.seed,
@@ -133,7 +135,7 @@ impl Trained {
 
     /// B_refl at a point by the kernel collection (fig. 4.13c).
     pub fn reflected_kernel(&self, y: DVec3, n: DVec3) -> Bands {
-        reflected_from_kernel(&self.kernel, &self.sender, y, n)
+        self.collection.at(y, n)
     }
 }
 
@@ -221,8 +223,8 @@ pub fn train(
 /// The last FEM step and the frozen kernel network it integrated, with its sender integrals:
 /// new samples take their strengths from it.
 struct Current {
-    kernel: KernelCells,
-    sender: Vec<f64>,
+    /// The kernel collection through the frozen kernel and its sender integrals.
+    collection: Collection,
     fem: FemSolution,
 }
 
@@ -299,8 +301,7 @@ impl<'a> Run<'a> {
         let base = Base::new(geo, self.fem_settings, self.surface.clone());
         let fem = fem_step(base, &kernel, &mut sender);
         self.current = Some(Current {
-            kernel,
-            sender,
+            collection: Collection::new(&kernel, &sender),
             fem,
         });
         self.metrics.fem_steps += 1;
@@ -350,6 +351,7 @@ impl<'a> Run<'a> {
         m.shading_triangles = fem.base.geo.simplices.len();
         m.rejected_base_components = fem.rejected;
         Trained {
+            collection: Collection::new(&kernel, &sender),
             kernel,
             sender,
             fem,

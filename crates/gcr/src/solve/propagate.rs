@@ -9,6 +9,7 @@ use super::guards::{
 use super::networks::freeze_kernel;
 use super::samples::{Sample, kernel_strength};
 use super::{Run, SolveError};
+use crate::cell_lanes::Collection;
 use crate::element::{BANDS, Bands};
 use crate::fem::{KernelCells, receiver_integrals, sender_integrals};
 use crate::network::GrowingNetwork;
@@ -201,8 +202,9 @@ fn propagate_at(
             break;
         }
         // ⟨One bounce: s ← E + B_refl(s)⟩
+        let collection = Collection::new(&frozen, sender);
         samples.par_iter_mut().for_each(|smp| {
-            smp.s = kernel_strength(&smp.ray, &frozen, sender);
+            smp.s = kernel_strength(&smp.ray, &collection);
         });
         generated = true;
         bounces += 1;
@@ -359,8 +361,9 @@ fn jump_to_fixed_point<R: Fn(u32, DVec3) -> Bands + Sync>(
         std::mem::replace(&mut frozen.v, v),
         samples.iter().map(|smp| smp.s).collect::<Vec<_>>(),
     );
+    let collection = Collection::new(frozen, sender);
     samples.par_iter_mut().for_each(|smp| {
-        smp.s = kernel_strength(&smp.ray, frozen, sender);
+        smp.s = kernel_strength(&smp.ray, &collection);
     });
     if bound_excess(samples, bound) > DIRECT_LIMIT {
         frozen.v = kept_v;

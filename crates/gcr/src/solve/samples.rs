@@ -4,11 +4,11 @@
 
 use super::Current;
 use super::Run;
+use crate::cell_lanes::Collection;
 use crate::config::{OutputFit, SolveConfig, StrengthFrom};
 use crate::domain::Ray;
 use crate::element::{BANDS, Bands};
 use crate::fem::FemSolution;
-use crate::fem::{KernelCells, reflected_from_kernel};
 use crate::network::GrowingNetwork;
 pub use crate::sample::Sample;
 use rand::{Rng, SeedableRng};
@@ -166,7 +166,7 @@ fn initial_strength(
     scratch: &mut Vec<u32>,
 ) -> Bands {
     match (config.strength_from, current) {
-        (StrengthFrom::Kernel, Some(c)) => kernel_strength(ray, &c.kernel, &c.sender),
+        (StrengthFrom::Kernel, Some(c)) => kernel_strength(ray, &c.collection),
         _ => strength(ray, current.map(|c| &c.fem), scratch),
     }
 }
@@ -184,8 +184,8 @@ fn strength(ray: &Ray, fem: Option<&FemSolution>, scratch: &mut Vec<u32>) -> Ban
 }
 
 /// s = E(x) + B_refl(x) with B_refl from the kernel collection (fig. 4.13c) at the sender.
-pub(super) fn kernel_strength(ray: &Ray, kernel: &KernelCells, sender: &[f64]) -> Bands {
-    let b = reflected_from_kernel(kernel, sender, ray.x, ray.nx);
+pub(super) fn kernel_strength(ray: &Ray, collection: &Collection) -> Bands {
+    let b = collection.at(ray.x, ray.nx);
     let mut s = ray.emission_x;
     for k in 0..BANDS {
         s[k] += b[k].max(0.0);

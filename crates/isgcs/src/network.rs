@@ -54,6 +54,15 @@ pub struct Isgcs {
     scratch_nb: Vec<u32>,
     #[serde(skip)]
     scratch_support: Vec<usize>,
+    #[serde(skip)]
+    scratch_e: Vec<f64>,
+    /// The centres by coordinate (`by_axis[a][i]` = coordinate a of cell i): a mirror of
+    /// `centres` for the training scan, valid while `by_axis_fresh` (every other change of the
+    /// centres clears it; `train_step` keeps it current for its own moves).
+    #[serde(skip)]
+    by_axis: Vec<Vec<f64>>,
+    #[serde(skip)]
+    by_axis_fresh: bool,
 }
 
 impl Isgcs {
@@ -138,6 +147,9 @@ impl Isgcs {
             scratch_d2: Vec::new(),
             scratch_nb: Vec::new(),
             scratch_support: Vec::new(),
+            scratch_e: Vec::new(),
+            by_axis: Vec::new(),
+            by_axis_fresh: false,
         };
         for i in 0..z {
             net.refresh_width(i);
@@ -282,6 +294,7 @@ impl Isgcs {
                 }
             }
         }
+        self.by_axis_fresh = false;
         for i in 0..self.len() {
             self.refresh_width(i);
         }
@@ -308,6 +321,7 @@ impl Isgcs {
         squared_distance(self.centre(i), x)
     }
 
+    #[inline(always)]
     fn refresh_width(&mut self, i: usize) {
         let nb = &self.neighbours[i];
         let w = if nb.is_empty() {
@@ -572,12 +586,25 @@ impl Isgcs {
         let mut d2 = std::mem::take(&mut self.scratch_d2);
         d2.clear();
         d2.resize(self.len(), 0.0);
+        if !self.by_axis_fresh {
+            self.by_axis = (0..self.n)
+                .map(|a| {
+                    self.centres
+                        .iter()
+                        .skip(a)
+                        .step_by(self.n)
+                        .copied()
+                        .collect()
+                })
+                .collect();
+            self.by_axis_fresh = true;
+        }
         let b = match self.n {
-            2 => scan::<2>(&self.centres, x, &mut d2),
-            3 => scan::<3>(&self.centres, x, &mut d2),
-            4 => scan::<4>(&self.centres, x, &mut d2),
-            6 => scan::<6>(&self.centres, x, &mut d2),
-            n => scan_any(&self.centres, n, x, &mut d2),
+            2 => scan::<2>(&self.by_axis, x, &mut d2),
+            3 => scan::<3>(&self.by_axis, x, &mut d2),
+            4 => scan::<4>(&self.by_axis, x, &mut d2),
+            6 => scan::<6>(&self.by_axis, x, &mut d2),
+            _ => scan_any(&self.by_axis, x, &mut d2),
         };
         self.steps += 1;
         self.hits[b] += 1;
@@ -586,6 +613,7 @@ impl Isgcs {
         let (eb, en) = (self.params.eps_bmu, self.params.eps_neighbour);
         for a in 0..self.n {
             self.centres[b * self.n + a] += eb * (x[a] - self.centres[b * self.n + a]);
+            self.by_axis[a][b] = self.centres[b * self.n + a];
         }
         let mut nb = std::mem::take(&mut self.scratch_nb);
         nb.clear();
@@ -594,6 +622,7 @@ impl Isgcs {
             let j = j as usize;
             for a in 0..self.n {
                 self.centres[j * self.n + a] += en * (x[a] - self.centres[j * self.n + a]);
+                self.by_axis[a][j] = self.centres[j * self.n + a];
             }
         }
         self.refresh_width(b);
@@ -605,26 +634,26 @@ impl Isgcs {
         self.scratch_nb = nb;
         // Supervised: delta rule over the cells whose Gaussian reaches x (as `support`), gathered
         // without a branch per cell (about half of them are in reach: a branch would be
-        // mispredicted at every other cell), then their Gaussians (the division too only for
-        // the cells in reach).
+        // mispredicted at every other cell), then their Gaussians; the exponents r²/d² of all
+        // cells first, in vector lanes.
         // The support is kept as two arrays (cell, weight), compacted in place over the
         // distances, so that the Gaussians are one straight loop over a slice.
         let mut cells = std::mem::take(&mut self.scratch_support);
         cells.clear();
         cells.resize(self.len(), 0);
+        let mut e = std::mem::take(&mut self.scratch_e);
+        e.clear();
+        e.extend(d2.iter().zip(&self.widths).map(|(r2, d)| r2 / (d * d)));
         let mut k = 0;
         for (i, &d) in self.widths.iter().enumerate() {
             let r2 = d2[i];
-            (cells[k], d2[k]) = (i, r2);
+            (cells[k], d2[k]) = (i, e[i]);
             k += usize::from(d > 0.0 && r2 < 16.0 * d * d);
         }
+        self.scratch_e = e;
         cells.truncate(k);
         let mut w = d2;
         w.truncate(k);
-        for (a, &i) in w.iter_mut().zip(&cells) {
-            let d = self.widths[i];
-            *a /= d * d;
-        }
         w.iter_mut().for_each(|a| *a = gaussian(*a));
         if self.params.normalized && !normalize(&mut w) {
             (cells, w) = (vec![b], vec![1.0]);
@@ -662,6 +691,7 @@ impl Isgcs {
 
     /// The delta rule (eq. 2.8) over the weighted cells `support` for M = m outputs, the output
     /// in registers; returns |target − Ψ|² before the update.
+    #[inline(always)]
     fn delta_rule<const M: usize>(&mut self, cells: &[usize], w: &[f64], target: &[f64]) -> f64 {
         let mut psi = [0.0; M];
         for (&i, &a) in cells.iter().zip(w) {
@@ -703,6 +733,7 @@ impl Isgcs {
     /// The step of [`Isgcs::set_unsupervised_only`]: BMU (as `bmu`), the moves of the BMU and
     /// its neighbours and their widths exactly as in `train_step`, then `after_step`.
     fn unsupervised_step(&mut self, x: &[f64]) -> usize {
+        self.by_axis_fresh = false;
         let b = self.bmu(x, None);
         self.steps += 1;
         self.hits[b] += 1;
@@ -758,6 +789,7 @@ impl Isgcs {
     #[cfg(test)]
     fn train_reference(&mut self, x: &[f64], target: &[f64], hint: Option<usize>) -> usize {
         debug_assert_eq!(x.len(), self.n);
+        self.by_axis_fresh = false;
         debug_assert_eq!(target.len(), self.m);
         let b = self.bmu(x, hint);
         self.steps += 1;
@@ -858,6 +890,7 @@ impl Isgcs {
                 .collect()
         };
         self.centres = keep(&self.centres, self.n);
+        self.by_axis_fresh = false;
         self.outputs = keep(&self.outputs, self.m);
         self.tau_sl = keep(&self.tau_sl, 1);
         self.tau_usl = keep(&self.tau_usl, 1);
@@ -1026,6 +1059,7 @@ impl Isgcs {
             let mid = 0.5 * (self.centres[q * self.n + a] + self.centres[f * self.n + a]);
             self.centres.push(mid);
         }
+        self.by_axis_fresh = false;
         if self.params.gamma_redistribution {
             // Filled in by `redistribute_by_gamma` once the topology is known.
             self.outputs.extend(std::iter::repeat_n(0.0, self.m));
@@ -1176,30 +1210,62 @@ fn squared_distance(c: &[f64], x: &[f64]) -> f64 {
     c.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum()
 }
 
-/// Fills `d2[i] = |x − w_i|²` for every cell (`centres` holds N coordinates per cell) and
-/// returns the best-matching unit, the first strict minimum (as [`Isgcs::bmu`]). N fixed at
-/// compile time unrolls [`squared_distance`] with its order kept.
-fn scan<const N: usize>(centres: &[f64], x: &[f64], d2: &mut [f64]) -> usize {
-    let x: &[f64; N] = x.try_into().expect("input of the network's dimension");
-    let (mut b, mut best) = (0, f64::INFINITY);
-    for (i, (c, slot)) in centres.chunks_exact(N).zip(d2).enumerate() {
-        let di = squared_distance(c, x);
-        *slot = di;
-        if di < best {
-            (best, b) = (di, i);
+/// Fills `d2[i] = |x − w_i|²` for every cell from the centres by coordinate (`by_axis`, N axes)
+/// and returns the best-matching unit, the first strict minimum (as [`Isgcs::bmu`]). The sum
+/// over the axes runs in coordinate order, as [`squared_distance`], cells side by side in the
+/// vector lanes.
+fn scan<const N: usize>(by_axis: &[Vec<f64>], x: &[f64], d2: &mut [f64]) -> usize {
+    let z = d2.len();
+    let axes: [&[f64]; N] = std::array::from_fn(|a| &by_axis[a][..z]);
+    let x: [f64; N] = std::array::from_fn(|a| x[a]);
+    for (i, slot) in d2.iter_mut().enumerate() {
+        let mut s = 0.0;
+        for a in 0..N {
+            let t = axes[a][i] - x[a];
+            s += t * t;
         }
+        *slot = s;
     }
-    b
+    first_minimum(d2)
 }
 
-/// [`scan`] for any input dimension `n`.
-fn scan_any(centres: &[f64], n: usize, x: &[f64], d2: &mut [f64]) -> usize {
-    let (mut b, mut best) = (0, f64::INFINITY);
-    for (i, (c, slot)) in centres.chunks_exact(n).zip(d2).enumerate() {
-        let di = squared_distance(c, x);
-        *slot = di;
-        if di < best {
-            (best, b) = (di, i);
+/// [`scan`] for any input dimension.
+fn scan_any(by_axis: &[Vec<f64>], x: &[f64], d2: &mut [f64]) -> usize {
+    let z = d2.len();
+    d2.iter_mut().for_each(|s| *s = 0.0);
+    for (axis, &xa) in by_axis.iter().zip(x) {
+        for (s, &c) in d2.iter_mut().zip(&axis[..z]) {
+            let t = c - xa;
+            *s += t * t;
+        }
+    }
+    first_minimum(d2)
+}
+
+/// The index of the first strict minimum of `d` (0 when none is below +∞), kept in four lanes
+/// (each the first minimum of its residue class) and combined by value, then index: the same
+/// index as one running minimum.
+fn first_minimum(d: &[f64]) -> usize {
+    const W: usize = 4;
+    let (mut best, mut at) = ([f64::INFINITY; W], [0usize; W]);
+    let chunks = d.chunks_exact(W);
+    let tail = chunks.remainder();
+    for (c, chunk) in chunks.enumerate() {
+        for l in 0..W {
+            if chunk[l] < best[l] {
+                (best[l], at[l]) = (chunk[l], c * W + l);
+            }
+        }
+    }
+    let (mut b, mut v) = (0, f64::INFINITY);
+    for l in 0..W {
+        if best[l] < v || (best[l] == v && at[l] < b && v < f64::INFINITY) {
+            (v, b) = (best[l], at[l]);
+        }
+    }
+    for (k, &t) in tail.iter().enumerate() {
+        if t < v {
+            (v, b) = (t, d.len() - tail.len() + k);
         }
     }
     b
@@ -1443,6 +1509,36 @@ mod tests {
             assert_eq!(full.steps(), lean.steps());
             assert!(lean.outputs.iter().all(|&v| v == 0.0));
             assert!(full.outputs.iter().any(|&v| v != 0.0));
+        }
+    }
+
+    #[test]
+    fn first_minimum_is_the_first_strict_minimum() {
+        // Few distinct values (ties everywhere), infinities and NaN, every length 0..40.
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for len in 0..40 {
+            for _ in 0..50 {
+                let d: Vec<f64> = (0..len)
+                    .map(|_| match next() % 7 {
+                        0 => f64::INFINITY,
+                        1 => f64::NAN,
+                        r => (r % 3) as f64,
+                    })
+                    .collect();
+                let (mut b, mut best) = (0, f64::INFINITY);
+                for (i, &v) in d.iter().enumerate() {
+                    if v < best {
+                        (best, b) = (v, i);
+                    }
+                }
+                assert_eq!(first_minimum(&d), b, "{d:?}");
+            }
         }
     }
 

@@ -10,7 +10,7 @@
 //! the point, else 0. Cells beyond the cut-off thus contribute exactly 0, as the branch did.
 
 use crate::element::{BANDS, Bands};
-use crate::fem::KernelCells;
+use crate::kernel_cells::KernelCells;
 use glam::DVec3;
 use isgcs::gaussian;
 use std::ops::Range;

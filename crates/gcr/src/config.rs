@@ -233,7 +233,7 @@ pub struct SolveConfig {
     /// Gaussian is too wide to resolve them, so that an integral costs the same on a million
     /// triangles as on a few thousand. Below it (every built-in scene) the integrals are exact.
     pub surface_clusters: SurfaceClusters,
-    /// Facing masks on the projected kernel's Gaussians ([`crate::fem::KernelCells::assign_facing`]):
+    /// Facing masks on the projected kernel's Gaussians ([`crate::kernel_cells::KernelCells::assign_facing`]):
     /// each half lives only on surfaces that face like the samples it was fitted to (within the
     /// breaking angle), so that light does not blur across the edges where surfaces meet. Off by
     /// default: measured (docs/gcr-algorithm.md) it cuts the kernel collection's error on

@@ -35,6 +35,7 @@ mod element;
 mod emitters;
 mod fem;
 mod gather;
+mod kernel_cells;
 mod mesh;
 mod metrics;
 mod neighbours;
@@ -77,10 +78,11 @@ pub mod stages {
     pub use crate::cluster::ClusterTree;
     pub use crate::element::Element;
     pub use crate::fem::{
-        Base, FemSettings, FemSolution, KernelCells, SceneSurface, fem_step, receiver_integrals,
+        Base, FemSettings, FemSolution, SceneSurface, fem_step, receiver_integrals,
         reflected_from_kernel, sender_integrals,
     };
     pub use crate::gather::gather;
+    pub use crate::kernel_cells::KernelCells;
     pub use crate::projection::{KernelProjection, kernel_gram};
     pub use crate::retriangulate::{Triangulation, retriangulate};
     pub use crate::shading::ShadingGeometry;

@@ -28,7 +28,8 @@
 use crate::cell_lanes::CellLanes;
 use crate::cluster::Mask;
 use crate::element::{BANDS, Bands};
-use crate::fem::{KernelCells, SceneSurface};
+use crate::fem::SceneSurface;
+use crate::kernel_cells::KernelCells;
 use crate::sample::Sample;
 use crate::spatial::width_a;
 use gauss_integrals as integrals;

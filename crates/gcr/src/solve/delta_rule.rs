@@ -5,7 +5,8 @@
 use super::Run;
 use super::networks::freeze_kernel;
 use super::training::Trainer;
-use crate::fem::{KernelCells, sender_integrals};
+use crate::fem::sender_integrals;
+use crate::kernel_cells::KernelCells;
 use crate::network::GrowingNetwork;
 
 /// A FEM step: freeze the kernel, its sender integrals c_o, step the base, update the strengths.

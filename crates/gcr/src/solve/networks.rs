@@ -6,7 +6,7 @@ use super::SolveError;
 use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::element::BANDS;
-use crate::fem::KernelCells;
+use crate::kernel_cells::KernelCells;
 use crate::network::GrowingNetwork;
 use crate::shading::ShadingGeometry;
 use glam::DVec3;

@@ -6,7 +6,7 @@ use super::Run;
 use super::SolveError;
 use super::propagate::{FINAL_BOUNCES, Propagated, TRAINING_BOUNCES, propagate};
 use crate::config::StrengthFrom;
-use crate::fem::KernelCells;
+use crate::kernel_cells::KernelCells;
 use crate::network::GrowingNetwork;
 
 /// A FEM step during training: a few bounces through the projected kernel, then the base step

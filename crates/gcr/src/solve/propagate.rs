@@ -11,7 +11,8 @@ use super::samples::{Sample, kernel_strength};
 use super::{Run, SolveError};
 use crate::cell_lanes::Collection;
 use crate::element::{BANDS, Bands};
-use crate::fem::{KernelCells, receiver_integrals, sender_integrals};
+use crate::fem::{receiver_integrals, sender_integrals};
+use crate::kernel_cells::KernelCells;
 use crate::network::GrowingNetwork;
 use crate::projection::{
     BounceOperator, KernelProjection, bounce_operator, closed_reflected_power,

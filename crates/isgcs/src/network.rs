@@ -1214,6 +1214,7 @@ fn squared_distance(c: &[f64], x: &[f64]) -> f64 {
 /// and returns the best-matching unit, the first strict minimum (as [`Isgcs::bmu`]). The sum
 /// over the axes runs in coordinate order, as [`squared_distance`], cells side by side in the
 /// vector lanes.
+#[inline(always)]
 fn scan<const N: usize>(by_axis: &[Vec<f64>], x: &[f64], d2: &mut [f64]) -> usize {
     let z = d2.len();
     let axes: [&[f64]; N] = std::array::from_fn(|a| &by_axis[a][..z]);
@@ -1230,6 +1231,7 @@ fn scan<const N: usize>(by_axis: &[Vec<f64>], x: &[f64], d2: &mut [f64]) -> usiz
 }
 
 /// [`scan`] for any input dimension.
+#[inline(always)]
 fn scan_any(by_axis: &[Vec<f64>], x: &[f64], d2: &mut [f64]) -> usize {
     let z = d2.len();
     d2.iter_mut().for_each(|s| *s = 0.0);
@@ -1245,6 +1247,7 @@ fn scan_any(by_axis: &[Vec<f64>], x: &[f64], d2: &mut [f64]) -> usize {
 /// The index of the first strict minimum of `d` (0 when none is below +∞), kept in four lanes
 /// (each the first minimum of its residue class) and combined by value, then index: the same
 /// index as one running minimum.
+#[inline(always)]
 fn first_minimum(d: &[f64]) -> usize {
     const W: usize = 4;
     let (mut best, mut at) = ([f64::INFINITY; W], [0usize; W]);

@@ -126,9 +126,13 @@ pub(crate) fn gram_add(a: ArrayView2<'_, f64>, g: &mut Array2<f64>) {
 }
 
 /// In-place lower Cholesky factor of the symmetric matrix `a` plus `rho`·I (the lower triangle
-/// is read; the strict upper triangle is left unspecified). Blocked right-looking, the trailing
-/// updates by matrix products on two threads. `false` at a non-positive or NaN pivot.
+/// is read; the strict upper triangle is left unspecified). Blocked right-looking: the
+/// diagonal block by substitution, the panel below it row by row (rows in parallel, each
+/// row's entries updated by whole rows of the block's transpose, so the inner loop has no
+/// dependent chain), the trailing update of the lower triangle only by matrix products on
+/// column blocks (in parallel). `false` at a non-positive or NaN pivot.
 pub(crate) fn cholesky_in_place(a: &mut Array2<f64>, rho: f64) -> bool {
+    use rayon::prelude::*;
     let z = a.nrows();
     if a.as_slice().is_none() {
         *a = a.as_standard_layout().into_owned();
@@ -136,9 +140,11 @@ pub(crate) fn cholesky_in_place(a: &mut Array2<f64>, rho: f64) -> bool {
     for i in 0..z {
         a[[i, i]] += rho;
     }
+    let mut lt = vec![0.0; BLOCK * BLOCK];
     let mut k0 = 0;
     while k0 < z {
         let k1 = (k0 + BLOCK).min(z);
+        let bw = k1 - k0;
         // Diagonal block, unblocked. Rows as slices (standard layout): the same operations in
         // the same order as indexing, without the bounds checks.
         {
@@ -170,48 +176,62 @@ pub(crate) fn cholesky_in_place(a: &mut Array2<f64>, rho: f64) -> bool {
         if k1 == z {
             break;
         }
-        // Panel L21 = A21 L11⁻ᵀ (the rows of L11 are above every panel row).
+        // Panel L21 = A21 L11⁻ᵀ. Entry j of a panel row is a_j − Σ_{p<j} l_p L11[j][p] (p
+        // ascending), divided by L11[j][j]: computed as l_p final, then subtracted from every
+        // later entry at once (the transpose's row p), the same operations in the same order.
         {
             let data = a.as_slice_mut().expect("standard layout");
-            let (top, bottom) = data.split_at_mut(k1 * z);
-            let l11 = &top[k0 * z..];
-            // Column by column of the panel, every row within a column: each element gets the
-            // same operations in the same order as row by row, but consecutive ones (other
-            // rows) do not wait for each other's dependent sums and divisions.
-            for j in k0..k1 {
-                let rj = &l11[(j - k0) * z..(j - k0 + 1) * z];
-                for ri in bottom.chunks_exact_mut(z) {
-                    let mut s = ri[j];
-                    for p in k0..j {
-                        s -= ri[p] * rj[p];
-                    }
-                    ri[j] = s / rj[j];
+            for p in 0..bw {
+                for j in 0..bw {
+                    lt[p * BLOCK + j] = if j > p {
+                        data[(k0 + j) * z + k0 + p]
+                    } else {
+                        0.0
+                    };
                 }
             }
+            let diag: Vec<f64> = (k0..k1).map(|j| data[j * z + j]).collect();
+            let lt = &lt;
+            let (_, bottom) = data.split_at_mut(k1 * z);
+            bottom.par_chunks_mut(z).with_min_len(32).for_each(|ri| {
+                let r = &mut ri[k0..k1];
+                for p in 0..bw {
+                    let l = r[p] / diag[p];
+                    r[p] = l;
+                    let (_, later) = r.split_at_mut(p + 1);
+                    for (v, t) in later.iter_mut().zip(&lt[p * BLOCK + p + 1..p * BLOCK + bw]) {
+                        *v -= l * t;
+                    }
+                }
+            });
         }
-        // Trailing update A22 −= L21 L21ᵀ.
+        // Trailing update A22 −= L21 L21ᵀ, lower triangle only: column block c gets the rows
+        // from its own first row down.
         let l21 = a
             .slice_axis(Axis(0), Slice::from(k1..))
             .slice_axis(Axis(1), Slice::from(k0..k1))
             .to_owned();
         let mut a22 = a.slice_axis_mut(Axis(0), Slice::from(k1..));
         let mut a22 = a22.slice_axis_mut(Axis(1), Slice::from(k1..));
-        let rows = z - k1;
-        if rows >= 2 * BLOCK {
-            let h = rows / 2;
-            let (l_top, l_bottom) = l21.view().split_at(Axis(0), h);
-            let (mut top, mut bottom) = a22.view_mut().split_at(Axis(0), h);
-            rayon::join(
-                || general_mat_mul(-1.0, &l_top, &l21.t(), 1.0, &mut top),
-                || general_mat_mul(-1.0, &l_bottom, &l21.t(), 1.0, &mut bottom),
-            );
-        } else {
-            general_mat_mul(-1.0, &l21, &l21.t(), 1.0, &mut a22);
-        }
+        let mut cols: Vec<(usize, ndarray::ArrayViewMut2<'_, f64>)> = a22
+            .axis_chunks_iter_mut(Axis(1), TRAIL_BLOCK)
+            .enumerate()
+            .map(|(c, v)| (c * TRAIL_BLOCK, v))
+            .collect();
+        cols.par_iter_mut().for_each(|(c0, v)| {
+            let w = v.ncols();
+            let mut below = v.slice_axis_mut(Axis(0), Slice::from(*c0..));
+            let lrows = l21.slice_axis(Axis(0), Slice::from(*c0..));
+            let lcols = l21.slice_axis(Axis(0), Slice::from(*c0..*c0 + w));
+            general_mat_mul(-1.0, &lrows, &lcols.t(), 1.0, &mut below);
+        });
         k0 = k1;
     }
     true
 }
+
+/// Column block of [`cholesky_in_place`]'s trailing update.
+const TRAIL_BLOCK: usize = 128;
 
 /// Solves L X = B in place (L lower triangular from [`cholesky_in_place`], B z × c), blocked:
 /// the off-diagonal blocks by matrix products, the diagonal blocks by substitution.
@@ -344,23 +364,10 @@ pub(crate) fn ridge_fit(
     relative: f64,
     probes: &Array2<f64>,
 ) -> Option<RidgeFit> {
+    let (w, u, rho) = ridge_solve_with(g, b, relative, probes, None)?;
     let z = g.nrows();
-    let mean_diag = g.diag().sum() / z.max(1) as f64;
-    if !(mean_diag > 0.0 && mean_diag.is_finite()) {
-        return None;
-    }
-    let rho = relative * mean_diag;
-    let mut l = g.clone();
-    if !cholesky_in_place(&mut l, rho) {
-        return None;
-    }
-    let mut w = b.clone();
-    forward(&l, &mut w);
-    backward(&l, &mut w);
     let gw = mul_few(g.view(), w.view());
     let rss = (yy - 2.0 * (&w * b).sum() + (&w * &gw).sum()).max(0.0);
-    let mut u = probes.clone();
-    forward(&l, &mut u);
     let trace_inv = u.iter().map(|v| v * v).sum::<f64>() / probes.ncols().max(1) as f64;
     let dof = (z as f64 - rho * trace_inv).clamp(0.0, z as f64);
     Some(RidgeFit {
@@ -369,6 +376,78 @@ pub(crate) fn ridge_fit(
         rss,
         dof,
     })
+}
+
+/// The weights W of (G + ρI) W = B alone ([`ridge_fit`] without the residual and tr H, which
+/// the holdout selection does not use: ⟨W, G W⟩ reads all of G once more per ridge), the
+/// factor made in a spare matrix of `scratch`. `None` when the factorisation fails.
+pub(crate) fn ridge_weights(
+    g: &Array2<f64>,
+    b: &Array2<f64>,
+    relative: f64,
+    scratch: &Scratch,
+) -> Option<Array2<f64>> {
+    let none = Array2::zeros((g.nrows(), 0));
+    ridge_solve_with(g, b, relative, &none, Some(scratch)).map(|(w, _, _)| w)
+}
+
+/// The Cholesky solve of [`ridge_fit`]: W = (G + ρI)⁻¹ B, L⁻¹ `probes` and the absolute ρ.
+fn ridge_solve_with(
+    g: &Array2<f64>,
+    b: &Array2<f64>,
+    relative: f64,
+    probes: &Array2<f64>,
+    scratch: Option<&Scratch>,
+) -> Option<(Array2<f64>, Array2<f64>, f64)> {
+    let z = g.nrows();
+    let mean_diag = g.diag().sum() / z.max(1) as f64;
+    if !(mean_diag > 0.0 && mean_diag.is_finite()) {
+        return None;
+    }
+    let rho = relative * mean_diag;
+    let mut l = match scratch {
+        Some(s) => {
+            let mut l = s.take(z, z);
+            l.assign(g);
+            l
+        }
+        None => g.clone(),
+    };
+    let solved = cholesky_in_place(&mut l, rho).then(|| {
+        let mut w = b.clone();
+        forward(&l, &mut w);
+        backward(&l, &mut w);
+        let mut u = probes.clone();
+        forward(&l, &mut u);
+        (w, u, rho)
+    });
+    if let Some(s) = scratch {
+        s.give(l);
+    }
+    solved
+}
+
+/// Spare matrices for [`ridge_weights`]' Cholesky factors and the selection's design matrices,
+/// shared by the solves and candidates of one selection (a fresh 8 MB factor per solve and
+/// 24–48 MB design matrices per width at z = 1000 cost page faults, ~8 % of a fit's CPU).
+/// Dropped with the selection, so nothing stays allocated after a fit.
+#[derive(Default)]
+pub(crate) struct Scratch(std::sync::Mutex<Vec<Array2<f64>>>);
+
+impl Scratch {
+    /// A spare rows × cols matrix (contents unspecified), or a new one.
+    pub fn take(&self, rows: usize, cols: usize) -> Array2<f64> {
+        let mut spare = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        match spare.iter().position(|a| a.dim() == (rows, cols)) {
+            Some(i) => spare.swap_remove(i),
+            None => Array2::zeros((rows, cols)),
+        }
+    }
+
+    /// Returns a matrix from [`Scratch::take`].
+    pub fn give(&self, a: Array2<f64>) {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).push(a);
+    }
 }
 
 /// z × p Rademacher probe vectors (±1), deterministic in `seed`.
@@ -523,6 +602,122 @@ impl RidgePath {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The blocked Cholesky of round eight (row-by-row panel, full trailing update): the
+    /// reference of `cholesky_is_bit_identical_to_the_row_panel_reference`.
+    fn reference_cholesky(a: &mut Array2<f64>, rho: f64) -> bool {
+        let z = a.nrows();
+        if a.as_slice().is_none() {
+            *a = a.as_standard_layout().into_owned();
+        }
+        for i in 0..z {
+            a[[i, i]] += rho;
+        }
+        let mut k0 = 0;
+        while k0 < z {
+            let k1 = (k0 + BLOCK).min(z);
+            // Diagonal block, unblocked. Rows as slices (standard layout): the same operations in
+            // the same order as indexing, without the bounds checks.
+            {
+                let data = a.as_slice_mut().expect("standard layout");
+                for i in k0..k1 {
+                    let (head, tail) = data.split_at_mut(i * z);
+                    let ri = &mut tail[..z];
+                    for j in k0..=i {
+                        let rj: &[f64] = if j == i {
+                            &[]
+                        } else {
+                            &head[j * z..(j + 1) * z]
+                        };
+                        let mut s = ri[j];
+                        for p in k0..j {
+                            s -= ri[p] * if j == i { ri[p] } else { rj[p] };
+                        }
+                        if i == j {
+                            if s.is_nan() || s <= 0.0 {
+                                return false;
+                            }
+                            ri[i] = s.sqrt();
+                        } else {
+                            ri[j] = s / rj[j];
+                        }
+                    }
+                }
+            }
+            if k1 == z {
+                break;
+            }
+            // Panel L21 = A21 L11⁻ᵀ (the rows of L11 are above every panel row).
+            {
+                let data = a.as_slice_mut().expect("standard layout");
+                let (top, bottom) = data.split_at_mut(k1 * z);
+                let l11 = &top[k0 * z..];
+                // Column by column of the panel, every row within a column: each element gets the
+                // same operations in the same order as row by row, but consecutive ones (other
+                // rows) do not wait for each other's dependent sums and divisions.
+                for j in k0..k1 {
+                    let rj = &l11[(j - k0) * z..(j - k0 + 1) * z];
+                    for ri in bottom.chunks_exact_mut(z) {
+                        let mut s = ri[j];
+                        for p in k0..j {
+                            s -= ri[p] * rj[p];
+                        }
+                        ri[j] = s / rj[j];
+                    }
+                }
+            }
+            // Trailing update A22 −= L21 L21ᵀ.
+            let l21 = a
+                .slice_axis(Axis(0), Slice::from(k1..))
+                .slice_axis(Axis(1), Slice::from(k0..k1))
+                .to_owned();
+            let mut a22 = a.slice_axis_mut(Axis(0), Slice::from(k1..));
+            let mut a22 = a22.slice_axis_mut(Axis(1), Slice::from(k1..));
+            let rows = z - k1;
+            if rows >= 2 * BLOCK {
+                let h = rows / 2;
+                let (l_top, l_bottom) = l21.view().split_at(Axis(0), h);
+                let (mut top, mut bottom) = a22.view_mut().split_at(Axis(0), h);
+                rayon::join(
+                    || general_mat_mul(-1.0, &l_top, &l21.t(), 1.0, &mut top),
+                    || general_mat_mul(-1.0, &l_bottom, &l21.t(), 1.0, &mut bottom),
+                );
+            } else {
+                general_mat_mul(-1.0, &l21, &l21.t(), 1.0, &mut a22);
+            }
+            k0 = k1;
+        }
+        true
+    }
+
+    #[test]
+    fn cholesky_is_bit_identical_to_the_row_panel_reference() {
+        // The vectorized panel and the lower-only trailing update perform the same
+        // operations in the same order as the row-by-row panel and full trailing update of
+        // round eight (the regressor's fits must not change): equal bits, z not a multiple of
+        // the blocks, for a well- and an ill-conditioned ridge.
+        let z = 3 * TRAIL_BLOCK + 45;
+        let a = rademacher(z, z + 7, 5);
+        let g = a.dot(&a.t());
+        for rho in [1e-3, 1e-12] {
+            let (mut l, mut reference) = (g.clone(), g.clone());
+            assert!(cholesky_in_place(&mut l, rho) && reference_cholesky(&mut reference, rho));
+            for i in 0..z {
+                for j in 0..=i {
+                    assert_eq!(
+                        l[[i, j]].to_bits(),
+                        reference[[i, j]].to_bits(),
+                        "({i}, {j})"
+                    );
+                }
+            }
+        }
+        // A matrix that is not positive definite fails in both.
+        let mut bad = g.clone();
+        bad[[z - 1, z - 1]] = -1.0;
+        assert!(!cholesky_in_place(&mut bad.clone(), 0.0));
+        assert!(!reference_cholesky(&mut bad, 0.0));
+    }
 
     #[test]
     fn solves_a_small_spd_system() {

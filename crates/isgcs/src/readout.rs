@@ -2,7 +2,9 @@
 //! exact leave-one-out (the default regressor) or on a holdout (the k-means RBF
 //! reference), on standardized inputs and outputs.
 
-use crate::linalg::{RidgePath, gcv, gram_add, mul_few, rademacher, ridge_fit};
+use crate::linalg::{
+    RidgePath, Scratch, gcv, gram_add, mul_few, rademacher, ridge_fit, ridge_weights,
+};
 use ndarray::{Array2, ArrayView2, Axis, Slice};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -183,8 +185,15 @@ impl Basis {
         if !self.normalized && !self.affine {
             return Cow::Borrowed(raw);
         }
+        let mut a = Array2::zeros((raw.nrows(), self.cols()));
+        self.design_of_raw_into(raw, xs, &mut a);
+        Cow::Owned(a)
+    }
+
+    /// [`Basis::design_of_raw`] into `a` (rows × cols, every entry overwritten), a design
+    /// matrix kept from an earlier width or candidate ([`Scratch`]).
+    pub fn design_of_raw_into(&self, raw: &Array2<f64>, xs: &[f64], a: &mut Array2<f64>) {
         let (n, z, cols) = (self.n, self.cells(), self.cols());
-        let mut a = Array2::zeros((raw.nrows(), cols));
         a.as_slice_mut()
             .expect("fresh arrays are contiguous")
             .par_chunks_mut(cols)
@@ -219,7 +228,6 @@ impl Basis {
                     o[z + 1..z + 1 + n].copy_from_slice(x);
                 }
             });
-        Cow::Owned(a)
     }
 
     /// The design matrix of `rows` standardized inputs (rows × cols), rows in parallel.
@@ -822,7 +830,16 @@ fn holdout_at(
 ) -> Option<(f64, Array2<f64>, f64, f64)> {
     let a_fit = basis.design(mult, fit.0);
     let a_hold = basis.design(mult, hold.0);
-    holdout_solve(basis, a_fit.view(), fit.1, a_hold.view(), hold.1, hint).map(|(f, _)| f)
+    holdout_solve(
+        basis,
+        a_fit.view(),
+        fit.1,
+        a_hold.view(),
+        hold.1,
+        hint,
+        &Scratch::default(),
+    )
+    .map(|(f, _)| f)
 }
 
 /// A refitted candidate: its index, weights (cols × m) and what was chosen.
@@ -844,10 +861,10 @@ fn holdout_solve(
     a: ArrayView2<'_, f64>,
     y_hold: ArrayView2<'_, f64>,
     hint: Option<f64>,
+    scratch: &Scratch,
 ) -> Option<(Scored, Normal)> {
-    let (g, b, yy) = normal_from(a_fit, y_fit, basis.cols());
+    let (g, b, _) = normal_from(a_fit, y_fit, basis.cols());
     let hold = ((), y_hold);
-    let zero = Array2::zeros((basis.cols(), 0));
     let rows = hold.1.nrows().max(1) as f64;
     // (log10 ridge, error, weights) of the best ridge so far.
     let mut best: Option<(f64, f64, Array2<f64>)> = None;
@@ -868,12 +885,9 @@ fn holdout_solve(
         let fits: Vec<Option<(f64, Array2<f64>)>> = todo
             .par_iter()
             .map(|&e| {
-                let f = ridge_fit(&g, &b, yy, 10f64.powf(e), &zero)?;
-                let err = (&mul_few(a, f.weights.view()) - &hold.1)
-                    .mapv(|v| v * v)
-                    .sum()
-                    / rows;
-                Some((err, f.weights))
+                let w = ridge_weights(&g, &b, 10f64.powf(e), scratch)?;
+                let err = (&mul_few(a, w.view()) - &hold.1).mapv(|v| v * v).sum() / rows;
+                Some((err, w))
             })
             .collect();
         for (&e, fit) in todo.iter().zip(fits) {
@@ -1016,15 +1030,36 @@ fn fit_best_holdout(
     let rows = ys.nrows();
     let sy = ys.slice_axis(Axis(0), Slice::from(..sel));
     let hy = ys.slice_axis(Axis(0), Slice::from(sel..sel + hold));
+    let scratch = Scratch::default();
     fn split<'a>(c: &(&Basis, &'a [f64]), sel: usize, hold: usize) -> (&'a [f64], &'a [f64]) {
         let n = c.0.n;
         (&c.1[..sel * n], &c.1[sel * n..(sel + hold) * n])
     }
     let eval = |c: &(&Basis, &[f64]), raw: &RawRows, hint: Option<f64>| -> Option<Fit> {
         let (xf, xh) = split(c, sel, hold);
-        let a_fit = c.0.design_of_raw(&raw.fit, xf);
-        let a_hold = c.0.design_of_raw(&raw.hold, xh);
-        holdout_solve(c.0, a_fit.view(), sy, a_hold.view(), hy, hint)
+        let basis = c.0;
+        if !basis.normalized && !basis.affine {
+            return holdout_solve(
+                basis,
+                raw.fit.view(),
+                sy,
+                raw.hold.view(),
+                hy,
+                hint,
+                &scratch,
+            );
+        }
+        // The design matrices in spare matrices of the selection (no fresh pages per width).
+        let (mut a_fit, mut a_hold) = (
+            scratch.take(sel, basis.cols()),
+            scratch.take(hold, basis.cols()),
+        );
+        basis.design_of_raw_into(&raw.fit, xf, &mut a_fit);
+        basis.design_of_raw_into(&raw.hold, xh, &mut a_hold);
+        let fit = holdout_solve(basis, a_fit.view(), sy, a_hold.view(), hy, hint, &scratch);
+        scratch.give(a_fit);
+        scratch.give(a_hold);
+        fit
     };
     let first = mult.unwrap_or_else(|| start.clamp(MULT_RANGE.0, MULT_RANGE.1));
     // Candidates with the same centres, widths and rows share their raw values.

@@ -1166,10 +1166,13 @@ impl Isgcs {
         for &c in &affected {
             self.neighbours[c].clear();
         }
-        let c32: Vec<u32> = affected.iter().map(|&c| c as u32).collect();
+        let mut is_affected = vec![false; self.len()];
+        for &c in &affected {
+            is_affected[c] = true;
+        }
         for s in &self.simplices {
             for &v in s {
-                if c32.binary_search(&v).is_ok() {
+                if is_affected[v as usize] {
                     for &w in s {
                         if w != v {
                             self.neighbours[v as usize].push(w);

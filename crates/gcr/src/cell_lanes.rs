@@ -19,7 +19,7 @@ use std::ops::Range;
 const BLOCK: usize = 64;
 
 /// One half (sender x or receiver y) of every cell: centre coordinates by axis and the facing
-/// directions of the masks (empty without masks).
+/// directions of the masks (empty without masks: [`KernelCells::nx`] empty).
 #[derive(Clone, Debug, Default)]
 struct Halves {
     c: [Vec<f64>; 3],
@@ -92,15 +92,9 @@ impl CellLanes {
     pub fn new(kernel: &KernelCells, excluded: &[bool]) -> Self {
         let n = kernel.len();
         let masks = !kernel.nx.is_empty();
-        let none = vec![DVec3::ZERO; if masks { 0 } else { n }];
-        let (fx, fy) = if masks {
-            (&kernel.nx, &kernel.ny)
-        } else {
-            (&none, &none)
-        };
         Self {
-            x: Halves::new(&kernel.wx, fx),
-            y: Halves::new(&kernel.wy, fy),
+            x: Halves::new(&kernel.wx, &kernel.nx),
+            y: Halves::new(&kernel.wy, &kernel.ny),
             a: kernel.width.iter().map(|d| 1.0 / (d * d)).collect(),
             skip: (0..n)
                 .map(|o| excluded.get(o).copied().unwrap_or(false))

@@ -125,6 +125,38 @@ pub(crate) fn gram_add(a: ArrayView2<'_, f64>, g: &mut Array2<f64>) {
     }
 }
 
+/// The diagonal block `rows` of a blocked Cholesky factorization of the z × z row-major `data`
+/// (its columns `rows` already updated by the blocks before), unblocked. Rows as slices: the same
+/// operations in the same order as indexing, without the bounds checks. `false` at a
+/// non-positive or NaN pivot.
+fn factor_diagonal_block(data: &mut [f64], z: usize, rows: std::ops::Range<usize>) -> bool {
+    let k0 = rows.start;
+    for i in rows {
+        let (head, tail) = data.split_at_mut(i * z);
+        let ri = &mut tail[..z];
+        for j in k0..=i {
+            let rj: &[f64] = if j == i {
+                &[]
+            } else {
+                &head[j * z..(j + 1) * z]
+            };
+            let mut s = ri[j];
+            for p in k0..j {
+                s -= ri[p] * if j == i { ri[p] } else { rj[p] };
+            }
+            if i == j {
+                if s.is_nan() || s <= 0.0 {
+                    return false;
+                }
+                ri[i] = s.sqrt();
+            } else {
+                ri[j] = s / rj[j];
+            }
+        }
+    }
+    true
+}
+
 /// In-place lower Cholesky factor of the symmetric matrix `a` plus `rho`·I (the lower triangle
 /// is read; the strict upper triangle is left unspecified). Blocked right-looking: the
 /// diagonal block by substitution, the panel below it row by row (rows in parallel, each
@@ -145,33 +177,8 @@ pub(crate) fn cholesky_in_place(a: &mut Array2<f64>, rho: f64) -> bool {
     while k0 < z {
         let k1 = (k0 + BLOCK).min(z);
         let bw = k1 - k0;
-        // Diagonal block, unblocked. Rows as slices (standard layout): the same operations in
-        // the same order as indexing, without the bounds checks.
-        {
-            let data = a.as_slice_mut().expect("standard layout");
-            for i in k0..k1 {
-                let (head, tail) = data.split_at_mut(i * z);
-                let ri = &mut tail[..z];
-                for j in k0..=i {
-                    let rj: &[f64] = if j == i {
-                        &[]
-                    } else {
-                        &head[j * z..(j + 1) * z]
-                    };
-                    let mut s = ri[j];
-                    for p in k0..j {
-                        s -= ri[p] * if j == i { ri[p] } else { rj[p] };
-                    }
-                    if i == j {
-                        if s.is_nan() || s <= 0.0 {
-                            return false;
-                        }
-                        ri[i] = s.sqrt();
-                    } else {
-                        ri[j] = s / rj[j];
-                    }
-                }
-            }
+        if !factor_diagonal_block(a.as_slice_mut().expect("standard layout"), z, k0..k1) {
+            return false;
         }
         if k1 == z {
             break;
@@ -616,33 +623,8 @@ mod tests {
         let mut k0 = 0;
         while k0 < z {
             let k1 = (k0 + BLOCK).min(z);
-            // Diagonal block, unblocked. Rows as slices (standard layout): the same operations in
-            // the same order as indexing, without the bounds checks.
-            {
-                let data = a.as_slice_mut().expect("standard layout");
-                for i in k0..k1 {
-                    let (head, tail) = data.split_at_mut(i * z);
-                    let ri = &mut tail[..z];
-                    for j in k0..=i {
-                        let rj: &[f64] = if j == i {
-                            &[]
-                        } else {
-                            &head[j * z..(j + 1) * z]
-                        };
-                        let mut s = ri[j];
-                        for p in k0..j {
-                            s -= ri[p] * if j == i { ri[p] } else { rj[p] };
-                        }
-                        if i == j {
-                            if s.is_nan() || s <= 0.0 {
-                                return false;
-                            }
-                            ri[i] = s.sqrt();
-                        } else {
-                            ri[j] = s / rj[j];
-                        }
-                    }
-                }
+            if !factor_diagonal_block(a.as_slice_mut().expect("standard layout"), z, k0..k1) {
+                return false;
             }
             if k1 == z {
                 break;

@@ -571,19 +571,10 @@ impl Isgcs {
         })
     }
 
-    /// The training step itself (eq. 2.6–2.8, 2.15–2.18).
+    /// `d2[i] = |x − w_i|²` for every cell (resized to the cell count) from the centres by
+    /// coordinate (rebuilt when stale), and the best-matching unit as [`Isgcs::bmu`].
     #[inline(always)]
-    fn train_step_body(&mut self, x: &[f64], target: &[f64]) -> (usize, f64) {
-        debug_assert_eq!(x.len(), self.n);
-        debug_assert_eq!(target.len(), self.m);
-        // One scan computes every |x − w_i|² for the BMU (as `bmu`: first strict minimum) and
-        // is reused for the support after the moved cells' distances are recomputed: the same
-        // arithmetic as `bmu` + `support`, so the results are bit-identical to the reference
-        // (`train_reference` in the tests) while the cells are scanned once instead of twice.
-        if self.unsupervised_only {
-            return (self.unsupervised_step(x), 0.0);
-        }
-        let mut d2 = std::mem::take(&mut self.scratch_d2);
+    fn scan_all(&mut self, x: &[f64], d2: &mut Vec<f64>) -> usize {
         d2.clear();
         d2.resize(self.len(), 0.0);
         if !self.by_axis_fresh {
@@ -599,13 +590,29 @@ impl Isgcs {
                 .collect();
             self.by_axis_fresh = true;
         }
-        let b = match self.n {
-            2 => scan::<2>(&self.by_axis, x, &mut d2),
-            3 => scan::<3>(&self.by_axis, x, &mut d2),
-            4 => scan::<4>(&self.by_axis, x, &mut d2),
-            6 => scan::<6>(&self.by_axis, x, &mut d2),
-            _ => scan_any(&self.by_axis, x, &mut d2),
-        };
+        match self.n {
+            2 => scan::<2>(&self.by_axis, x, d2),
+            3 => scan::<3>(&self.by_axis, x, d2),
+            4 => scan::<4>(&self.by_axis, x, d2),
+            6 => scan::<6>(&self.by_axis, x, d2),
+            _ => scan_any(&self.by_axis, x, d2),
+        }
+    }
+
+    /// The training step itself (eq. 2.6–2.8, 2.15–2.18).
+    #[inline(always)]
+    fn train_step_body(&mut self, x: &[f64], target: &[f64]) -> (usize, f64) {
+        debug_assert_eq!(x.len(), self.n);
+        debug_assert_eq!(target.len(), self.m);
+        // One scan computes every |x − w_i|² for the BMU (as `bmu`: first strict minimum) and
+        // is reused for the support after the moved cells' distances are recomputed: the same
+        // arithmetic as `bmu` + `support`, so the results are bit-identical to the reference
+        // (`train_reference` in the tests) while the cells are scanned once instead of twice.
+        if self.unsupervised_only {
+            return (self.unsupervised_step(x), 0.0);
+        }
+        let mut d2 = std::mem::take(&mut self.scratch_d2);
+        let b = self.scan_all(x, &mut d2);
         self.steps += 1;
         self.hits[b] += 1;
         // Unsupervised: move the BMU and its neighbours towards x.
@@ -730,16 +737,20 @@ impl Isgcs {
         err.iter().map(|e| e * e).sum::<f64>()
     }
 
-    /// The step of [`Isgcs::set_unsupervised_only`]: BMU (as `bmu`), the moves of the BMU and
+    /// The step of [`Isgcs::set_unsupervised_only`]: BMU (as `bmu`, by the training step's scan),
+    /// the moves of the BMU and
     /// its neighbours and their widths exactly as in `train_step`, then `after_step`.
+    #[inline(always)]
     fn unsupervised_step(&mut self, x: &[f64]) -> usize {
-        self.by_axis_fresh = false;
-        let b = self.bmu(x, None);
+        let mut d2 = std::mem::take(&mut self.scratch_d2);
+        let b = self.scan_all(x, &mut d2);
+        self.scratch_d2 = d2;
         self.steps += 1;
         self.hits[b] += 1;
         let (eb, en) = (self.params.eps_bmu, self.params.eps_neighbour);
         for a in 0..self.n {
             self.centres[b * self.n + a] += eb * (x[a] - self.centres[b * self.n + a]);
+            self.by_axis[a][b] = self.centres[b * self.n + a];
         }
         let mut nb = std::mem::take(&mut self.scratch_nb);
         nb.clear();
@@ -748,6 +759,7 @@ impl Isgcs {
             let j = j as usize;
             for a in 0..self.n {
                 self.centres[j * self.n + a] += en * (x[a] - self.centres[j * self.n + a]);
+                self.by_axis[a][j] = self.centres[j * self.n + a];
             }
         }
         self.refresh_width(b);

@@ -612,39 +612,19 @@ impl Isgcs {
             return (self.unsupervised_step(x), 0.0);
         }
         let mut d2 = std::mem::take(&mut self.scratch_d2);
-        let b = self.scan_all(x, &mut d2);
-        self.steps += 1;
-        self.hits[b] += 1;
-        // Unsupervised: move the BMU and its neighbours towards x.
+        // Unsupervised: the BMU and its neighbours move towards x; the distances of the moved
+        // cells are taken again for the support.
+        let b = self.adapt_centres(x, &mut d2);
         let q_err = d2[b];
-        let (eb, en) = (self.params.eps_bmu, self.params.eps_neighbour);
-        for a in 0..self.n {
-            self.centres[b * self.n + a] += eb * (x[a] - self.centres[b * self.n + a]);
-            self.by_axis[a][b] = self.centres[b * self.n + a];
-        }
-        let mut nb = std::mem::take(&mut self.scratch_nb);
-        nb.clear();
-        nb.extend_from_slice(&self.neighbours[b]);
-        for &j in &nb {
-            let j = j as usize;
-            for a in 0..self.n {
-                self.centres[j * self.n + a] += en * (x[a] - self.centres[j * self.n + a]);
-                self.by_axis[a][j] = self.centres[j * self.n + a];
-            }
-        }
-        self.refresh_width(b);
         d2[b] = self.dist2(b, x);
-        for &j in &nb {
-            self.refresh_width(j as usize);
+        for &j in &self.neighbours[b] {
             d2[j as usize] = self.dist2(j as usize, x);
         }
-        self.scratch_nb = nb;
-        // Supervised: delta rule over the cells whose Gaussian reaches x (as `support`), gathered
-        // without a branch per cell (about half of them are in reach: a branch would be
-        // mispredicted at every other cell), then their Gaussians; the exponents r²/d² of all
-        // cells first, in vector lanes.
-        // The support is kept as two arrays (cell, weight), compacted in place over the
-        // distances, so that the Gaussians are one straight loop over a slice.
+        // Supervised: delta rule over the cells whose Gaussian reaches x (as `support`). The
+        // exponents r²/d² of all cells in one vector pass; the cells in reach gathered without a
+        // branch per cell (about half of them are in reach: a branch would be mispredicted at
+        // every other cell) into two arrays (cell, exponent), compacted in place over the
+        // distances; then their Gaussians, one straight loop over a slice.
         let mut cells = std::mem::take(&mut self.scratch_support);
         cells.clear();
         cells.resize(self.len(), 0);
@@ -737,14 +717,23 @@ impl Isgcs {
         err.iter().map(|e| e * e).sum::<f64>()
     }
 
-    /// The step of [`Isgcs::set_unsupervised_only`]: BMU (as `bmu`, by the training step's scan),
-    /// the moves of the BMU and
-    /// its neighbours and their widths exactly as in `train_step`, then `after_step`.
+    /// The step of [`Isgcs::set_unsupervised_only`]: the unsupervised part of `train_step`
+    /// ([`Isgcs::adapt_centres`]), then `after_step`.
     #[inline(always)]
     fn unsupervised_step(&mut self, x: &[f64]) -> usize {
         let mut d2 = std::mem::take(&mut self.scratch_d2);
-        let b = self.scan_all(x, &mut d2);
+        let b = self.adapt_centres(x, &mut d2);
         self.scratch_d2 = d2;
+        self.after_step();
+        b
+    }
+
+    /// The unsupervised part of a step (eq. 2.6–2.7, 2.10): the scan ([`Isgcs::scan_all`], `d2`
+    /// holds the distances before the move), the BMU's hit, the BMU and its neighbours moved
+    /// towards x (the mirror by coordinate with them) and their widths refreshed. Returns the BMU.
+    #[inline(always)]
+    fn adapt_centres(&mut self, x: &[f64], d2: &mut Vec<f64>) -> usize {
+        let b = self.scan_all(x, d2);
         self.steps += 1;
         self.hits[b] += 1;
         let (eb, en) = (self.params.eps_bmu, self.params.eps_neighbour);
@@ -767,7 +756,6 @@ impl Isgcs {
             self.refresh_width(j as usize);
         }
         self.scratch_nb = nb;
-        self.after_step();
         b
     }
 
@@ -801,8 +789,8 @@ impl Isgcs {
     #[cfg(test)]
     fn train_reference(&mut self, x: &[f64], target: &[f64], hint: Option<usize>) -> usize {
         debug_assert_eq!(x.len(), self.n);
-        self.by_axis_fresh = false;
         debug_assert_eq!(target.len(), self.m);
+        self.by_axis_fresh = false;
         let b = self.bmu(x, hint);
         self.steps += 1;
         self.hits[b] += 1;
@@ -1298,12 +1286,12 @@ fn normalize(w: &mut [f64]) -> bool {
     sum > 0.0
 }
 
-/// [`normalize`] for a support of (cell, weight) pairs; an empty or zero support becomes the
-/// fallback cell with weight 1.
+/// [`normalize`] for a support of (cell, weight) pairs (the same sum, the same divisions); an
+/// empty or zero support becomes the fallback cell with weight 1.
 fn normalize_pairs(cells: &mut Vec<(usize, f64)>, fallback: impl FnOnce() -> usize) {
-    let mut w: Vec<f64> = cells.iter().map(|&(_, a)| a).collect();
-    if normalize(&mut w) {
-        cells.iter_mut().zip(w).for_each(|((_, a), v)| *a = v);
+    let sum: f64 = cells.iter().map(|&(_, a)| a).sum();
+    if sum > 0.0 {
+        cells.iter_mut().for_each(|(_, a)| *a /= sum);
     } else {
         cells.clear();
         cells.push((fallback(), 1.0));

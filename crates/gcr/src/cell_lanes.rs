@@ -80,15 +80,15 @@ pub struct CellLanes {
     x: Halves,
     y: Halves,
     a: Vec<f64>,
-    /// Cells that contribute nothing (left out of the projection for want of samples).
+    /// Cells whose pair Gaussians are 0 (left out of the projection for want of samples).
     skip: Vec<bool>,
     masks: bool,
     cos_min: f64,
 }
 
 impl CellLanes {
-    /// The cells of `kernel`; `excluded` (empty, or one flag per cell) marks cells whose factor is
-    /// always 0.
+    /// The cells of `kernel`; `excluded` (empty, or one flag per cell) marks cells whose pair
+    /// factor ([`CellLanes::pair_gaussians`]) is always 0.
     pub fn new(kernel: &KernelCells, excluded: &[bool]) -> Self {
         let n = kernel.len();
         let masks = !kernel.nx.is_empty();
@@ -131,7 +131,9 @@ impl CellLanes {
     }
 
     /// `out[o] = exp(−|y − w_o^y|²/d_o²)` for every cell, as [`CellLanes::pair_gaussians`] for
-    /// the receiver halves alone (at a point y with unit normal `n`).
+    /// the receiver halves alone (at a point y with unit normal `n`), skipped cells included:
+    /// the collection weighs a cell by its output, which is 0 for a cell left out of the
+    /// projection.
     pub fn receiver_gaussians(&self, (y, n): (DVec3, DVec3), cut: f64, out: &mut [f64]) {
         assert_eq!(out.len(), self.len(), "one factor per cell");
         pulp::Arch::new().dispatch(Receiver {
@@ -143,24 +145,23 @@ impl CellLanes {
     }
 
     /// `out[i] = exp(−|y − w_o^y|²/d_o²)` for the cells `o = first + i` of one block, as
-    /// [`CellLanes::pair_gaussians`] for the receiver halves alone.
+    /// [`CellLanes::receiver_gaussians`].
     #[inline(always)]
     fn receiver_block(&self, first: usize, (y, n): (DVec3, DVec3), cut: f64, out: &mut [f64]) {
         let r = first..first + out.len();
-        let (a, skip) = (&self.a[r.clone()], &self.skip[r.clone()]);
+        let a = &self.a[r.clone()];
         let c = self.y.slices(r.clone());
         if self.masks && n != DVec3::ZERO {
             let f = self.y.facing(r);
             for (i, g) in out.iter_mut().enumerate() {
                 let e = a[i] * distance_squared(c, i, y);
-                let keep = (e <= cut) & !skip[i] & lives_on(f, i, n, self.cos_min);
+                let keep = (e <= cut) & lives_on(f, i, n, self.cos_min);
                 *g = if keep { gaussian(e) } else { 0.0 };
             }
         } else {
             for (i, g) in out.iter_mut().enumerate() {
                 let e = a[i] * distance_squared(c, i, y);
-                let keep = (e <= cut) & !skip[i];
-                *g = if keep { gaussian(e) } else { 0.0 };
+                *g = if e <= cut { gaussian(e) } else { 0.0 };
             }
         }
     }

@@ -426,10 +426,7 @@ pub fn bounce_operator(
 ) -> BounceOperator {
     let m = kernel.len();
     let cut = (1.0 / tol).ln();
-    let (pairs, receivers) = (
-        CellLanes::new(kernel, excluded),
-        CellLanes::new(kernel, &[]),
-    );
+    let lanes = CellLanes::new(kernel, excluded);
     let inv = 1.0 / shots.max(1) as f64;
     // ⟨Per sample: its power weights, the cells at ξ_i (moments), the cells at x_i (collection)⟩
     let shot: Vec<usize> = (0..samples.len())
@@ -442,9 +439,9 @@ pub fn bounce_operator(
             let smp = &samples[i];
             let w = power_weights(smp, reflectance(smp.ray.face_y, smp.ray.y));
             let mut g = vec![0.0; m];
-            gaussians_at(&pairs, smp, cut, &mut g);
+            gaussians_at(&lanes, smp, cut, &mut g);
             let at = nonzero(&g, |_, g| g);
-            receivers.receiver_gaussians((smp.ray.x, smp.ray.nx), cut, &mut g);
+            lanes.receiver_gaussians((smp.ray.x, smp.ray.nx), cut, &mut g);
             (w, at, nonzero(&g, |p, g| sender[p] * g))
         })
         .collect();

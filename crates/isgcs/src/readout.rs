@@ -620,7 +620,10 @@ pub(crate) fn fit_best(
     // With enough rows beyond the selection rows, the score is the error on (up to
     // 2 × `sel` of) them instead of the leave-one-out error on the selection rows.
     let hold = (rows - sel).min(2 * sel);
-    let use_holdout = ridge.is_none() && 2 * hold >= sel && hold >= HOLDOUT_MIN;
+    // (A fifth of the rows or more also counts: `selection_rows` holds that out when rows are
+    // few per column.)
+    let use_holdout =
+        ridge.is_none() && (2 * hold >= sel || 5 * hold >= rows) && hold >= HOLDOUT_MIN;
     let hy = ys.slice_axis(Axis(0), Slice::from(sel..sel + hold));
     if use_holdout {
         return fit_best_holdout(candidates, ys, mult, sel, hold, start);
@@ -812,6 +815,22 @@ fn refit_solve(
 
 /// Fewest rows beyond the selection rows for the holdout score of [`fit_best`].
 const HOLDOUT_MIN: usize = 200;
+
+/// The selection rows S of the regressor's output layer (module docs of `regressor`, step
+/// 4) for N = `rows` rows and `cols` columns: S = max(3·cols, 1500) when at least a fifth of
+/// the rows is left over for the holdout, else S = N − ⌈N/5⌉ (a fifth of the rows held out,
+/// as the k-means RBF does). [`fit_best`] scores on a holdout whenever it has at least
+/// [`HOLDOUT_MIN`] rows; with fewer (N < 1000) it falls back to the exact leave-one-out
+/// error, whose eigendecomposition per width costs O(cols³) (at 1000 cells and 3000 rows
+/// 5–13 × the k-means RBF's whole fit, against 1.5 × with the holdout).
+pub(crate) fn selection_rows(rows: usize, cols: usize) -> usize {
+    let wanted = (3 * cols).max(1500);
+    if 4 * rows >= 5 * wanted {
+        wanted
+    } else {
+        rows - rows.div_ceil(5)
+    }
+}
 
 /// One multiplier's output layer fitted on the rows `fit` (inputs, targets) and scored by
 /// the mean squared error per row on the rows `hold`: the weights, the relative ridge
@@ -1719,6 +1738,31 @@ mod tests {
                 assert!((g - w).abs() <= 1e-9 * w.abs().max(1.0), "{g} vs {w}");
             }
         }
+    }
+
+    #[test]
+    fn few_rows_per_cell_still_leave_a_fifth_for_the_holdout() {
+        // Ten rows per cell (the benchmark's shapes): S = 3 z, the holdout 2 S or the rest.
+        assert_eq!(selection_rows(3000, 300), 1500);
+        assert_eq!(selection_rows(10_000, 1000), 3000);
+        for (rows, cols) in [
+            (3000, 1000),
+            (2000, 300),
+            (1200, 300),
+            (1000, 100),
+            (4001, 1000),
+        ] {
+            let sel = selection_rows(rows, cols);
+            let hold = (rows - sel).min(2 * sel);
+            assert!(
+                5 * hold >= rows && sel + hold <= rows,
+                "{rows} × {cols}: {sel}"
+            );
+            assert!(hold >= HOLDOUT_MIN, "{rows} × {cols}: holdout {hold}");
+        }
+        // Below 1000 rows the holdout would be under HOLDOUT_MIN: leave-one-out instead.
+        let sel = selection_rows(900, 100);
+        assert!(900 - sel < HOLDOUT_MIN);
     }
 
     #[test]

@@ -31,10 +31,12 @@
 //!    each in the learned metric and, when a metric was learned, in the standardized metric at
 //!    the same centres mapped back (x = T⁻¹c; the pilots that chose T had fewer centres).
 //!    The weights are fitted on the first S = max(3z, 1500) rows (the rows are shuffled) and
-//!    scored by their mean squared error on the next min(N − S, 2S) rows (a holdout; when
-//!    fewer than max(S/2, 200) rows are left, by the exact closed-form leave-one-out error
-//!    mean(e_i/(1 − h_ii))² over the S rows instead, every ridge from one symmetric
-//!    eigendecomposition of AᵀA, `linalg::RidgePath`). For each μ the relative ridge in
+//!    scored by their mean squared error on the next min(N − S, 2S) rows (a holdout). With
+//!    fewer rows per cell (N < 1.25 S) the last fifth of the rows is held out (S = N − ⌈N/5⌉,
+//!    `readout::selection_rows`); below 1000 rows, where that fifth is under 200 rows, the
+//!    score is the exact closed-form leave-one-out error mean(e_i/(1 − h_ii))² over all rows
+//!    instead, every ridge from one symmetric eigendecomposition of AᵀA
+//!    (`linalg::RidgePath`; O(z³) per width, which is why it is not used on more rows). For each μ the relative ridge in
 //!    ε…1 (ε = machine epsilon) is the one with the lowest score (one Cholesky solve per
 //!    ridge: every second decade, then the best one's neighbours at ±1 decade; at the next μ
 //!    of a walk, the previous ridge and ±2 decades; then half decades around the best until
@@ -65,6 +67,7 @@ use crate::data::check_data;
 use crate::kmeans::kmeans;
 use crate::readout::{
     Basis, Readout, Selected, Standardizer, egop, fit_best, fit_fixed, fit_gcv, nearest_widths,
+    selection_rows,
 };
 use crate::{GoalFunction, Isgcs, IsgcsError, Params, Termination};
 use ndarray::ArrayView2;
@@ -620,7 +623,7 @@ impl Regressor {
             affine: params.affine,
         };
         let yv = ArrayView2::from_shape((rows, m), &ys).expect("shape checked");
-        let select_rows = (3 * basis.cols()).max(1500);
+        let select_rows = selection_rows(rows, basis.cols());
         // Normalized and plain Gaussians (unless fixed), in the learned and the standardized
         // metric: the lowest leave-one-out score on the selection rows wins; the walks start
         // at the metric pilot's multiplier.

@@ -37,7 +37,8 @@ pub enum RegressorError {
     /// The network rejected its parameters.
     #[error(transparent)]
     Network(#[from] IsgcsError),
-    /// The least-squares output layer could not be solved (no row activates any cell).
+    /// The least-squares output layer could not be solved (a fixed ridge too small for the
+    /// factorisation, or no row activates any cell).
     #[error("the output layer could not be fitted: {0}")]
     Solve(String),
 }

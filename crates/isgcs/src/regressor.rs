@@ -668,7 +668,20 @@ impl Regressor {
             select_rows,
             pilot_mult,
         )
-        .ok_or_else(|| RegressorError::Solve("no row activates any cell".into()))?;
+        .ok_or_else(|| {
+            RegressorError::Solve(match params.ridge {
+                // A fixed ridge is used as given: below the rounding level of AᵀA the
+                // Cholesky factorisation meets a non-positive pivot.
+                Some(r) => format!(
+                    "the normal equations AᵀA + ρI are not positive definite at the fixed \
+                     relative ridge {r:e} (the Cholesky factorisation failed); use a larger \
+                     ridge, or leave it unset to choose it from the data"
+                ),
+                None => "no ridge factorised the normal equations, or no row activates any \
+                         cell"
+                    .into(),
+            })
+        })?;
         let readout_of = |index: usize, weights: Vec<f64>, chosen: &Selected| {
             let (basis, in_metric) = bases[index].clone();
             Readout {

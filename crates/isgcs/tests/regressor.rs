@@ -232,3 +232,28 @@ fn misuse_is_an_error() {
     model.predict(&[f64::NAN, 0.5, 0.1, 0.1], &mut out).unwrap();
     assert!(out[0].is_nan() && out[1].is_finite());
 }
+
+#[test]
+fn a_fixed_ridge_below_rounding_is_an_error_that_names_the_ridge() {
+    // Wide Gaussians without a ridge: AᵀA is singular to rounding. A fixed ridge is used as
+    // given, so the fit either factorises (finite predictions) or says which ridge failed.
+    let p = suite().into_iter().find(|p| p.name == "franke").unwrap();
+    let (x, y) = p.sample(600, false, 1);
+    let mut failed = 0;
+    for ridge in [0.0, 1e-16] {
+        let fixed = RegressorParams {
+            ridge: Some(ridge),
+            width_multiplier: Some(8.0),
+            ..params(60, 1)
+        };
+        match Regressor::fit(&fixed, &x, &y, 2, 1) {
+            Ok(model) => assert!(predict(&model, &x).iter().all(|v| v.is_finite())),
+            Err(RegressorError::Solve(msg)) => {
+                failed += 1;
+                assert!(msg.contains("fixed relative ridge"), "{msg}");
+            }
+            Err(e) => panic!("unexpected error {e}"),
+        }
+    }
+    eprintln!("{failed} of 2 fixed ridges failed to factorise");
+}

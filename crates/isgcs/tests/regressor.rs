@@ -97,7 +97,10 @@ fn input_units_do_not_matter_and_fits_are_deterministic() {
             .flat_map(|r| [r[0], 10.0 * r[1], r[2]])
             .collect()
     };
-    // Exactly (to 1e-6) without the learned metric; with it (the default) the discrete
+    // Nearly exactly (to 1e-4) without the learned metric: the standardized inputs differ in
+    // their last bits, and the holdout selection may take ridges down to machine epsilon,
+    // where that rounding moves the weights (1.8e-5 here; the leave-one-out selection used
+    // on these 1500 rows before the holdout took over gave 1e-6); with it (the default) the discrete
     // choices of the metric search (pilot k-means, leave-one-out comparisons) can flip on
     // rounding-level differences, so there the two fits must only be about equally accurate.
     let fixed = RegressorParams {
@@ -107,7 +110,7 @@ fn input_units_do_not_matter_and_fits_are_deterministic() {
     let a0 = Regressor::fit(&fixed, &x, &y, 3, 1).unwrap();
     let c0 = Regressor::fit(&fixed, &scale(&x), &y, 3, 1).unwrap();
     let diff = rms_over_sd(&predict(&c0, &scale(&tx)), &predict(&a0, &tx));
-    assert!(diff < 1e-6, "relative rms difference {diff}");
+    assert!(diff < 1e-4, "relative rms difference {diff}");
     let (_, ty) = p.sample(500, false, 5);
     let c = Regressor::fit(&params(80, 2), &scale(&x), &y, 3, 1).unwrap();
     let (ea, ec) = (
@@ -256,4 +259,29 @@ fn a_fixed_ridge_below_rounding_is_an_error_that_names_the_ridge() {
         }
     }
     eprintln!("{failed} of 2 fixed ridges failed to factorise");
+}
+
+#[test]
+fn repeated_rows_do_not_leak_into_the_holdout() {
+    // Every noisy row three times: the selection must not score the interpolation of a row's
+    // noise on its own copies (the holdout keeps repeated inputs on one side).
+    let p = suite()
+        .into_iter()
+        .find(|p| p.name == "franke-noisy")
+        .unwrap();
+    let (x, y) = p.sample(1000, true, 1);
+    let (tx, ty) = p.sample(5000, false, 2);
+    let (x3, y3) = (x.repeat(3), y.repeat(3));
+    let once = Regressor::fit(&params(300, 1), &x, &y, 2, 1).unwrap();
+    let thrice = Regressor::fit(&params(300, 1), &x3, &y3, 2, 1).unwrap();
+    let (e1, e3) = (
+        rms_over_sd(&predict(&once, &tx), &ty),
+        rms_over_sd(&predict(&thrice, &tx), &ty),
+    );
+    eprintln!(
+        "franke-noisy 300 cells: rows once {e1:.4} (dof {:.0}), three times {e3:.4} (dof {:.0})",
+        once.report().dof,
+        thrice.report().dof
+    );
+    assert!(e3 < 1.25 * e1, "{e3} vs {e1}");
 }

@@ -9,7 +9,9 @@
 //! **Input metric** (`metric`, step 1b, default on): recursive expected gradient outer product
 //! of pilot networks (100 k-means centres, ≤ 2000 rows): T = E^½ of the pilot's mean gradient
 //! outer product, directions floored at 10 %, up to three rounds, the metric with the lowest
-//! pilot leave-one-out score kept (identity if none beats it); everything below runs on T·x.
+//! pilot leave-one-out score kept (identity if none beats it, or if the identity pilot's score
+//! is above half the targets' variance: a pilot that misses most of the function has no
+//! gradients to learn from); everything below runs on T·x.
 //!
 //! 2. **Topology and start**: k (when not given) is the number of principal components of the
 //!    standardized inputs that carry at least 10 % of the largest component's variance, at most
@@ -456,6 +458,13 @@ fn learn_metric(
         }
         start = sel.mult;
         best = (sel.score, t.clone(), sel.mult);
+        if round == 0 && sel.score > METRIC_UNRESOLVED {
+            // The identity pilot misses most of the function (its leave-one-out error is
+            // above half the targets' variance): its gradients are mostly noise, and a metric
+            // learned from them distorts the network (a 2-D sine of 5 × 4 periods: 0.95 ×
+            // the k-means RBF's rms with the metric, 0.58 without).
+            break;
+        }
         if round + 1 == METRIC_ROUNDS {
             // No pilot would try the next metric.
             break;
@@ -495,6 +504,10 @@ const GROWTH_RIDGE: f64 = 1e-6;
 
 /// Smallest scale of a direction in the learned metric, relative to the largest.
 const METRIC_FLOOR: f64 = 0.1;
+
+/// The identity pilot's leave-one-out score (mean squared error of the standardized targets,
+/// a share of their variance) above which no metric is learned from it.
+const METRIC_UNRESOLVED: f64 = 0.5;
 
 impl Regressor {
     /// Fits N rows: `inputs` N × n and `targets` N × m, row-major (module docs).
@@ -879,6 +892,27 @@ mod tests {
         assert_eq!(group_repeats(&order, &inputs, 2), vec![5, 3, 0, 2, 1, 4]);
         let distinct = [0.0, 1.0, 2.0, 3.0];
         assert_eq!(group_repeats(&[2, 0, 3, 1], &distinct, 1), vec![2, 0, 3, 1]);
+    }
+
+    #[test]
+    fn no_metric_is_learned_from_a_pilot_that_misses_the_function() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let xs: Vec<f64> = (0..2 * 2000).map(|_| rng.random::<f64>()).collect();
+        let tau = std::f64::consts::TAU;
+        let metric_of = |f: &dyn Fn(&[f64]) -> f64| {
+            let ys: Vec<f64> = xs.chunks(2).map(f).collect();
+            let xs = Standardizer::of(&xs, 2).apply(&xs);
+            let ys = Standardizer::of(&ys, 1).apply(&ys);
+            let params = RegressorParams {
+                max_cells: 300,
+                ..RegressorParams::default()
+            };
+            learn_metric(&xs, &ys, 2, 1, &params).0
+        };
+        // 5 × 4 periods: the 100-cell identity pilot leaves most of the variance.
+        assert!(metric_of(&|x| (tau * 5.0 * x[0]).sin() * (tau * 4.0 * x[1]).sin()).is_none());
+        // Resolved and anisotropic (x₁ barely matters): a metric is learned.
+        assert!(metric_of(&|x| (3.0 * x[0]).sin() + 0.01 * x[1]).is_some());
     }
 
     #[test]

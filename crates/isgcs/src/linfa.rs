@@ -31,7 +31,8 @@
 //! By default `fit` runs the chosen-from-data pipeline of [`crate::regressor`]: inputs and
 //! outputs standardized, k and the initial simplex from a principal component analysis,
 //! growth in rounds that insert where the least-squares residual is largest, and an output
-//! layer whose width multiplier and ridge minimise a leave-one-out estimate. Only `max_cells`
+//! layer whose basis, width multiplier and ridge minimise the error on held-out rows (the exact
+//! leave-one-out error below 1000 rows). Only `max_cells`
 //! and `seed` need setting; `ridge` and `width_multiplier` fix what is otherwise chosen.
 //!
 //! Setting [`IsgcsRegressorParams::network_params`] or
@@ -220,7 +221,7 @@ impl Default for IsgcsRegressorParams {
 impl IsgcsRegressorParams {
     /// The defaults: the chosen-from-data pipeline of [`crate::regressor`] (standardized
     /// inputs and outputs, k and the start simplex from a principal component analysis,
-    /// growth by least-squares residuals, width multiplier and ridge by leave-one-out / GCV),
+    /// growth by least-squares residuals, width multiplier and ridge on held-out rows),
     /// 100 cells, seed 0.
     pub fn new() -> Self {
         Self::default()
@@ -234,14 +235,16 @@ impl IsgcsRegressorParams {
         self.0.auto = false;
         self
     }
-    /// Fixed relative ridge of the default pipeline's output layer instead of the leave-one-out
-    /// choice (`None`, the default: chosen from the data).
+    /// Fixed relative ridge of the default pipeline's output layer instead of the selection on
+    /// held-out rows (`None`, the default: chosen from the data).
+    /// A fixed ridge is used as given: one below the rounding level of AᵀA fails to factorise
+    /// (an error naming the ridge).
     pub fn ridge(mut self, ridge: Option<f64>) -> Self {
         self.0.ridge = ridge;
         self
     }
-    /// Fixed width multiplier of the default pipeline's output layer instead of the
-    /// leave-one-out choice (`None`, the default: chosen from the data).
+    /// Fixed width multiplier of the default pipeline's output layer instead of the selection
+    /// on held-out rows (`None`, the default: chosen from the data).
     pub fn width_multiplier(mut self, multiplier: Option<f64>) -> Self {
         self.0.width_multiplier = multiplier;
         self

@@ -7,18 +7,13 @@
 //! With `--repeat R` every fit runs R times and the shortest wall time is printed (the fits
 //! are deterministic; the minimum is the least disturbed by other load on the machine).
 
+mod common;
+
+use common::{Run, arg, regressor_params};
 use isgcs::rbf::KMeansRbf;
-use isgcs::regressor::{Regressor, RegressorParams};
+use isgcs::regressor::Regressor;
 use isgcs::test_functions::suite;
 use std::time::Instant;
-
-fn arg<T: std::str::FromStr>(args: &[String], name: &str, default: T) -> T {
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1))
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
 
 fn rms_over_sd(pred: &[f64], truth: &[f64]) -> f64 {
     let n = truth.len() as f64;
@@ -35,32 +30,14 @@ fn rms_over_sd(pred: &[f64], truth: &[f64]) -> f64 {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let cells: usize = arg(&args, "--cells", 300);
-    let rows: usize = arg(&args, "--rows", 10 * cells);
-    let seed: u64 = arg(&args, "--seed", 1);
-    let only: String = arg(&args, "--only", String::new());
-    let repeat: usize = arg(&args, "--repeat", 1usize).max(1);
-    let params = RegressorParams {
-        max_cells: cells,
+    let Run {
+        cells,
+        rows,
         seed,
-        affine: arg::<u8>(&args, "--affine", 0) == 1,
-        normalized: arg::<u8>(&args, "--normalized", 1) == 1,
-        metric: arg::<u8>(&args, "--metric", 1) == 1,
-        choose_basis: arg::<u8>(&args, "--choose", 1) == 1,
-        lambda: args
-            .iter()
-            .position(|a| a == "--lambda")
-            .map(|_| arg(&args, "--lambda", 50)),
-        width_multiplier: args
-            .iter()
-            .position(|a| a == "--mult")
-            .map(|_| arg(&args, "--mult", 1.0)),
-        ridge: args
-            .iter()
-            .position(|a| a == "--ridge")
-            .map(|_| arg(&args, "--ridge", 1e-6)),
-        ..RegressorParams::default()
-    };
+        only,
+    } = Run::from_args(&args);
+    let repeat: usize = arg(&args, "--repeat", 1usize).max(1);
+    let params = regressor_params(&args, cells, seed);
     println!(
         "function          isgcs    t(s)   rbf     t(s)   ratio  k lam  mult   ridge    dof  t-ratio"
     );

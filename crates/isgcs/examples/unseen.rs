@@ -14,6 +14,9 @@
 //! the two is the headline and both are printed). `--dump DIR` writes DIR/NAME.{train,test}.csv
 //! (inputs then targets; test targets noise-free) for the Python smoothers.
 
+mod common;
+
+use common::{Run, arg, regressor_params};
 use isgcs::rbf::KMeansRbf;
 use isgcs::regressor::{Regressor, RegressorParams};
 use rand::{Rng, SeedableRng};
@@ -21,14 +24,6 @@ use rand_chacha::ChaCha8Rng;
 use std::f64::consts::PI;
 use std::io::Write;
 use std::time::Instant;
-
-fn arg<T: std::str::FromStr>(args: &[String], name: &str, default: T) -> T {
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1))
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
 
 fn normal(rng: &mut ChaCha8Rng) -> f64 {
     let (u1, u2): (f64, f64) = (rng.random::<f64>().max(1e-300), rng.random());
@@ -609,10 +604,12 @@ fn edge_cases(seed: u64) {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let cells: usize = arg(&args, "--cells", 300);
-    let rows: usize = arg(&args, "--rows", 10 * cells);
-    let seed: u64 = arg(&args, "--seed", 1);
-    let only: String = arg(&args, "--only", String::new());
+    let Run {
+        cells,
+        rows,
+        seed,
+        only,
+    } = Run::from_args(&args);
     let exact: String = arg(&args, "--exact", String::new());
     let dumpdir: String = arg(&args, "--dump", String::new());
     let norbf = arg::<u8>(&args, "--norbf", 0) == 1;
@@ -620,31 +617,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         edge_cases(seed);
         return Ok(());
     }
-    let params = RegressorParams {
-        max_cells: cells,
-        seed,
-        width_multiplier: args
-            .iter()
-            .position(|a| a == "--mult")
-            .map(|_| arg(&args, "--mult", 1.0)),
-        ridge: args
-            .iter()
-            .position(|a| a == "--ridge")
-            .map(|_| arg(&args, "--ridge", 1e-6)),
-        metric: arg::<u8>(&args, "--metric", 1) == 1,
-        affine: arg::<u8>(&args, "--affine", 0) == 1,
-        lambda: args
-            .iter()
-            .position(|a| a == "--lambda")
-            .map(|_| arg(&args, "--lambda", 10)),
-        choose_basis: arg::<u8>(&args, "--choose", 1) == 1,
-        normalized: arg::<u8>(&args, "--normalized", 1) == 1,
-        topology_dim: args
-            .iter()
-            .position(|a| a == "--k")
-            .map(|_| arg(&args, "--k", 1)),
-        ..RegressorParams::default()
-    };
+    let params = regressor_params(&args, cells, seed);
     println!(
         "{:20} {:>8} {:>6} {:>8} {:>6} {:>6} {:>5} {:>6} {:>8} {:>6} {:>5} {:>5} rbf(μ,ρ) / per-output",
         "case", "isgcs", "t(s)", "rbf", "t(s)", "ratio", "tR", "mult", "ridge", "dof", "blend", "k",

@@ -821,8 +821,8 @@ const HOLDOUT_MIN: usize = 200;
 /// the rows is left over for the holdout, else S = N − ⌈N/5⌉ (a fifth of the rows held out,
 /// as the k-means RBF does). [`fit_best`] scores on a holdout whenever it has at least
 /// [`HOLDOUT_MIN`] rows; with fewer (N < 1000) it falls back to the exact leave-one-out
-/// error, whose eigendecomposition per width costs O(cols³) (at 1000 cells and 3000 rows
-/// 5–13 × the k-means RBF's whole fit, against 1.5 × with the holdout).
+/// error, whose eigendecomposition per width costs O(cols³) (measured in docs/isgcs.md,
+/// round eleven).
 pub(crate) fn selection_rows(rows: usize, cols: usize) -> usize {
     let wanted = (3 * cols).max(1500);
     if 4 * rows >= 5 * wanted {

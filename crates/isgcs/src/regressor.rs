@@ -32,14 +32,15 @@
 //!    every row. Candidates (with `choose_basis`, the default): normalized and plain Gaussians,
 //!    each in the learned metric and, when a metric was learned, in the standardized metric at
 //!    the same centres mapped back (x = T⁻¹c; the pilots that chose T had fewer centres).
-//!    The weights are fitted on the first S = max(3z, 1500) rows (the rows are shuffled) and
+//!    The weights are fitted on the first S = max(3z, 1500) rows (the rows are shuffled, rows
+//!    of one input kept together: `group_repeats`) and
 //!    scored by their mean squared error on the next min(N − S, 2S) rows (a holdout). With
 //!    fewer rows per cell (N < 1.25 S) the last fifth of the rows is held out (S = N − ⌈N/5⌉,
 //!    `readout::selection_rows`); below 1000 rows, where that fifth is under 200 rows, the
 //!    score is the exact closed-form leave-one-out error mean(e_i/(1 − h_ii))² over all rows
 //!    instead, every ridge from one symmetric eigendecomposition of AᵀA
-//!    (`linalg::RidgePath`; O(z³) per width, which is why it is not used on more rows). For each μ the relative ridge in
-//!    ε…1 (ε = machine epsilon) is the one with the lowest score (one Cholesky solve per
+//!    (`linalg::RidgePath`; O(z³) per width, which is why it is not used on more rows). For
+//!    each μ the relative ridge in ε…1 (ε = machine epsilon) is the one with the lowest score (one Cholesky solve per
 //!    ridge: every second decade, then the best one's neighbours at ±1 decade; at the next μ
 //!    of a walk, the previous ridge and ±2 decades; then half decades around the best until
 //!    both neighbours are tried). Every candidate is scored at the pilot's multiplier (the
@@ -215,28 +216,26 @@ fn shuffle(v: &mut [usize], rng: &mut ChaCha8Rng) {
 /// The shuffled row `order` with rows of identical inputs moved next to the first of them
 /// (otherwise in the same order). The output layer is fitted on a prefix of the rows and
 /// scored on the next ones (module docs, step 4): a repeated input on both sides would score
-/// interpolation of its noise as accuracy (1000 distinct rows three times each, 300 cells:
-/// dof 224 and 3.5 × the error of the same rows once). Inputs compare bit for bit (−0 as +0).
+/// the interpolation of its noise as accuracy (docs/isgcs.md, round eleven). Inputs compare
+/// bit for bit (−0 as +0).
 fn group_repeats(order: &[usize], inputs: &[f64], n: usize) -> Vec<usize> {
-    use std::collections::HashMap;
-    let key = |r: usize| -> Vec<u64> {
-        inputs[r * n..(r + 1) * n]
-            .iter()
-            .map(|v| (v + 0.0).to_bits())
-            .collect()
-    };
-    let mut first: HashMap<Vec<u64>, usize> = HashMap::with_capacity(order.len());
-    let mut groups: Vec<Vec<usize>> = Vec::with_capacity(order.len());
-    for &r in order {
-        match first.entry(key(r)) {
-            std::collections::hash_map::Entry::Occupied(g) => groups[*g.get()].push(r),
-            std::collections::hash_map::Entry::Vacant(v) => {
-                v.insert(groups.len());
-                groups.push(vec![r]);
-            }
-        }
-    }
-    groups.concat()
+    // ⟨each row's group: the rank of its input's first occurrence in `order`⟩
+    let mut first: std::collections::HashMap<Vec<u64>, usize> =
+        std::collections::HashMap::with_capacity(order.len());
+    let mut rows: Vec<(usize, usize)> = order
+        .iter()
+        .map(|&r| {
+            let key = inputs[r * n..(r + 1) * n]
+                .iter()
+                .map(|v| (v + 0.0).to_bits())
+                .collect();
+            let next = first.len();
+            (*first.entry(key).or_insert(next), r)
+        })
+        .collect();
+    // A stable sort: the rows of a group keep their shuffled order.
+    rows.sort_by_key(|&(group, _)| group);
+    rows.into_iter().map(|(_, r)| r).collect()
 }
 
 /// Eigenvalues (descending) and eigenvectors (columns of the returned row-major d × d matrix)
@@ -666,8 +665,8 @@ impl Regressor {
         let yv = ArrayView2::from_shape((rows, m), &ys).expect("shape checked");
         let select_rows = selection_rows(rows, basis.cols());
         // Normalized and plain Gaussians (unless fixed), in the learned and the standardized
-        // metric: the lowest leave-one-out score on the selection rows wins; the walks start
-        // at the metric pilot's multiplier.
+        // metric: the lowest score (holdout, or leave-one-out below 1000 rows; module docs,
+        // step 4) wins; the walks start at the metric pilot's multiplier.
         let kinds: &[bool] = if params.choose_basis {
             &[true, false]
         } else {

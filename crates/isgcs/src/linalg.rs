@@ -94,11 +94,26 @@ const GRAM_BLOCK: usize = 128;
 /// multiplied (blocks of [`GRAM_BLOCK`] columns, spread over the rayon threads; about half
 /// the multiply-adds of the full product for large z) and mirrored into the upper triangle.
 pub(crate) fn gram_add(a: ArrayView2<'_, f64>, g: &mut Array2<f64>) {
+    gram_into(a, g, true);
+}
+
+/// AᵀA for a dense block A (rows × z), as [`gram_add`] but written into fresh memory: the
+/// zeroed pages of a new matrix are not read first (reading them maps the shared zero page,
+/// and the write after it faults again to copy it, flushing the other threads' address
+/// translations: a tenth of a 1000-cell selection's time went to that).
+pub(crate) fn gram(a: ArrayView2<'_, f64>) -> Array2<f64> {
+    let mut g = Array2::zeros((a.ncols(), a.ncols()));
+    gram_into(a, &mut g, false);
+    g
+}
+
+/// G += AᵀA (`add`) or G = AᵀA, blocked as [`gram_add`] describes.
+fn gram_into(a: ArrayView2<'_, f64>, g: &mut Array2<f64>, add: bool) {
     use rayon::prelude::*;
     let z = a.ncols();
     let blocks = z.div_ceil(GRAM_BLOCK);
     if blocks <= 1 {
-        general_mat_mul(1.0, &a.t(), &a, 1.0, g);
+        general_mat_mul(1.0, &a.t(), &a, if add { 1.0 } else { 0.0 }, g);
         return;
     }
     let pairs: Vec<(usize, usize)> = (0..blocks)
@@ -116,11 +131,19 @@ pub(crate) fn gram_add(a: ArrayView2<'_, f64>, g: &mut Array2<f64>) {
     for (&(i, j), p) in pairs.iter().zip(&products) {
         let mut lower = g.slice_axis_mut(Axis(0), cols(i));
         let mut lower = lower.slice_axis_mut(Axis(1), cols(j));
-        lower += p;
+        if add {
+            lower += p;
+        } else {
+            lower.assign(p);
+        }
         if i != j {
             let mut upper = g.slice_axis_mut(Axis(0), cols(j));
             let mut upper = upper.slice_axis_mut(Axis(1), cols(i));
-            upper += &p.t();
+            if add {
+                upper += &p.t();
+            } else {
+                upper.assign(&p.t());
+            }
         }
     }
 }
@@ -159,10 +182,10 @@ fn factor_diagonal_block(data: &mut [f64], z: usize, rows: std::ops::Range<usize
 
 /// In-place lower Cholesky factor of the symmetric matrix `a` plus `rho`·I (the lower triangle
 /// is read; the strict upper triangle is left unspecified). Blocked right-looking: the
-/// diagonal block by substitution, the panel below it row by row (rows in parallel, each
-/// row's entries updated by whole rows of the block's transpose, so the inner loop has no
-/// dependent chain), the trailing update of the lower triangle only by matrix products on
-/// column blocks (in parallel). `false` at a non-positive or NaN pivot.
+/// diagonal block by substitution, the panel below it by substitution in groups of rows that
+/// share the vector lanes ([`PanelRows`]; groups in parallel), the trailing update of the
+/// lower triangle only by matrix products on column blocks (in parallel). `false` at a
+/// non-positive or NaN pivot.
 pub(crate) fn cholesky_in_place(a: &mut Array2<f64>, rho: f64) -> bool {
     use rayon::prelude::*;
     let z = a.nrows();
@@ -183,9 +206,8 @@ pub(crate) fn cholesky_in_place(a: &mut Array2<f64>, rho: f64) -> bool {
         if k1 == z {
             break;
         }
-        // Panel L21 = A21 L11⁻ᵀ. Entry j of a panel row is a_j − Σ_{p<j} l_p L11[j][p] (p
-        // ascending), divided by L11[j][j]: computed as l_p final, then subtracted from every
-        // later entry at once (the transpose's row p), the same operations in the same order.
+        // Panel L21 = A21 L11⁻ᵀ by substitution, groups of rows side by side ([`PanelRows`]);
+        // L11ᵀ into `lt` first (its rows contiguous).
         {
             let data = a.as_slice_mut().expect("standard layout");
             for p in 0..bw {
@@ -197,20 +219,24 @@ pub(crate) fn cholesky_in_place(a: &mut Array2<f64>, rho: f64) -> bool {
                     };
                 }
             }
-            let diag: Vec<f64> = (k0..k1).map(|j| data[j * z + j]).collect();
-            let lt = &lt;
+        }
+        let diag: Vec<f64> = (k0..k1).map(|j| a[[j, j]]).collect();
+        {
+            let data = a.as_slice_mut().expect("standard layout");
             let (_, bottom) = data.split_at_mut(k1 * z);
-            bottom.par_chunks_mut(z).with_min_len(32).for_each(|ri| {
-                let r = &mut ri[k0..k1];
-                for p in 0..bw {
-                    let l = r[p] / diag[p];
-                    r[p] = l;
-                    let (_, later) = r.split_at_mut(p + 1);
-                    for (v, t) in later.iter_mut().zip(&lt[p * BLOCK + p + 1..p * BLOCK + bw]) {
-                        *v -= l * t;
-                    }
-                }
-            });
+            let (lt, diag) = (&lt[..], &diag[..]);
+            bottom
+                .par_chunks_mut(PANEL_ROWS * z)
+                .with_min_len(4)
+                .for_each(|group| {
+                    pulp::Arch::new().dispatch(PanelRows {
+                        group,
+                        z,
+                        cols: k0..k1,
+                        lt,
+                        diag,
+                    })
+                });
         }
         // Trailing update A22 −= L21 L21ᵀ, lower triangle only: column block c gets the rows
         // from its own first row down.
@@ -235,6 +261,68 @@ pub(crate) fn cholesky_in_place(a: &mut Array2<f64>, rho: f64) -> bool {
         k0 = k1;
     }
     true
+}
+
+/// Rows of a [`PanelRows`] group: the lanes of its vector operations.
+const PANEL_ROWS: usize = 8;
+
+/// Up to [`PANEL_ROWS`] consecutive rows of a Cholesky panel (`group`, row-major with `z`
+/// columns) solved against the diagonal block's factor on the columns `cols`: entry j of a
+/// row becomes (a_j − Σ_{p<j} l_p L11[j][p]) / L11[j][j], p ascending, computed as l_p final
+/// and then subtracted from every later entry (`lt` holds L11ᵀ, rows of BLOCK; `diag` the
+/// diagonal). The rows sit side by side in the vector lanes (one division and one update per
+/// lane for all of them), so each entry gets the same operations in the same order as row by
+/// row, without waiting on its own row's division chain; `pulp` compiles it for the
+/// processor's vector unit.
+struct PanelRows<'a> {
+    group: &'a mut [f64],
+    z: usize,
+    cols: std::ops::Range<usize>,
+    lt: &'a [f64],
+    diag: &'a [f64],
+}
+
+impl pulp::WithSimd for PanelRows<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let Self {
+            group,
+            z,
+            cols,
+            lt,
+            diag,
+        } = self;
+        let (k0, bw) = (cols.start, cols.len());
+        let rows = group.len() / z;
+        // r[j][q]: column j of the block, row q of the group.
+        let mut r = [[0.0f64; PANEL_ROWS]; BLOCK];
+        for q in 0..rows {
+            for (j, rj) in r.iter_mut().enumerate().take(bw) {
+                rj[q] = group[q * z + k0 + j];
+            }
+        }
+        for p in 0..bw {
+            let d = diag[p];
+            let mut l = r[p];
+            for v in l.iter_mut() {
+                *v /= d;
+            }
+            r[p] = l;
+            for (j, rj) in r.iter_mut().enumerate().take(bw).skip(p + 1) {
+                let t = lt[p * BLOCK + j];
+                for (v, l) in rj.iter_mut().zip(&l) {
+                    *v -= l * t;
+                }
+            }
+        }
+        for q in 0..rows {
+            for (j, rj) in r.iter().enumerate().take(bw) {
+                group[q * z + k0 + j] = rj[q];
+            }
+        }
+    }
 }
 
 /// Column block of [`cholesky_in_place`]'s trailing update.

@@ -3,7 +3,7 @@
 //! reference), on standardized inputs and outputs.
 
 use crate::linalg::{
-    RidgePath, Scratch, gcv, gram_add, mul_few, rademacher, ridge_fit, ridge_weights,
+    RidgePath, Scratch, gcv, gram, gram_add, mul_few, rademacher, ridge_fit, ridge_weights,
 };
 use ndarray::{Array2, ArrayView2, Axis, Slice};
 use rayon::prelude::*;
@@ -212,15 +212,7 @@ impl Basis {
                     if sum > 0.0 {
                         out.iter_mut().for_each(|v| *v /= sum);
                     } else if z > 0 {
-                        let (mut nearest, mut nearest_d2) = (0, f64::INFINITY);
-                        for i in 0..z {
-                            let c = &self.centres[i * n..(i + 1) * n];
-                            let r2: f64 = c.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum();
-                            if r2 < nearest_d2 {
-                                (nearest, nearest_d2) = (i, r2);
-                            }
-                        }
-                        out[nearest] = 1.0;
+                        out[self.nearest(x)] = 1.0;
                     }
                 }
                 if self.affine {
@@ -228,6 +220,19 @@ impl Basis {
                     o[z + 1..z + 1 + n].copy_from_slice(x);
                 }
             });
+    }
+
+    /// The index of the centre nearest to x (the first of equally near ones; 0 without
+    /// centres).
+    pub fn nearest(&self, x: &[f64]) -> usize {
+        let (mut nearest, mut nearest_d2) = (0, f64::INFINITY);
+        for (i, c) in self.centres.chunks_exact(self.n).enumerate() {
+            let r2: f64 = c.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum();
+            if r2 < nearest_d2 {
+                (nearest, nearest_d2) = (i, r2);
+            }
+        }
+        nearest
     }
 
     /// The design matrix of `rows` standardized inputs (rows × cols), rows in parallel.
@@ -255,7 +260,9 @@ impl Basis {
     ) -> (Array2<f64>, Array2<f64>, f64, Vec<Array2<f64>>) {
         let cols = self.cols();
         let m = ys.ncols();
-        let mut g = Array2::zeros((cols, cols));
+        // The first block's Gram is written, not added, into fresh memory (adding reads the
+        // zeroed pages first, and the write then faults again to copy them).
+        let mut g: Option<Array2<f64>> = None;
         let mut b = Array2::zeros((cols, m));
         let rows = ys.nrows();
         let mut blocks = Vec::new();
@@ -263,7 +270,10 @@ impl Basis {
         while start < rows {
             let end = (start + ROW_BLOCK).min(rows);
             let a = self.design(mult, &xs[start * self.n..end * self.n]);
-            gram_add(a.view(), &mut g);
+            match g.as_mut() {
+                Some(g) => gram_add(a.view(), g),
+                None => g = Some(gram(a.view())),
+            }
             ndarray::linalg::general_mat_mul(
                 1.0,
                 &a.t(),
@@ -277,6 +287,7 @@ impl Basis {
             start = end;
         }
         let yy = ys.iter().map(|v| v * v).sum();
+        let g = g.unwrap_or_else(|| Array2::zeros((cols, cols)));
         (g, b, yy, blocks)
     }
 }
@@ -853,7 +864,7 @@ fn holdout_at(
         basis,
         a_fit.view(),
         fit.1,
-        a_hold.view(),
+        Holdout::Design(a_hold.view()),
         hold.1,
         hint,
         &Scratch::default(),
@@ -877,7 +888,7 @@ fn holdout_solve(
     basis: &Basis,
     a_fit: ArrayView2<'_, f64>,
     y_fit: ArrayView2<'_, f64>,
-    a: ArrayView2<'_, f64>,
+    a: Holdout<'_>,
     y_hold: ArrayView2<'_, f64>,
     hint: Option<f64>,
     scratch: &Scratch,
@@ -901,13 +912,16 @@ fn holdout_solve(
             }
         }
         tried.extend(&todo);
-        let fits: Vec<Option<(f64, Array2<f64>)>> = todo
+        let solved: Vec<Option<Array2<f64>>> = todo
             .par_iter()
-            .map(|&e| {
-                let w = ridge_weights(&g, &b, 10f64.powf(e), scratch)?;
-                let err = (&mul_few(a, w.view()) - &hold.1).mapv(|v| v * v).sum() / rows;
-                Some((err, w))
-            })
+            .map(|&e| ridge_weights(&g, &b, 10f64.powf(e), scratch))
+            .collect();
+        // The holdout errors of all of them in one pass over the holdout rows.
+        let ws: Vec<&Array2<f64>> = solved.iter().flatten().collect();
+        let mut errs = a.squared_errors(&ws, hold.1).into_iter();
+        let fits: Vec<Option<(f64, Array2<f64>)>> = solved
+            .into_iter()
+            .map(|w| w.map(|w| (errs.next().expect("one error per solution") / rows, w)))
             .collect();
         for (&e, fit) in todo.iter().zip(fits) {
             if let Some((err, w)) = fit
@@ -955,15 +969,138 @@ fn holdout_solve(
     Some(((err, w, 10f64.powf(e), f64::NAN), (g, b)))
 }
 
+/// The holdout rows of a selection, as their design matrix or as their raw Gaussians
+/// ([`Basis::raw`]) completed row by row ([`Basis::design_of_raw`]'s numbers up to the
+/// rounding of the row sum) while they are read.
+#[derive(Clone, Copy)]
+enum Holdout<'a> {
+    Design(ArrayView2<'a, f64>),
+    Raw {
+        raw: ArrayView2<'a, f64>,
+        basis: &'a Basis,
+        xs: &'a [f64],
+    },
+}
+
+impl Holdout<'_> {
+    /// Σ |y − A W|² over the holdout rows for each of the weights `ws` (cols × m), in one
+    /// pass over the rows (rows in parallel): each row is read once for all of them.
+    fn squared_errors(&self, ws: &[&Array2<f64>], y: ArrayView2<'_, f64>) -> Vec<f64> {
+        let m = y.ncols();
+        let k = ws.len();
+        if k == 0 {
+            return Vec::new();
+        }
+        // The weights as k·m contiguous columns.
+        let cols: Vec<Vec<f64>> = ws
+            .iter()
+            .flat_map(|w| (0..m).map(move |c| w.column(c).to_vec()))
+            .collect();
+        let rows = y.nrows();
+        let row_err = |r: usize, acc: &mut [f64], pred: &mut [f64]| {
+            match *self {
+                Holdout::Design(a) => {
+                    let row = a.row(r);
+                    let row = row.as_slice().expect("design rows are contiguous");
+                    for (p, c) in pred.iter_mut().zip(&cols) {
+                        *p = dot(row, c);
+                    }
+                }
+                Holdout::Raw { raw, basis, xs } => {
+                    let z = basis.cells();
+                    let row = raw.row(r);
+                    let row = row.as_slice().expect("raw rows are contiguous");
+                    let x = &xs[r * basis.n..(r + 1) * basis.n];
+                    let sum = if basis.normalized {
+                        lanes_sum(row)
+                    } else {
+                        1.0
+                    };
+                    if sum > 0.0 {
+                        for (p, c) in pred.iter_mut().zip(&cols) {
+                            *p = dot(row, &c[..z]) / sum;
+                        }
+                    } else {
+                        // Normalized, no positive value: the nearest cell's indicator
+                        // (`finish`).
+                        let nearest = basis.nearest(x);
+                        for (p, c) in pred.iter_mut().zip(&cols) {
+                            *p = c[nearest];
+                        }
+                    }
+                    if basis.affine {
+                        for (p, c) in pred.iter_mut().zip(&cols) {
+                            *p += c[z] + dot(x, &c[z + 1..z + 1 + basis.n]);
+                        }
+                    }
+                }
+            }
+            for (j, p) in pred.iter().enumerate() {
+                let e = p - y[[r, j % m]];
+                acc[j / m] += e * e;
+            }
+        };
+        (0..rows)
+            .into_par_iter()
+            .with_min_len(64)
+            .fold(
+                || (vec![0.0; k], vec![0.0; k * m]),
+                |(mut acc, mut pred), r| {
+                    row_err(r, &mut acc, &mut pred);
+                    (acc, pred)
+                },
+            )
+            .map(|(acc, _)| acc)
+            .reduce(
+                || vec![0.0; k],
+                |mut a, b| {
+                    a.iter_mut().zip(b).for_each(|(a, b)| *a += b);
+                    a
+                },
+            )
+    }
+}
+
+/// Σ aᵢbᵢ with eight partial sums (vectorized).
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0; 8];
+    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    let tail: f64 = ca
+        .remainder()
+        .iter()
+        .zip(cb.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    for (x, y) in ca.zip(cb) {
+        for i in 0..8 {
+            acc[i] += x[i] * y[i];
+        }
+    }
+    acc.iter().sum::<f64>() + tail
+}
+
+/// Σ aᵢ with eight partial sums (vectorized).
+fn lanes_sum(a: &[f64]) -> f64 {
+    let mut acc = [0.0; 8];
+    let c = a.chunks_exact(8);
+    let tail: f64 = c.remainder().iter().sum();
+    for x in c {
+        for i in 0..8 {
+            acc[i] += x[i];
+        }
+    }
+    acc.iter().sum::<f64>() + tail
+}
+
 /// G = AᵀA, B = AᵀY and Σ y² of a design matrix A (rows × cols) and targets Y.
 fn normal_from(
     a: ArrayView2<'_, f64>,
     ys: ArrayView2<'_, f64>,
     cols: usize,
 ) -> (Array2<f64>, Array2<f64>, f64) {
-    let mut g = Array2::zeros((cols, cols));
+    let g = gram(a);
+    debug_assert_eq!(g.ncols(), cols);
     let mut b = Array2::zeros((cols, ys.ncols()));
-    gram_add(a, &mut g);
     ndarray::linalg::general_mat_mul(1.0, &a.t(), &ys, 1.0, &mut b);
     let yy = ys.iter().map(|v| v * v).sum();
     (g, b, yy)
@@ -1057,27 +1194,21 @@ fn fit_best_holdout(
     let eval = |c: &(&Basis, &[f64]), raw: &RawRows, hint: Option<f64>| -> Option<Fit> {
         let (xf, xh) = split(c, sel, hold);
         let basis = c.0;
+        // The holdout rows are scored from their raw values (normalized and completed row
+        // by row as they are read), the selection rows' design matrix made in a spare matrix
+        // of the selection (no fresh pages per width).
+        let holdout = Holdout::Raw {
+            raw: raw.hold.view(),
+            basis,
+            xs: xh,
+        };
         if !basis.normalized && !basis.affine {
-            return holdout_solve(
-                basis,
-                raw.fit.view(),
-                sy,
-                raw.hold.view(),
-                hy,
-                hint,
-                &scratch,
-            );
+            return holdout_solve(basis, raw.fit.view(), sy, holdout, hy, hint, &scratch);
         }
-        // The design matrices in spare matrices of the selection (no fresh pages per width).
-        let (mut a_fit, mut a_hold) = (
-            scratch.take(sel, basis.cols()),
-            scratch.take(hold, basis.cols()),
-        );
+        let mut a_fit = scratch.take(sel, basis.cols());
         basis.design_of_raw_into(&raw.fit, xf, &mut a_fit);
-        basis.design_of_raw_into(&raw.hold, xh, &mut a_hold);
-        let fit = holdout_solve(basis, a_fit.view(), sy, a_hold.view(), hy, hint, &scratch);
+        let fit = holdout_solve(basis, a_fit.view(), sy, holdout, hy, hint, &scratch);
         scratch.give(a_fit);
-        scratch.give(a_hold);
         fit
     };
     let first = mult.unwrap_or_else(|| start.clamp(MULT_RANGE.0, MULT_RANGE.1));
@@ -1128,7 +1259,6 @@ fn fit_best_holdout(
                 .collect::<Vec<_>>(),
         )
         .collect();
-    // … then the walk (module docs of `regressor`) only from the RACE_KEEP best of them.
     let keep = if mult.is_some() { 1 } else { RACE_KEEP };
     let order = leaders(
         candidates.len(),
@@ -1654,6 +1784,64 @@ mod tests {
                     assert!(
                         (g - d).abs() <= tol || (*g == 0.0 && *d < tiny),
                         "at {to}: {g} vs {d}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn holdout_errors_from_raw_values_are_those_of_the_design() {
+        // 2-D rows, one far from every centre (its normalized row is its nearest centre's
+        // indicator); two targets; three weight matrices scored in one pass.
+        let n = 2;
+        let mut xs: Vec<f64> = (0..150)
+            .flat_map(|i| {
+                let t = i as f64;
+                [
+                    (t * 0.618_034) % 1.0 * 4.0 - 2.0,
+                    (t * 0.414_214) % 1.0 * 4.0 - 2.0,
+                ]
+            })
+            .collect();
+        xs.extend([400.0, -300.0]);
+        let rows = xs.len() / n;
+        let ys = Array2::from_shape_fn((rows, 2), |(r, c)| (r as f64 * 0.37 + c as f64).sin());
+        let centres: Vec<f64> = (0..60)
+            .map(|i| ((i * 37) % 61) as f64 / 15.0 - 2.0)
+            .collect();
+        let base = nearest_widths(&centres, n, n + 1);
+        for (normalized, affine) in [(false, false), (true, false), (true, true), (false, true)] {
+            let basis = Basis {
+                n,
+                centres: centres.clone(),
+                base: base.clone(),
+                normalized,
+                affine,
+            };
+            let ws: Vec<Array2<f64>> = (0..3)
+                .map(|k| {
+                    Array2::from_shape_fn((basis.cols(), 2), |(j, c)| {
+                        ((j * 7 + c * 3 + k * 11) % 13) as f64 / 6.0 - 1.0
+                    })
+                })
+                .collect();
+            let refs: Vec<&Array2<f64>> = ws.iter().collect();
+            let design = basis.design(1.7, &xs);
+            let raw = basis.raw(1.7, &xs);
+            let from_design = Holdout::Design(design.view()).squared_errors(&refs, ys.view());
+            let from_raw = Holdout::Raw {
+                raw: raw.view(),
+                basis: &basis,
+                xs: &xs,
+            }
+            .squared_errors(&refs, ys.view());
+            for (k, w) in ws.iter().enumerate() {
+                let direct = (&design.dot(w) - &ys).mapv(|e| e * e).sum();
+                for got in [from_design[k], from_raw[k]] {
+                    assert!(
+                        (got - direct).abs() <= 1e-12 * direct,
+                        "normalized {normalized} affine {affine} weights {k}: {got} vs {direct}"
                     );
                 }
             }

@@ -1290,8 +1290,9 @@ fn fit_best_holdout(
     let walks: Vec<(usize, (f64, Fit), RawRows)> = seeds.into_par_iter().map(walk).collect();
     let mut walks = walks;
     walks.sort_by(|a, b| a.1.1.0.0.total_cmp(&b.1.1.0.0).then(a.0.cmp(&b.0)));
-    // Holdout predictions of every walked candidate at its chosen multiplier (only the
-    // holdout rows' raw values are needed from here on: the refit reuses them).
+    // Holdout predictions of every walked candidate at its chosen multiplier. From here on
+    // only the holdout rows' design matrix is needed (the refit adds its Gram matrix): it
+    // replaces their raw values in `raw.hold`.
     let preds: Vec<Array2<f64>> = walks
         .par_iter_mut()
         .map(|(i, (mult, fit), raw)| {
@@ -1299,7 +1300,10 @@ fn fit_best_holdout(
             let (_, xh) = split(c, sel, hold);
             raw.fit = Array2::zeros((0, c.0.cells()));
             raw.move_to(*mult, c.0, &[], xh);
-            mul_few(c.0.design_of_raw(&raw.hold, xh).view(), fit.0.1.view())
+            if c.0.normalized || c.0.affine {
+                raw.hold = c.0.design_of_raw(&raw.hold, xh).into_owned();
+            }
+            mul_few(raw.hold.view(), fit.0.1.view())
         })
         .collect();
     let share = if BLEND && walks.len() > 1 {
@@ -1315,21 +1319,17 @@ fn fit_best_holdout(
     };
     // The refit on every row with the same absolute ridge (module docs of `regressor`): G and
     // B of the selection rows as scored at the chosen multiplier, plus those of the holdout
-    // rows' raw values moved there and of the remaining rows.
+    // rows (their design matrix made for the predictions above) and of the remaining rows.
     let yy: f64 = ys.iter().map(|v| v * v).sum();
     let refit = |(index, (mult, fit), raw): (usize, (f64, Fit), RawRows)| {
         let (fit, (mut g, mut b)) = fit;
-        let c = &candidates[index];
-        let (basis, xs) = *c;
-        let (_, xh) = split(c, sel, hold);
+        let (basis, xs) = candidates[index];
         let n = basis.n;
         let rest = basis.design(mult, &xs[(sel + hold) * n..rows * n]);
+        // (`raw.hold` holds the holdout rows' design matrix since the predictions.)
         let pieces = [
-            (basis.design_of_raw(&raw.hold, xh), hy),
-            (
-                Cow::Owned(rest),
-                ys.slice_axis(Axis(0), Slice::from(sel + hold..)),
-            ),
+            (raw.hold, hy),
+            (rest, ys.slice_axis(Axis(0), Slice::from(sel + hold..))),
         ];
         for (a, y) in &pieces {
             gram_add(a.view(), &mut g);

@@ -1724,12 +1724,10 @@ mod tests {
         assert!(r_clean >= f64::EPSILON * 0.999, "{r_clean}");
     }
 
-    #[test]
-    fn raw_values_make_the_design_and_move_along_the_walk() {
-        // 2-D rows and 30 centres with unequal widths; one row far from every centre (all of
-        // its values flushed, so the normalized row falls back to its nearest centre).
-        let n = 2;
-        let mut xs: Vec<f64> = (0..200)
+    /// `count` 2-D rows spread over [−2, 2]² (golden-ratio steps) and one row far from
+    /// every centre of [`plane_centres`] (all of its Gaussians flushed).
+    fn plane_rows(count: usize) -> Vec<f64> {
+        let mut xs: Vec<f64> = (0..count)
             .flat_map(|i| {
                 let t = i as f64;
                 [
@@ -1739,9 +1737,23 @@ mod tests {
             })
             .collect();
         xs.extend([400.0, -300.0]);
-        let centres: Vec<f64> = (0..60)
+        xs
+    }
+
+    /// 30 centres in [−2, 2]², irregularly placed (so their nearest-centre widths differ).
+    fn plane_centres() -> Vec<f64> {
+        (0..60)
             .map(|i| ((i * 37) % 61) as f64 / 15.0 - 2.0)
-            .collect();
+            .collect()
+    }
+
+    #[test]
+    fn raw_values_make_the_design_and_move_along_the_walk() {
+        // 2-D rows and 30 centres with unequal widths; one row far from every centre (all of
+        // its values flushed, so the normalized row falls back to its nearest centre).
+        let n = 2;
+        let xs = plane_rows(200);
+        let centres = plane_centres();
         let base = nearest_widths(&centres, n, n + 1);
         for (normalized, affine) in [(false, false), (true, false), (true, true), (false, true)] {
             let basis = Basis {
@@ -1795,21 +1807,10 @@ mod tests {
         // 2-D rows, one far from every centre (its normalized row is its nearest centre's
         // indicator); two targets; three weight matrices scored in one pass.
         let n = 2;
-        let mut xs: Vec<f64> = (0..150)
-            .flat_map(|i| {
-                let t = i as f64;
-                [
-                    (t * 0.618_034) % 1.0 * 4.0 - 2.0,
-                    (t * 0.414_214) % 1.0 * 4.0 - 2.0,
-                ]
-            })
-            .collect();
-        xs.extend([400.0, -300.0]);
+        let xs = plane_rows(150);
         let rows = xs.len() / n;
         let ys = Array2::from_shape_fn((rows, 2), |(r, c)| (r as f64 * 0.37 + c as f64).sin());
-        let centres: Vec<f64> = (0..60)
-            .map(|i| ((i * 37) % 61) as f64 / 15.0 - 2.0)
-            .collect();
+        let centres = plane_centres();
         let base = nearest_widths(&centres, n, n + 1);
         for (normalized, affine) in [(false, false), (true, false), (true, true), (false, true)] {
             let basis = Basis {

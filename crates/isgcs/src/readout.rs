@@ -563,7 +563,7 @@ fn gcv_of_raw(
     loo_rows: usize,
 ) -> Option<(f64, Array2<f64>, f64, f64)> {
     let a = basis.design_of_raw(raw, xs);
-    let (g, b, yy) = normal_from(a.view(), ys, basis.cols());
+    let (g, b, yy) = normal_from(a.view(), ys);
     gcv_of(&g, &b, yy, &[a.view()], ys, ridge, loo_rows)
 }
 
@@ -861,7 +861,6 @@ fn holdout_at(
     let a_fit = basis.design(mult, fit.0);
     let a_hold = basis.design(mult, hold.0);
     holdout_solve(
-        basis,
         a_fit.view(),
         fit.1,
         Holdout::Design(a_hold.view()),
@@ -885,7 +884,6 @@ type Scored = (f64, Array2<f64>, f64, f64);
 /// [`holdout_at`] on given design matrices of the fitted rows and of the holdout rows; also
 /// returns the fitted rows' G and B (the refit adds the other rows to them).
 fn holdout_solve(
-    basis: &Basis,
     a_fit: ArrayView2<'_, f64>,
     y_fit: ArrayView2<'_, f64>,
     a: Holdout<'_>,
@@ -893,7 +891,7 @@ fn holdout_solve(
     hint: Option<f64>,
     scratch: &Scratch,
 ) -> Option<(Scored, Normal)> {
-    let (g, b, _) = normal_from(a_fit, y_fit, basis.cols());
+    let (g, b, _) = normal_from(a_fit, y_fit);
     let hold = ((), y_hold);
     let rows = hold.1.nrows().max(1) as f64;
     // (log10 ridge, error, weights) of the best ridge so far.
@@ -1012,7 +1010,7 @@ impl Holdout<'_> {
                     let row = row.as_slice().expect("raw rows are contiguous");
                     let x = &xs[r * basis.n..(r + 1) * basis.n];
                     let sum = if basis.normalized {
-                        lanes_sum(row)
+                        ndarray::ArrayView1::from(row).sum()
                     } else {
                         1.0
                     };
@@ -1061,46 +1059,15 @@ impl Holdout<'_> {
     }
 }
 
-/// Σ aᵢbᵢ with eight partial sums (vectorized).
+/// Σ aᵢbᵢ (ndarray's unrolled dot product).
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let mut acc = [0.0; 8];
-    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
-    let tail: f64 = ca
-        .remainder()
-        .iter()
-        .zip(cb.remainder())
-        .map(|(x, y)| x * y)
-        .sum();
-    for (x, y) in ca.zip(cb) {
-        for i in 0..8 {
-            acc[i] += x[i] * y[i];
-        }
-    }
-    acc.iter().sum::<f64>() + tail
-}
-
-/// Σ aᵢ with eight partial sums (vectorized).
-fn lanes_sum(a: &[f64]) -> f64 {
-    let mut acc = [0.0; 8];
-    let c = a.chunks_exact(8);
-    let tail: f64 = c.remainder().iter().sum();
-    for x in c {
-        for i in 0..8 {
-            acc[i] += x[i];
-        }
-    }
-    acc.iter().sum::<f64>() + tail
+    ndarray::ArrayView1::from(a).dot(&ndarray::ArrayView1::from(b))
 }
 
 /// G = AᵀA, B = AᵀY and Σ y² of a design matrix A (rows × cols) and targets Y.
-fn normal_from(
-    a: ArrayView2<'_, f64>,
-    ys: ArrayView2<'_, f64>,
-    cols: usize,
-) -> (Array2<f64>, Array2<f64>, f64) {
+fn normal_from(a: ArrayView2<'_, f64>, ys: ArrayView2<'_, f64>) -> (Array2<f64>, Array2<f64>, f64) {
     let g = gram(a);
-    debug_assert_eq!(g.ncols(), cols);
-    let mut b = Array2::zeros((cols, ys.ncols()));
+    let mut b = Array2::zeros((a.ncols(), ys.ncols()));
     ndarray::linalg::general_mat_mul(1.0, &a.t(), &ys, 1.0, &mut b);
     let yy = ys.iter().map(|v| v * v).sum();
     (g, b, yy)
@@ -1203,11 +1170,11 @@ fn fit_best_holdout(
             xs: xh,
         };
         if !basis.normalized && !basis.affine {
-            return holdout_solve(basis, raw.fit.view(), sy, holdout, hy, hint, &scratch);
+            return holdout_solve(raw.fit.view(), sy, holdout, hy, hint, &scratch);
         }
         let mut a_fit = scratch.take(sel, basis.cols());
         basis.design_of_raw_into(&raw.fit, xf, &mut a_fit);
-        let fit = holdout_solve(basis, a_fit.view(), sy, holdout, hy, hint, &scratch);
+        let fit = holdout_solve(a_fit.view(), sy, holdout, hy, hint, &scratch);
         scratch.give(a_fit);
         fit
     };
@@ -1259,6 +1226,7 @@ fn fit_best_holdout(
                 .collect::<Vec<_>>(),
         )
         .collect();
+    // … then the walk (module docs of `regressor`) only from the RACE_KEEP best of them.
     let keep = if mult.is_some() { 1 } else { RACE_KEEP };
     let order = leaders(
         candidates.len(),
@@ -1747,33 +1715,36 @@ mod tests {
             .collect()
     }
 
+    /// Gaussians on [`plane_centres`] (nearest-centre widths), plain and normalized, with and
+    /// without the affine columns.
+    fn plane_bases() -> Vec<Basis> {
+        let centres = plane_centres();
+        let base = nearest_widths(&centres, 2, 3);
+        [(false, false), (true, false), (true, true), (false, true)]
+            .into_iter()
+            .map(|(normalized, affine)| Basis {
+                n: 2,
+                centres: centres.clone(),
+                base: base.clone(),
+                normalized,
+                affine,
+            })
+            .collect()
+    }
+
     #[test]
     fn raw_values_make_the_design_and_move_along_the_walk() {
         // 2-D rows and 30 centres with unequal widths; one row far from every centre (all of
         // its values flushed, so the normalized row falls back to its nearest centre).
         let n = 2;
         let xs = plane_rows(200);
-        let centres = plane_centres();
-        let base = nearest_widths(&centres, n, n + 1);
-        for (normalized, affine) in [(false, false), (true, false), (true, true), (false, true)] {
-            let basis = Basis {
-                n,
-                centres: centres.clone(),
-                base: base.clone(),
-                normalized,
-                affine,
-            };
+        for basis in plane_bases() {
             let raw = basis.raw(1.7, &xs);
             // The design from the raw values is the design, bit for bit.
             assert_eq!(*basis.design_of_raw(&raw, &xs), basis.design(1.7, &xs));
         }
-        let basis = Basis {
-            n,
-            centres,
-            base,
-            normalized: false,
-            affine: false,
-        };
+        // Plain Gaussians without the affine columns.
+        let basis = plane_bases().swap_remove(0);
         let step = std::f64::consts::SQRT_2;
         let (fit, hold) = xs.split_at(120 * n);
         let mut moved = RawRows {
@@ -1810,16 +1781,7 @@ mod tests {
         let xs = plane_rows(150);
         let rows = xs.len() / n;
         let ys = Array2::from_shape_fn((rows, 2), |(r, c)| (r as f64 * 0.37 + c as f64).sin());
-        let centres = plane_centres();
-        let base = nearest_widths(&centres, n, n + 1);
-        for (normalized, affine) in [(false, false), (true, false), (true, true), (false, true)] {
-            let basis = Basis {
-                n,
-                centres: centres.clone(),
-                base: base.clone(),
-                normalized,
-                affine,
-            };
+        for basis in plane_bases() {
             let ws: Vec<Array2<f64>> = (0..3)
                 .map(|k| {
                     Array2::from_shape_fn((basis.cols(), 2), |(j, c)| {
@@ -1842,7 +1804,9 @@ mod tests {
                 for got in [from_design[k], from_raw[k]] {
                     assert!(
                         (got - direct).abs() <= 1e-12 * direct,
-                        "normalized {normalized} affine {affine} weights {k}: {got} vs {direct}"
+                        "normalized {} affine {} weights {k}: {got} vs {direct}",
+                        basis.normalized,
+                        basis.affine
                     );
                 }
             }

@@ -227,6 +227,69 @@ pub struct SolveArgs {
     /// No progress output.
     #[arg(long)]
     pub quiet: bool,
+    /// Lights beside the scene's own.
+    #[command(flatten)]
+    pub lights: LightArgs,
+}
+
+/// Lights given on the command line or in a lighting file, beside the scene's own emitting faces
+/// (3-D scenes; `scene_sampler::lights::lighting` has the conventions, docs/guide/lights.md the
+/// workflow).
+#[derive(Args, Clone, Debug, Default)]
+#[command(next_help_heading = "Lights (3-D scenes)")]
+pub struct LightArgs {
+    /// A sun at compass bearing AZ (0 north, 90 east) and elevation EL (degrees), with normal
+    /// illuminance LUX, and angular diameter DIAM degrees (default 0.53; 0: sharp shadows).
+    #[arg(long, value_name = "AZ,EL,LUX[,DIAM]", value_parser = scene_sampler::lights::lighting::parse_sun, allow_hyphen_values = true)]
+    pub sun: Option<scene_sampler::lights::lighting::SunSpec>,
+    /// A sky: uniform, cie-overcast or cie-clear (needs --sun), with its horizontal (diffuse)
+    /// illuminance LUX.
+    #[arg(long, value_name = "MODEL:LUX", value_parser = scene_sampler::lights::lighting::parse_sky)]
+    pub sky: Option<scene_sampler::lights::lighting::SkySpec>,
+    /// The ground's reflectance below the horizon (Radiance's ground glow: ρ·(sky + sun
+    /// horizontal illuminance)/π); 0 for a black ground.
+    #[arg(long, value_name = "RHO", default_value_t = 0.2, requires = "sky")]
+    pub ground_reflectance: f64,
+    /// The zenith axis of --sun and --sky: y (glTF: north −Z, east +X) or z (Radiance: north +Y,
+    /// east +X).
+    #[arg(long, value_name = "AXIS", default_value = "y", value_parser = ["y", "z"])]
+    pub up: String,
+    /// A point light at X,Y,Z with intensity CD (candela); repeatable.
+    #[arg(long, value_name = "X,Y,Z,CD", value_parser = scene_sampler::lights::lighting::parse_point, allow_hyphen_values = true)]
+    pub point_light: Vec<scene_sampler::lights::lighting::PointSpec>,
+    /// A spot light at X,Y,Z shining along DX,DY,DZ with intensity CD, full within INNER and none
+    /// beyond OUTER degrees of its axis; repeatable.
+    #[arg(long, value_name = "X,Y,Z,DX,DY,DZ,CD,INNER,OUTER", value_parser = scene_sampler::lights::lighting::parse_spot, allow_hyphen_values = true)]
+    pub spot_light: Vec<scene_sampler::lights::lighting::SpotSpec>,
+    /// A JSON lighting file (its format in docs/guide/lights.md); options above add to it.
+    #[arg(long, value_name = "FILE")]
+    pub lights: Option<PathBuf>,
+}
+
+impl LightArgs {
+    /// The lighting these options describe (the file's, then the options').
+    pub fn lighting(&self) -> scene_sampler::Result<scene_sampler::Lighting> {
+        use scene_sampler::lights::lighting::Up;
+        let mut l = match &self.lights {
+            Some(path) => scene_sampler::Lighting::read(path)?,
+            None => scene_sampler::Lighting::default(),
+        };
+        if self.up == "z" {
+            l.up = Up::Z;
+        }
+        if let Some(sun) = &self.sun {
+            l.sun = Some(sun.clone());
+        }
+        if let Some(sky) = &self.sky {
+            l.sky = Some(scene_sampler::lights::lighting::SkySpec {
+                ground_reflectance: self.ground_reflectance,
+                ..sky.clone()
+            });
+        }
+        l.point_lights.extend(self.point_light.iter().cloned());
+        l.spot_lights.extend(self.spot_light.iter().cloned());
+        Ok(l)
+    }
 }
 
 impl SolveArgs {

@@ -18,11 +18,22 @@ pub fn run(args: &SolveArgs) -> Result<()> {
     for w in loaded.warnings() {
         eprintln!("warning: {w}");
     }
+    let lighting = args.lights.lighting()?;
     match loaded {
-        AnyScene::ThreeD(s) => {
+        AnyScene::ThreeD(mut s) => {
+            // ⟨Lights beside the scene's own, then refuse a scene nothing lights⟩
+            lighting.apply(&mut s)?;
+            s.check_lit()?;
             let bvh = SceneBvh::new(&s);
             let domain = Domain::ThreeD(KernelSampler::new(&s, &bvh));
             solve_and_write(&domain, args, &config, started)
+        }
+        AnyScene::Flatland(_) if !lighting.is_empty() => {
+            anyhow::bail!(
+                "{}: lights (--sun, --sky, --point-light, --spot-light, --lights) need a 3-D scene; \
+                 a Flatland scene is lit by its emitting segments",
+                args.scene
+            )
         }
         AnyScene::Flatland(s) => {
             let domain = Domain::Flat(FlatKernelSampler::new(&s));

@@ -34,7 +34,10 @@ use crate::emitters::Emitters;
 use glam::{DVec2, DVec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use scene_sampler::{PowerHeuristic, cosine_halfplane, cosine_hemisphere, uniform_triangle};
+use scene_sampler::{
+    Light, Pick, PowerHeuristic, Receiver, ShadowTarget, cosine_halfplane, cosine_hemisphere,
+    uniform_triangle,
+};
 use std::f64::consts::PI;
 
 /// Result of a gather at one point.
@@ -71,18 +74,18 @@ pub fn gather(
     };
     let mut direct = [0.0; BANDS];
     let mut indirect = [0.0; BANDS];
-    // ⟨Direct light: shadow rays to emitter points, stratified over the emitter choice⟩
+    // ⟨Direct light: shadow rays to light samples, stratified over the light choice⟩
     if !emitters.is_empty() && samples.direct > 0 {
         for i in 0..samples.direct {
             let u0 = (i as f64 + rng.random::<f64>()) / samples.direct as f64;
-            let Some(ef) = emitters.table().pick_by_power(u0) else {
+            let Some(pick) = emitters.lights().pick(u0) else {
                 break;
             };
-            if ef == face {
+            if matches!(pick, Pick::Face(ef) if ef == face) {
                 continue;
             }
             let u = [rng.random::<f64>(), rng.random::<f64>()];
-            if let Some(d) = shadow_ray(domain, &mis, ef, u, (y, n, face)) {
+            if let Some(d) = light_ray(domain, &mis, pick, u, (y, n, face)) {
                 for b in 0..BANDS {
                     direct[b] += d[b];
                 }
@@ -90,11 +93,19 @@ pub fn gather(
         }
     }
     // ⟨Indirect light: cosine rays with B_refl from the networks at their hits; hits on an
-    // emitter are the direct light's second technique⟩
+    // emitter, and rays that escape to a light at infinity, are the direct light's second
+    // technique⟩
     for _ in 0..samples.indirect {
         let u = [rng.random::<f64>(), rng.random::<f64>()];
-        let Some(hit) = cosine_ray(domain, &mis, (y, n, face), u) else {
-            continue;
+        let hit = match cosine_ray(domain, &mis, (y, n, face), u) {
+            Cosine::Hit(hit) => hit,
+            Cosine::Escaped(d) => {
+                for band in 0..BANDS {
+                    direct[band] += d[band];
+                }
+                continue;
+            }
+            Cosine::Lost => continue,
         };
         let b = b_refl(hit.x, hit.nx, hit.face);
         for band in 0..BANDS {
@@ -129,6 +140,69 @@ pub(crate) fn shadow_ray(
     Some(e.map(|e| w * e))
 }
 
+/// The direct light per unit ρ that one shadow ray to the light `pick` (drawn by
+/// [`scene_sampler::LightSet::pick`]), at its sample `u`, brings to the receiver (y, n, face),
+/// MIS-weighted; None when the light does not reach the receiver. A face is [`shadow_ray`]; any
+/// other light is sampled through the [`Light`] interface ([`other_light_ray`]).
+pub(crate) fn light_ray(
+    domain: &Domain,
+    mis: &Mis,
+    pick: Pick,
+    u: [f64; 2],
+    receiver: (DVec3, DVec3, u32),
+) -> Option<Bands> {
+    match pick {
+        Pick::Face(ef) => shadow_ray(domain, mis, ef, u, receiver),
+        Pick::Light(light, probability) => {
+            other_light_ray(domain, mis, light, probability, u, receiver)
+        }
+    }
+}
+
+/// One shadow ray to a sample of `light` (drawn with `probability`): E·g/(P·p) with the power
+/// heuristic against the cosine rays (none for a delta light, which no cosine ray reaches); the
+/// ray goes to the sample's point, or must escape the scene toward its direction. 3-D only.
+fn other_light_ray(
+    domain: &Domain,
+    mis: &Mis,
+    light: &dyn Light,
+    probability: f64,
+    u: [f64; 2],
+    (y, n, face): (DVec3, DVec3, u32),
+) -> Option<Bands> {
+    let Domain::ThreeD(k) = domain else {
+        return None;
+    };
+    let s = light.sample(&Receiver { p: y, n }, u)?;
+    let from = Domain::surface_point_3d(y, n, face);
+    let seen = match s.target {
+        ShadowTarget::Point(x) => k.bvh.visible(&x, &from),
+        ShadowTarget::Direction(w) => k.bvh.escapes(&from, w),
+    };
+    if !seen {
+        return None;
+    }
+    let p = probability * s.pdf;
+    let w = if light.is_delta() {
+        mis.delta(s.g, p)
+    } else {
+        mis.light_density(s.g, p)
+    };
+    Some(s.emission.map(|e| w * e))
+}
+
+/// What a cosine ray found: the front of a surface, light at infinity (it escaped the scene), or
+/// nothing (the back of a face; or it escaped where no light is).
+pub(crate) enum Cosine {
+    /// It hit the front of a surface.
+    Hit(CosineHit),
+    /// It escaped; the direct light per unit ρ the infinite lights give it, weighted by
+    /// [`Mis::cosine_density`].
+    Escaped(Bands),
+    /// It hit the back of a face.
+    Lost,
+}
+
 /// The front of the surface a cosine ray hit, and the direct light per unit ρ it carries when it
 /// is an emitter (weighted by [`Mis::cosine`]).
 pub(crate) struct CosineHit {
@@ -138,19 +212,29 @@ pub(crate) struct CosineHit {
     pub(crate) direct: Bands,
 }
 
-/// One cosine-weighted ray from the receiver (y, n, face) drawn with `u`; None when it leaves the
-/// scene or hits the back of a face (only the front side radiates).
+/// One cosine-weighted ray from the receiver (y, n, face) drawn with `u`: a hit on the front of a
+/// face (only the front side radiates), or the light at infinity where it leaves the scene.
 pub(crate) fn cosine_ray(
     domain: &Domain,
     mis: &Mis,
     (y, n, face): (DVec3, DVec3, u32),
     u: [f64; 2],
-) -> Option<CosineHit> {
-    let (x, nx, fx) = trace_cosine(domain, y, n, face, u)?;
+) -> Cosine {
+    let (x, nx, fx) = match trace_cosine(domain, y, n, face, u) {
+        Ok(hit) => hit,
+        Err(dir) => {
+            let at = Receiver { p: y, n };
+            let lights = mis.emitters.lights();
+            if !lights.has_infinite() {
+                return Cosine::Lost;
+            }
+            return Cosine::Escaped(lights.escaped(&at, dir, |g, p| mis.cosine_density(g, p)));
+        }
+    };
     let d = y - x;
     let cx = nx.dot(d);
     if cx <= 0.0 {
-        return None;
+        return Cosine::Lost;
     }
     let e = domain.emission(fx);
     let mut direct = [0.0; BANDS];
@@ -160,7 +244,7 @@ pub(crate) fn cosine_ray(
             direct = e.map(|e| w * e);
         }
     }
-    Some(CosineHit {
+    Cosine::Hit(CosineHit {
         x,
         nx,
         face: fx,
@@ -182,7 +266,7 @@ impl Mis<'_> {
         if self.emitters.is_empty() {
             0.0
         } else {
-            self.emitters.table().power_density(face)
+            self.emitters.lights().face_density(face)
         }
     }
 
@@ -204,6 +288,27 @@ impl Mis<'_> {
     pub(crate) fn cosine(&self, g: f64, face: u32) -> f64 {
         self.heuristic().cosine(g, self.p_e(face))
     }
+
+    /// [`Mis::light`] for a light sample with cosine density `g` and light density `p` in the
+    /// light's own measure ([`scene_sampler::LightSample`]).
+    pub(crate) fn light_density(&self, g: f64, p: f64) -> f64 {
+        self.heuristic().light(g, p)
+    }
+
+    /// [`Mis::cosine`] for a cosine ray with density `g` that reached a light whose own density
+    /// there is `p` (0: a light that light sampling never draws there: full weight 1/n_c).
+    pub(crate) fn cosine_density(&self, g: f64, p: f64) -> f64 {
+        self.heuristic().cosine(g, p)
+    }
+
+    /// The weight of a delta light's sample (no cosine ray reaches it): g/(n_e·p).
+    pub(crate) fn delta(&self, g: f64, p: f64) -> f64 {
+        PowerHeuristic {
+            light_samples: self.n_e,
+            cosine_samples: 0.0,
+        }
+        .light(g, p)
+    }
 }
 
 /// The point-to-point geometry term for cosines `cx`, `cy` and offset `d` = y − x: cos θx cos θy /
@@ -217,16 +322,8 @@ fn geometry(domain: &Domain, cx: f64, cy: f64, d: DVec3) -> f64 {
 }
 
 /// G(y, x) = cos θ_y cos θ_x/(π r²) of the receiver (y, n) and the surface point (x, n_x), 0
-/// unless they face each other (or it is not finite).
-pub(crate) fn geometry_3d(y: DVec3, n: DVec3, x: DVec3, nx: DVec3) -> f64 {
-    let d = x - y;
-    let (cy, cx, r2) = (n.dot(d), -nx.dot(d), d.length_squared());
-    if cy <= 0.0 || cx <= 0.0 || r2 == 0.0 {
-        return 0.0;
-    }
-    let g = cy * cx / (PI * r2 * r2);
-    if g.is_finite() { g } else { 0.0 }
-}
+/// unless they face each other ([`scene_sampler::lights::geometry`]).
+pub(crate) use scene_sampler::lights::geometry as geometry_3d;
 
 /// An area-uniform point x on emitter `ef` at `u` ∈ [0,1)² (3-D: barycentrics (1 − √u1,
 /// √u1(1 − u2), √u1·u2); Flatland: arc length u1, embedded at z = 0) and G(x, y), when x and the
@@ -274,34 +371,33 @@ pub(crate) fn emitter_geometry(
 }
 
 /// The first surface point (x, n_x, face_x) along a cosine-weighted direction from (y, n, face)
-/// drawn with `u` (3-D: about the hemisphere; Flatland: the half-plane, from u[0]).
+/// drawn with `u` (3-D: about the hemisphere; Flatland: the half-plane, from u[0]); `Err` with the
+/// direction (3-D; zero in Flatland) when the ray leaves the scene.
 fn trace_cosine(
     domain: &Domain,
     y: DVec3,
     n: DVec3,
     face: u32,
     u: [f64; 2],
-) -> Option<(DVec3, DVec3, u32)> {
+) -> Result<(DVec3, DVec3, u32), DVec3> {
     match domain {
         Domain::ThreeD(k) => {
             let dir = cosine_hemisphere(n, u);
             let from = Domain::surface_point_3d(y, n, face);
-            k.bvh.trace_from(&from, dir).map(|h| {
-                let p = k.bvh.surface_point(&h);
-                (p.point, p.normal, p.face)
-            })
+            let h = k.bvh.trace_from(&from, dir).ok_or(dir)?;
+            let p = k.bvh.surface_point(&h);
+            Ok((p.point, p.normal, p.face))
         }
         Domain::Flat(k) => {
             let dir = cosine_halfplane(DVec2::new(n.x, n.y), u[0]);
             let from = Domain::flat_point(y, n, face);
-            k.vis.trace_from(&from, dir).map(|h| {
-                let p = k.vis.surface_point(&h);
-                (
-                    DVec3::new(p.point.x, p.point.y, 0.0),
-                    DVec3::new(p.normal.x, p.normal.y, 0.0),
-                    p.segment,
-                )
-            })
+            let h = k.vis.trace_from(&from, dir).ok_or(DVec3::ZERO)?;
+            let p = k.vis.surface_point(&h);
+            Ok((
+                DVec3::new(p.point.x, p.point.y, 0.0),
+                DVec3::new(p.normal.x, p.normal.y, 0.0),
+                p.segment,
+            ))
         }
     }
 }

@@ -22,7 +22,10 @@
 //! Direct light: each member keeps its own shadow rays; the cosine hits on an emitter count for
 //! member k with the power heuristic between its n_e emitter samples (a = n_e·p_e(x)) and the
 //! shared technique (b = c·Σ_a G(y_a, x), visibility left out: MIS weights need only sum to one),
-//! so shadow-ray and shared-hit weights partition unity at every emitter point.
+//! so shadow-ray and shared-hit weights partition unity at every emitter point. Lights other than
+//! faces (the sun, a sky, point lights: [`scene_sampler::lights`]) are not shared: a member's
+//! shadow rays to them are weighted against its own c cosine rays, and a cosine ray that escapes
+//! the scene brings the infinite lights' light to the member that cast it alone.
 //!
 //! Cost: each hit needs m − 1 visibility rays (one per other member) but only one path, so a
 //! hit seen by a member costs (m − 1 + path)/m rays instead of 1 + path (a path with its shadow rays
@@ -38,12 +41,12 @@
 use crate::config::GatherSamples;
 use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
-use crate::gather::{emitter_geometry, geometry_3d};
+use crate::gather::{Mis, emitter_geometry, geometry_3d, light_ray};
 use crate::paths::{PathGather, PointEstimate, REPLICATES, SobolRay, Vertex};
 use glam::DVec3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use scene_sampler::{KernelSampler, NO_FACE, cosine_hemisphere};
+use scene_sampler::{KernelSampler, NO_FACE, Pick, Receiver, cosine_hemisphere};
 use std::f64::consts::PI;
 
 /// A group's members lie within twice the radius of a disc that holds a full group at the points'
@@ -244,12 +247,26 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
         rho: &[Bands],
         out: &mut [PointEstimate],
     ) {
-        let table = self.emitters.table();
+        let lights = self.emitters.lights();
+        // other lights than faces: MIS against the member's own c cosine rays (module docs)
+        let own = Mis {
+            emitters: self.emitters,
+            n_e: g.n_e as f64,
+            n_c: g.c as f64,
+        };
         for (k, &(y, n, face)) in g.members.iter().enumerate() {
             for i in 0..g.n_e {
                 let a = g.qmc(g.first, k, i).set(0);
-                let Some(ef) = table.pick_by_power(a[0]) else {
-                    continue;
+                let ef = match lights.pick(a[0]) {
+                    Some(Pick::Face(ef)) => ef,
+                    Some(pick) => {
+                        let u = [a[1], a[2]];
+                        if let Some(d) = light_ray(self.domain, &own, pick, u, (y, n, face)) {
+                            add(out, rho, (k, i % g.replicates), d, 1.0);
+                        }
+                        continue;
+                    }
+                    None => continue,
                 };
                 if ef == face {
                     continue;
@@ -259,7 +276,7 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
                     continue;
                 };
                 let f = &kernel.scene.faces[ef as usize];
-                let a = g.n_e as f64 * table.power_density(ef);
+                let a = g.n_e as f64 * lights.face_density(ef);
                 if a <= 0.0 {
                     continue;
                 }
@@ -286,13 +303,27 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
             group_seed ^ (g.first as u64).wrapping_mul(0xD1B5_4A32_D192_ED03),
         );
         let mut weight = vec![0.0; g.members.len()];
+        let lights = self.emitters.lights();
+        let infinite = lights.has_infinite();
+        let own = Mis {
+            emitters: self.emitters,
+            n_e: g.n_e as f64,
+            n_c: g.c as f64,
+        };
         for (a, &(y, n, face)) in g.members.iter().enumerate() {
             for i in 0..g.c {
                 let sobol = g.qmc(g.first_c, a, i);
                 let (sa, sb) = (sobol.set(0), sobol.set(1));
                 let u = SobolRay::cosine(sa, sb);
                 let from = Domain::surface_point_3d(y, n, face);
-                let Some(h) = bvh.trace_from(&from, cosine_hemisphere(n, u)) else {
+                let dir = cosine_hemisphere(n, u);
+                let Some(h) = bvh.trace_from(&from, dir) else {
+                    // escaped: the infinite lights, for the caster alone (module docs)
+                    if infinite {
+                        let at = Receiver { p: y, n };
+                        let t = lights.escaped(&at, dir, |g, p| own.cosine_density(g, p));
+                        add(out, rho, (a, i % g.replicates), t, 1.0);
+                    }
                     continue;
                 };
                 let hit = bvh.surface_point(&h);
@@ -313,7 +344,7 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
                 }
                 let e = scene.faces[hit.face as usize].emission.0;
                 let mis = if e.iter().any(|v| *v != 0.0) {
-                    let a = g.n_e as f64 * self.emitters.table().power_density(hit.face);
+                    let a = g.n_e as f64 * lights.face_density(hit.face);
                     power(a, g.shared_density(x, nx))
                 } else {
                     0.0

@@ -33,11 +33,11 @@ use crate::config::{GatherSamples, PathSettings};
 use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
 use crate::emitters::Emitters;
-use crate::gather::{Gathered, Mis, cosine_ray, shadow_ray};
+use crate::gather::{Cosine, Gathered, Mis, cosine_ray, light_ray};
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use scene_sampler::NO_FACE;
+use scene_sampler::{NO_FACE, Pick, Receiver};
 
 /// Path vertices beyond the output point at which a path stops whatever the roulette says: a
 /// guard, not a budget (a grey ρ = 0.99 furnace loses 0.99^100000 of its light to it; 64, the
@@ -106,6 +106,17 @@ pub struct PathGather<'a, C> {
     networks: C,
     samples: GatherSamples,
     pub(crate) settings: PathSettings,
+}
+
+/// What a camera ray sees first ([`PathGather::estimate_footprint`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum FirstHit {
+    /// The front of a face: the point, its normal, the face.
+    Front(DVec3, DVec3, u32),
+    /// Nothing: the ray leaves the scene in this unit direction (the sky, if any).
+    Escaped(DVec3),
+    /// The back of a face.
+    Back,
 }
 
 /// A surface point: position, unit normal, face ([`NO_FACE`] for a point in the air).
@@ -328,13 +339,14 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
     }
 
     /// One round of `rays` samples of the mean B over a footprint (a pixel): sample i's receiver
-    /// is `receiver(u)` at its own Sobol point u (dimensions 10 and 11; `None`: it sees no front
-    /// face and counts 0), where it gets E, one shadow ray and one cosine ray continued as a path
-    /// (every ray corrected: the networks are not read). A path tracer whose first vertex is the
-    /// receiver; replicates, rounds and seeds as [`PathGather::estimate`].
+    /// is `receiver(u)` at its own Sobol point u (dimensions 10 and 11), where it gets E, one
+    /// shadow ray and one cosine ray continued as a path (every ray corrected: the networks are
+    /// not read); a sample that sees the sky gets the infinite lights' π·L there, one that sees
+    /// the back of a face 0. A path tracer whose first vertex is the receiver; replicates, rounds
+    /// and seeds as [`PathGather::estimate`].
     pub fn estimate_footprint(
         &self,
-        receiver: &impl Fn([f64; 2]) -> Option<(DVec3, DVec3, u32)>,
+        receiver: &impl Fn([f64; 2]) -> FirstHit,
         seed: u64,
         first: usize,
         rays: usize,
@@ -353,8 +365,22 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         for i in 0..rays {
             let u = SobolRay::new(seed, replicates, first, i);
             let pixel = u.set(2);
-            let Some((y, n, face)) = receiver([pixel[2], pixel[3]]) else {
-                continue;
+            let (y, n, face) = match receiver([pixel[2], pixel[3]]) {
+                FirstHit::Front(y, n, face) => (y, n, face),
+                FirstHit::Escaped(dir) => {
+                    // the light at infinity seen directly: its full π·L
+                    let at = Receiver {
+                        p: DVec3::ZERO,
+                        n: dir,
+                    };
+                    let b = self.emitters.lights().escaped(&at, dir, |_, _| 1.0);
+                    for k in 0..BANDS {
+                        share[i % replicates][k] += b[k] / rays as f64;
+                        ray_square[k] += b[k] * b[k] / rays as f64;
+                    }
+                    continue;
+                }
+                FirstHit::Back => continue,
             };
             let z = Vertex { p: y, n, face };
             let (rho, e) = (
@@ -453,19 +479,21 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         out
     }
 
-    /// One shadow ray from z to an emitter point drawn by power from `u0` and on it from `u`: its
-    /// direct light per unit ρ, MIS-weighted ([`shadow_ray`]).
+    /// One shadow ray from z to a light drawn by power from `u0` and sampled from `u`: its
+    /// direct light per unit ρ, MIS-weighted ([`light_ray`]).
     pub(crate) fn next_event(&self, z: &Vertex, mis: &Mis, (u0, u): (f64, [f64; 2])) -> Bands {
-        match self.emitters.table().pick_by_power(u0) {
-            Some(ef) if ef != z.face => {
-                shadow_ray(self.domain, mis, ef, u, (z.p, z.n, z.face)).unwrap_or_default()
+        match self.emitters.lights().pick(u0) {
+            Some(Pick::Face(ef)) if ef == z.face => [0.0; BANDS],
+            Some(pick) => {
+                light_ray(self.domain, mis, pick, u, (z.p, z.n, z.face)).unwrap_or_default()
             }
-            _ => [0.0; BANDS],
+            None => [0.0; BANDS],
         }
     }
 
     /// One cosine-weighted ray from z ([`cosine_ray`]): (the networks' C at its hit, 0 unless
-    /// `networks`; the direct light the hit carries, per one of `mis.n_c` rays; the hit).
+    /// `networks`; the direct light the hit carries — or the infinite lights' where the ray
+    /// escapes — per one of `mis.n_c` rays; the hit).
     pub(crate) fn cosine_ray(
         &self,
         z: &Vertex,
@@ -473,8 +501,10 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         networks: bool,
         u: [f64; 2],
     ) -> (Bands, Bands, Option<Vertex>) {
-        let Some(hit) = cosine_ray(self.domain, mis, (z.p, z.n, z.face), u) else {
-            return ([0.0; BANDS], [0.0; BANDS], None);
+        let hit = match cosine_ray(self.domain, mis, (z.p, z.n, z.face), u) {
+            Cosine::Hit(hit) => hit,
+            Cosine::Escaped(d) => return ([0.0; BANDS], d, None),
+            Cosine::Lost => return ([0.0; BANDS], [0.0; BANDS], None),
         };
         let c = if networks {
             (self.networks)(hit.x, hit.nx).map(|v| v.max(0.0))

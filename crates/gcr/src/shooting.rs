@@ -53,7 +53,11 @@ impl SenderDensity {
     pub fn new(domain: &Domain) -> Self {
         let emitters = Emitters::new(domain);
         Self {
-            alpha: if emitters.is_empty() { 1.0 } else { 0.5 },
+            alpha: if emitters.table().is_empty() {
+                1.0
+            } else {
+                0.5
+            },
             total: domain.total_measure(),
             emitters,
         }

@@ -246,15 +246,42 @@ impl SceneBvh {
     /// otherwise start its ray at t ≈ 0 from that wall, where the f32 test can miss it and the ray escapes
     /// (test `furnace_is_watertight`).
     pub fn trace_from(&self, from: &SurfacePoint, dir: DVec3) -> Option<Hit> {
+        self.closest_hit(self.origin(from, dir), dir, f64::INFINITY, from.face)
+    }
+
+    /// True when a ray leaving surface point `from` in direction `dir` hits nothing (offsets as
+    /// [`SceneBvh::trace_from`]): the shadow ray toward a light at infinity (the sun, the sky).
+    pub fn escapes(&self, from: &SurfacePoint, dir: DVec3) -> bool {
+        let len = dir.length();
+        if len == 0.0 || !len.is_finite() {
+            return false;
+        }
+        let u = dir / len;
+        let back = self.backoff();
+        let ray = Ray::new(
+            v3a(self.origin(from, dir) - u * back - self.centre),
+            v3a(u),
+            back as f32,
+            f32::INFINITY,
+        );
+        self.bvh.ray_traverse_miss(ray, |r, id| {
+            if self.face_of[id] == from.face {
+                f32::INFINITY
+            } else {
+                self.tris[id].intersect(r)
+            }
+        })
+    }
+
+    /// The origin of a ray leaving `from` toward `dir` ([`SceneBvh::trace_from`]'s offsets).
+    fn origin(&self, from: &SurfacePoint, dir: DVec3) -> DVec3 {
         if from.face == NO_FACE {
             // a point on no face: lifted off whatever surface it lies on, towards its normal's side
-            let o = from.point + from.normal * self.eps;
-            return self.closest_hit(o, dir, f64::INFINITY, NO_FACE);
+            return from.point + from.normal * self.eps;
         }
         let to_c = self.centroids[from.face as usize] - from.point;
         let inward = to_c.normalize_or_zero() * self.eps.min(to_c.length());
-        let o = from.point + inward + from.normal * (self.eps * dir.dot(from.normal).signum());
-        self.closest_hit(o, dir, f64::INFINITY, from.face)
+        from.point + inward + from.normal * (self.eps * dir.dot(from.normal).signum())
     }
 
     /// The normal of face `face` (convenience for path tracers: a [`Hit`] plus this is a [`SurfacePoint`]).

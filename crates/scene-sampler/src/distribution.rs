@@ -1,7 +1,7 @@
 //! Sampling building blocks shared by every sampler of the workspace: a discrete distribution
-//! over weighted items (pbrt-v4's `PiecewiseConstant1D`, discrete), the scene's emitters as one
-//! table ([`EmitterTable`]) and the uniform warp onto a triangle. The surface parameterization
-//! ([`crate::SurfaceSampler`]), gcr's gathers and shot rays, and the reference path tracers of
+//! over weighted items (pbrt-v4's `PiecewiseConstant1D`, discrete) and the uniform warp onto a
+//! triangle. The surface parameterization ([`crate::SurfaceSampler`]), the emitter table
+//! ([`crate::EmitterTable`]), gcr's gathers and shot rays, and the reference path tracers of
 //! `baselines` draw through these, so that one table and one warp serve all.
 
 /// A discrete distribution: item i is drawn with probability w_i / Σ w.
@@ -75,94 +75,6 @@ impl Discrete {
     }
 }
 
-/// The emitting faces (segments) of a scene with their measures, drawn in proportion to their
-/// power (measure × mean emission: next-event estimation, the ray gather) or to their area (the
-/// senders of shot rays), each then a point uniform on the chosen face.
-#[derive(Clone, Debug, Default)]
-pub struct EmitterTable {
-    /// Emitting faces, ascending.
-    faces: Vec<u32>,
-    /// Their areas (Flatland: lengths).
-    measure: Vec<f64>,
-    /// Selection ∝ measure × mean emission.
-    by_power: Option<Discrete>,
-    /// Selection ∝ measure.
-    by_area: Option<Discrete>,
-}
-
-impl EmitterTable {
-    /// From `(face, measure, mean emission)` of faces in ascending order; those with zero (or
-    /// non-finite) measure or emission are left out.
-    pub fn new(faces: impl IntoIterator<Item = (u32, f64, f64)>) -> Self {
-        let (mut ids, mut measure, mut power) = (Vec::new(), Vec::new(), Vec::new());
-        for (i, m, e) in faces {
-            if m > 0.0 && e > 0.0 && (m * e).is_finite() {
-                ids.push(i);
-                measure.push(m);
-                power.push(m * e);
-            }
-        }
-        Self {
-            by_power: Discrete::new(&power),
-            by_area: Discrete::new(&measure),
-            faces: ids,
-            measure,
-        }
-    }
-
-    /// The emitting triangles of a 3-D scene.
-    pub fn of_scene(scene: &crate::Scene) -> Self {
-        Self::new(
-            (scene.faces.iter().enumerate()).map(|(i, f)| (i as u32, f.area, f.emission.mean())),
-        )
-    }
-
-    /// The emitting segments of a Flatland scene.
-    pub fn of_flatland(scene: &crate::FlatlandScene) -> Self {
-        Self::new(
-            (scene.segments.iter().enumerate())
-                .map(|(i, s)| (i as u32, s.length, s.emission.mean())),
-        )
-    }
-
-    /// True when nothing emits.
-    pub fn is_empty(&self) -> bool {
-        self.faces.is_empty()
-    }
-
-    /// Whether `face` emits.
-    pub fn emits(&self, face: u32) -> bool {
-        self.faces.binary_search(&face).is_ok()
-    }
-
-    /// Total emitting area (length).
-    pub fn area(&self) -> f64 {
-        self.by_area.as_ref().map_or(0.0, Discrete::total)
-    }
-
-    /// Area (length) density of the power-proportional selection at a point of `face`: the
-    /// probability of choosing the face over its measure; 0 for a face that does not emit.
-    pub fn power_density(&self, face: u32) -> f64 {
-        match (self.faces.binary_search(&face), &self.by_power) {
-            (Ok(i), Some(d)) => d.probability(i) / self.measure[i],
-            _ => 0.0,
-        }
-    }
-
-    /// An emitter face drawn by power from `u ∈ [0,1)` (a uniform point on it then has
-    /// [`EmitterTable::power_density`]); `None` when nothing emits.
-    pub fn pick_by_power(&self, u: f64) -> Option<u32> {
-        let d = self.by_power.as_ref()?;
-        Some(self.faces[d.sample(u)])
-    }
-
-    /// An emitter face drawn by area from `u ∈ [0,1)`; `None` when nothing emits.
-    pub fn pick_by_area(&self, u: f64) -> Option<u32> {
-        let d = self.by_area.as_ref()?;
-        Some(self.faces[d.sample(u)])
-    }
-}
-
 /// Barycentric coordinates (b1, b2) of a point uniform on a triangle from `u ∈ [0,1)²`, by the
 /// square-root warp: with s = √u0, (b1, b2) = (s·(1 − u1), s·u1), the point p0 + b1·(p1 − p0) +
 /// b2·(p2 − p0) (pbrt-v4's `SampleUniformTriangle` up to the order of the corners).
@@ -196,23 +108,6 @@ mod tests {
             .filter(|k| d.sample((*k as f64 + 0.5) / n as f64) == 0)
             .count();
         assert!((hits as f64 / n as f64 - 0.25).abs() < 1e-4);
-    }
-
-    #[test]
-    fn the_emitter_table_draws_by_power_and_by_area() {
-        // faces 1 and 3 emit: areas 1 and 3, emissions 3 and 1 (equal power)
-        let t = EmitterTable::new([(0, 2.0, 0.0), (1, 1.0, 3.0), (3, 3.0, 1.0)]);
-        assert!(!t.is_empty() && t.emits(1) && t.emits(3) && !t.emits(0));
-        assert_eq!(t.area(), 4.0);
-        assert_eq!(t.power_density(1), 0.5);
-        assert!((t.power_density(3) - 0.5 / 3.0).abs() < 1e-15);
-        assert_eq!(t.power_density(0), 0.0);
-        assert_eq!(t.pick_by_power(0.49), Some(1));
-        assert_eq!(t.pick_by_power(0.51), Some(3));
-        assert_eq!(t.pick_by_area(0.24), Some(1));
-        assert_eq!(t.pick_by_area(0.26), Some(3));
-        let none = EmitterTable::new([(0, 1.0, 0.0)]);
-        assert!(none.is_empty() && none.pick_by_power(0.5).is_none() && none.area() == 0.0);
     }
 
     #[test]

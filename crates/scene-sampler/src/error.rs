@@ -145,13 +145,22 @@ pub enum SceneError {
         /// How many degenerate faces were dropped.
         dropped: usize,
     },
-    /// No face emits: the radiosity solution would be zero everywhere.
+    /// Nothing gives light: no face emits and no other light is given (the radiosity solution
+    /// would be zero everywhere).
     #[error(
-        "{source_name}: no face emits light (set Ke in the MTL, emissiveFactor in glTF, `emission` in Flatland JSON)"
+        "{source_name}: nothing gives light: no face emits (set Ke in the MTL, emissiveFactor in glTF, \
+         `emission` in Flatland JSON) and no light is given (3-D scenes: --sun AZ,EL,LUX, --sky MODEL:LUX, \
+         --point-light X,Y,Z,CD or a lighting file --lights FILE; docs/guide/lights.md)"
     )]
     NoEmitter {
         /// The file.
         source_name: String,
+    },
+    /// A lighting description (program options, a lighting file) that gives no valid light.
+    #[error("lighting: {message}")]
+    Lighting {
+        /// What is wrong, naming the value.
+        message: String,
     },
     /// A probe line that is not `x y z nx ny nz` (3-D) or `x y nx ny` (Flatland).
     #[error("{source_name}:{line}: bad probe: {message}")]

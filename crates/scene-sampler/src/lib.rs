@@ -15,6 +15,8 @@
 //! * **Provenance** — [`Face::part`], [`Scene::parts`] and [`Scene::gltf`] ([`provenance`]): which input
 //!   primitive of which node each face came from, and the glTF node tree, so that outputs can keep the
 //!   input's structure.
+//! * **Lights** — [`lights`]: one interface ([`Light`]) for the sun, skies, point and spot lights beside
+//!   the emitting faces ([`EmitterTable`]), and light selection ([`LightSet`]).
 //! * **Probes** — [`read_probes`] / [`Scene::snap_probe`]: the points where all solvers report radiosity.
 //!
 //! # Units
@@ -37,6 +39,7 @@ pub mod distribution;
 pub mod error;
 pub mod flatland;
 pub mod kernel;
+pub mod lights;
 pub mod load;
 pub mod mis;
 pub mod nearest;
@@ -49,10 +52,14 @@ pub mod texture;
 
 pub use builtin::{BUILTIN_NAMES, builtin, is_builtin, nearest_builtin, random_boxes};
 pub use bvh::{BuildQuality, FlatHit, FlatVisibility, Hit, SceneBvh};
-pub use distribution::{Discrete, EmitterTable, uniform_triangle};
+pub use distribution::{Discrete, uniform_triangle};
 pub use error::{Result, SceneError};
 pub use flatland::{FlatView, FlatlandScene, Segment};
 pub use kernel::{FlatKernelSample, FlatKernelSampler, KernelSample, KernelSampler, Samples};
+pub use lights::{
+    EmitterTable, Light, LightSample, LightSet, Lighting, Pick, PointLight, Receiver, ShadowTarget,
+    Sky, SkyModel, Sun,
+};
 pub use load::{
     load, load_flatland, load_gltf, load_obj, load_or_builtin, to_gltf, to_obj, write_flatland,
     write_gltf, write_obj,
@@ -65,7 +72,7 @@ pub use probe::{
 pub use provenance::{GltfMaterial, GltfMesh, GltfNode, GltfSource, NodeTransform, Part};
 pub use sample::{
     FlatPoint, FlatSampler, NO_FACE, SurfacePoint, SurfaceSampler, cosine_halfplane,
-    cosine_hemisphere, orthonormal_basis,
+    cosine_hemisphere, orthonormal_basis, uniform_cone, uniform_cone_pdf,
 };
 pub use scene::{Camera, Face, RHO_MAX, Scene};
 pub use spectrum::{BANDS, Bands, Spectrum};

@@ -403,6 +403,23 @@ pub fn cosine_hemisphere(n: DVec3, u: [f64; 2]) -> DVec3 {
     (t * x + b * y + n * z).normalize()
 }
 
+/// A direction uniform in the cone of half-angle α about the unit `axis`, given by
+/// `one_minus_cos` = 1 − cos α (pass it as 2 sin²(α/2) so that a sun's 0.27° keeps its digits):
+/// density 1/(2π (1 − cos α)) per steradian ([`uniform_cone_pdf`]; pbrt-v4's `SampleUniformCone`).
+pub fn uniform_cone(axis: DVec3, one_minus_cos: f64, u: [f64; 2]) -> DVec3 {
+    // 1 − cos θ uniform on [0, 1 − cos α]; sin θ from it without cancellation
+    let omc = u[0].clamp(0.0, 1.0) * one_minus_cos;
+    let sin = (omc * (2.0 - omc)).max(0.0).sqrt();
+    let phi = 2.0 * std::f64::consts::PI * u[1];
+    let (t, b) = orthonormal_basis(axis);
+    (t * (sin * phi.cos()) + b * (sin * phi.sin()) + axis * (1.0 - omc)).normalize()
+}
+
+/// The solid-angle density of [`uniform_cone`]: 1/(2π (1 − cos α)).
+pub fn uniform_cone_pdf(one_minus_cos: f64) -> f64 {
+    1.0 / (2.0 * std::f64::consts::PI * one_minus_cos)
+}
+
 /// Flatland analogue of [`cosine_hemisphere`]: a direction in the half-plane around unit `n` with density
 /// `cos θ / 2` per radian (θ from the normal), i.e. `sin θ = 2u − 1`. The Flatland kernel
 /// `cos θx cos θy / (2r)` integrates to 1 over the half-plane with exactly this measure.

@@ -1,9 +1,10 @@
 //! The 3-D scene model: triangles with per-face reflectance and emission, validated on construction.
 
 use crate::provenance::{GltfSource, Part};
-use crate::{FaceTexture, Result, SceneError, Spectrum, Texture};
+use crate::{FaceTexture, Light, Result, SceneError, Spectrum, Texture};
 use glam::DVec3;
 use std::collections::HashMap;
+use std::sync::Arc;
 
 /// A pinhole camera for images of a scene (right-handed, `up` roughly perpendicular to the view direction).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -182,6 +183,9 @@ pub struct Scene {
     /// The glTF document the scene came from (node tree, mesh and material names), for writers
     /// that give an output the input's structure; `None` for OBJ, built-ins and [`Scene::new`].
     pub gltf: Option<Box<GltfSource>>,
+    /// Lights other than the emitting faces (sun, sky, point and spot lights: [`crate::lights`]),
+    /// from the input (glTF `KHR_lights_punctual`) or given by the caller before solving.
+    pub lights: Vec<Arc<dyn Light>>,
 }
 
 impl Scene {
@@ -192,7 +196,8 @@ impl Scene {
     /// * Degenerate faces (area ≤ 1e-14 · diagonal², or zero normal): dropped, with a count in `warnings`;
     ///   error if nothing remains.
     /// * A bounding-box diagonal outside `[1e-9, 1e12]` (the f32 BVH's range): error.
-    /// * No face with positive emission: error.
+    /// * No face with positive emission: allowed (lights may be added to [`Scene::lights`]); the
+    ///   solvers refuse a scene that nothing lights ([`Scene::check_lit`]).
     /// * Coincident duplicate faces (same vertices and winding): merged with a warning naming them, or an
     ///   error if their materials differ (see `merge_duplicates`).
     /// * Inconsistent windings (two faces of one object sharing an edge traversed in the same direction):
@@ -271,11 +276,6 @@ impl Scene {
                 diagonal,
             });
         }
-        if !kept.iter().any(|f| f.emission.max() > 0.0) {
-            return Err(SceneError::NoEmitter {
-                source_name: source.into(),
-            });
-        }
         let mut objects = objects;
         let max_obj = kept
             .iter()
@@ -322,7 +322,19 @@ impl Scene {
             textures: Vec::new(),
             parts,
             gltf: None,
+            lights: Vec::new(),
         })
+    }
+
+    /// Errs ([`SceneError::NoEmitter`], with how to light the scene) when nothing gives light: no
+    /// face emits and no light of positive power is in [`Scene::lights`].
+    pub fn check_lit(&self) -> Result<()> {
+        if crate::LightSet::of_scene(self).is_empty() {
+            return Err(SceneError::NoEmitter {
+                source_name: self.source.clone(),
+            });
+        }
+        Ok(())
     }
 
     /// Attaches the textures the faces' [`Face::texture`] mappings index (a loader's last step):

@@ -244,9 +244,17 @@ fn malformed_inputs_give_errors() {
         "{:?}",
         s.warnings
     );
-    // no emitter
-    let e = obj("usemtl white\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "dark").unwrap_err();
+    // no emitter: loads (lights may be given), and is refused by the check the solvers make,
+    // with a message that says how to light it
+    let dark = obj("usemtl white\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "dark").unwrap();
+    let e = dark.check_lit().unwrap_err();
     assert!(matches!(e, SceneError::NoEmitter { .. }), "{e}");
+    assert!(e.to_string().contains("--sun"), "{e}");
+    let mut lit = dark.clone();
+    lit.lights.push(std::sync::Arc::new(
+        scene_sampler::Sun::new(glam::DVec3::Z, [1.0; 3], 0.53).unwrap(),
+    ));
+    lit.check_lit().unwrap();
     // degenerate faces dropped with a count; all degenerate: error
     let s = obj(
         "usemtl light\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\n",

@@ -372,7 +372,10 @@ fn gltf_primitive_modes_and_default_material() {
     let s = load_gltf(write(&d, "fan.gltf", &doc(6, ", \"material\": 0"))).unwrap();
     assert_eq!(s.faces.len(), 2);
     // the default material is white (ρ = 1): clamped, named; it does not emit, so the scene is refused
-    // for having no emitter — the message for that is still the emitter's
-    let e = load_gltf(write(&d, "default.gltf", &doc(4, ""))).unwrap_err();
+    // for having no light — the message for that is still the light's
+    let e = load_gltf(write(&d, "default.gltf", &doc(4, "")))
+        .unwrap()
+        .check_lit()
+        .unwrap_err();
     assert!(matches!(e, SceneError::NoEmitter { .. }), "{e}");
 }

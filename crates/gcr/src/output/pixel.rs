@@ -27,7 +27,7 @@ use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::emitters::Emitters;
 use crate::gather::Gathered;
-use crate::paths::PathGather;
+use crate::paths::{FirstHit, PathGather};
 use crate::pipeline::{GatherError, GatherStats, radiosity_at_points};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -221,8 +221,9 @@ fn render_footprints(
             let sx = (px + u[0]) / f64::from(width);
             let sy = (py + u[1]) / f64::from(height);
             match first_hit(sx, sy) {
-                Some((x, nx, face, true)) => Some((x, nx, face)),
-                _ => None,
+                Some((x, nx, face, true)) => FirstHit::Front(x, nx, face),
+                Some(_) => FirstHit::Back,
+                None => FirstHit::Escaped(camera.ray_direction(sx, sy, aspect).normalize()),
             }
         };
         gather.estimate_footprint(&receiver, seed(p), first, rays)

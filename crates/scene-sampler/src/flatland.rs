@@ -330,3 +330,21 @@ impl JsonValue {
         }
     }
 }
+
+/// The scene's lights, written beside the scene (the lights module knows no scene).
+impl crate::EmitterTable {
+    /// The emitting segments of a Flatland scene.
+    pub fn of_flatland(scene: &FlatlandScene) -> Self {
+        Self::new(
+            (scene.segments.iter().enumerate())
+                .map(|(i, s)| (i as u32, s.length, s.emission.mean())),
+        )
+    }
+}
+
+impl crate::LightSet {
+    /// The emitting segments of a Flatland scene (its only lights).
+    pub fn of_flatland(scene: &FlatlandScene) -> Self {
+        Self::new(crate::EmitterTable::of_flatland(scene), Vec::new(), 0.0)
+    }
+}

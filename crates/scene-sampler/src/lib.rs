@@ -49,6 +49,7 @@ pub mod sample;
 pub mod scene;
 pub mod spectrum;
 pub mod texture;
+pub mod warp;
 
 pub use builtin::{BUILTIN_NAMES, builtin, is_builtin, nearest_builtin, random_boxes};
 pub use bvh::{BuildQuality, FlatHit, FlatVisibility, Hit, SceneBvh};
@@ -70,13 +71,13 @@ pub use probe::{
     FlatProbe, Probe, ProbeSnapper, parse_flat_probes, parse_probes, read_flat_probes, read_probes,
 };
 pub use provenance::{GltfMaterial, GltfMesh, GltfNode, GltfSource, NodeTransform, Part};
-pub use sample::{
-    FlatPoint, FlatSampler, NO_FACE, SurfacePoint, SurfaceSampler, cosine_halfplane,
-    cosine_hemisphere, orthonormal_basis, uniform_cone, uniform_cone_pdf,
-};
+pub use sample::{FlatPoint, FlatSampler, NO_FACE, SurfacePoint, SurfaceSampler};
 pub use scene::{Camera, Face, RHO_MAX, Scene};
 pub use spectrum::{BANDS, Bands, Spectrum};
 pub use texture::{FaceTexture, Texture, Wrap, srgb_to_linear};
+pub use warp::{
+    cosine_halfplane, cosine_hemisphere, orthonormal_basis, uniform_cone, uniform_cone_pdf,
+};
 
 /// A scene of either dimension, as returned by [`load`] and [`builtin`].
 #[derive(Clone, Debug)]

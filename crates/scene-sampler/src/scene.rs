@@ -1,7 +1,7 @@
 //! The 3-D scene model: triangles with per-face reflectance and emission, validated on construction.
 
 use crate::provenance::{GltfSource, Part};
-use crate::{FaceTexture, Light, Result, SceneError, Spectrum, Texture};
+use crate::{EmitterTable, FaceTexture, Light, LightSet, Result, SceneError, Spectrum, Texture};
 use glam::DVec3;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -329,7 +329,7 @@ impl Scene {
     /// Errs ([`SceneError::NoEmitter`], with how to light the scene) when nothing gives light: no
     /// face emits and no light of positive power is in [`Scene::lights`].
     pub fn check_lit(&self) -> Result<()> {
-        if crate::LightSet::of_scene(self).is_empty() {
+        if LightSet::of_scene(self).is_empty() {
             return Err(SceneError::NoEmitter {
                 source_name: self.source.clone(),
             });
@@ -583,4 +583,26 @@ fn inconsistent_windings(faces: &[Face]) -> Vec<(u32, usize)> {
         }
     }
     bad.into_iter().collect()
+}
+
+/// The scene's lights, written beside the scene (the lights module knows no scene).
+impl EmitterTable {
+    /// The emitting triangles of a 3-D scene.
+    pub fn of_scene(scene: &Scene) -> Self {
+        Self::new(
+            (scene.faces.iter().enumerate()).map(|(i, f)| (i as u32, f.area, f.emission.mean())),
+        )
+    }
+}
+
+impl LightSet {
+    /// The lights of a 3-D scene: its emitting faces and [`Scene::lights`].
+    pub fn of_scene(scene: &Scene) -> Self {
+        let (lo, hi) = scene.bounds;
+        Self::new(
+            EmitterTable::of_scene(scene),
+            scene.lights.clone(),
+            0.5 * (hi - lo).length(),
+        )
+    }
 }

@@ -5,8 +5,7 @@
 //! cosine ray that hits the face is weighted against that density. Shot rays (the networks'
 //! training) draw their senders from the same table by area.
 
-use super::{LightSample, Receiver, ShadowTarget};
-use crate::{Discrete, Scene, SurfacePoint, uniform_triangle};
+use crate::Discrete;
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -43,21 +42,6 @@ impl EmitterTable {
             faces: ids,
             measure,
         }
-    }
-
-    /// The emitting triangles of a 3-D scene.
-    pub fn of_scene(scene: &crate::Scene) -> Self {
-        Self::new(
-            (scene.faces.iter().enumerate()).map(|(i, f)| (i as u32, f.area, f.emission.mean())),
-        )
-    }
-
-    /// The emitting segments of a Flatland scene.
-    pub fn of_flatland(scene: &crate::FlatlandScene) -> Self {
-        Self::new(
-            (scene.segments.iter().enumerate())
-                .map(|(i, s)| (i as u32, s.length, s.emission.mean())),
-        )
     }
 
     /// True when nothing emits.
@@ -114,35 +98,6 @@ pub fn geometry(y: DVec3, n: DVec3, x: DVec3, nx: DVec3) -> f64 {
     }
     let g = cy * cx / (PI * r2 * r2);
     if g.is_finite() { g } else { 0.0 }
-}
-
-impl EmitterTable {
-    /// A sample of the emitting face `face` of `scene` toward the receiver: x uniform on the face
-    /// from `u` ([`uniform_triangle`]), its E, G(y, x) and the area density `density` the caller's
-    /// selection gave the face ([`crate::LightSet::face_density`]); `None` when x and the receiver
-    /// do not face each other. Visibility is the caller's shadow ray.
-    pub fn sample_face(
-        scene: &Scene,
-        face: u32,
-        u: [f64; 2],
-        at: &Receiver,
-        density: f64,
-    ) -> Option<LightSample> {
-        let f = &scene.faces[face as usize];
-        let [b1, b2] = uniform_triangle(u);
-        let x = f.point(b1, b2);
-        let g = geometry(at.p, at.n, x, f.normal);
-        (g != 0.0).then_some(LightSample {
-            target: ShadowTarget::Point(SurfacePoint {
-                point: x,
-                normal: f.normal,
-                face,
-            }),
-            emission: f.emission.0,
-            g,
-            pdf: density,
-        })
-    }
 }
 
 #[cfg(test)]

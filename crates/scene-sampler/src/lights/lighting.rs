@@ -1,6 +1,7 @@
 //! Where lights come from when the scene file has none of its own: a description — program
 //! options (`gcr solve --sun 135,40,80000 --sky cie-overcast:12000`) or a small JSON lighting file
-//! (`--lights lights.json`) — turned into [`crate::Light`]s on a scene ([`Lighting::apply`]).
+//! (`--lights lights.json`) — turned into [`crate::Light`]s for [`crate::Scene::lights`]
+//! ([`Lighting::lights`]).
 //!
 //! Units are the scene's: with photometric values (lux, candela) B comes out in lm/m² (lux of
 //! exitance), as Radiance's `gensky` and glTF's punctual lights give them.
@@ -19,7 +20,7 @@
 //! ```
 
 use super::{Light, PointLight, Sky, SkyModel, Sun};
-use crate::{BANDS, Result, Scene, SceneError};
+use crate::{BANDS, Result, SceneError};
 use glam::DVec3;
 use serde::Deserialize;
 use std::f64::consts::PI;
@@ -222,12 +223,6 @@ impl Lighting {
             out.push(Arc::new(light));
         }
         Ok(out)
-    }
-
-    /// Adds the description's lights to `scene` ([`Scene::lights`]).
-    pub fn apply(&self, scene: &mut Scene) -> Result<()> {
-        scene.lights.extend(self.lights()?);
-        Ok(())
     }
 }
 

@@ -21,6 +21,9 @@
 //! A scene holds its lights other than faces in [`crate::Scene::lights`] as `Arc<dyn Light>`; a new
 //! light type is its own file implementing [`Light`] and one line that creates it (the lighting
 //! options, a loader). [`LightSet`] (`selection.rs`) draws among the faces and the other lights.
+//! This module knows no scene (a scene holds lights: the scene depends on it, not the reverse);
+//! the constructors from a scene, `EmitterTable::of_scene` and `LightSet::of_scene` (and their
+//! Flatland twins), are written beside the scenes.
 //!
 //! # Units
 //! The solvers compute radiosity B (exitance). A light's values are given as the exitance a
@@ -44,7 +47,7 @@ pub use selection::{LightSet, Pick};
 pub use sky::{Sky, SkyModel};
 pub use sun::Sun;
 
-use crate::{Bands, SurfacePoint};
+use crate::Bands;
 use glam::DVec3;
 use std::fmt::Debug;
 use std::panic::RefUnwindSafe;
@@ -61,9 +64,16 @@ pub struct Receiver {
 /// Where a light sample's shadow ray goes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ShadowTarget {
-    /// To a point of space: on a face (the face is not an occluder), or a point light
-    /// ([`crate::NO_FACE`], zero normal).
-    Point(SurfacePoint),
+    /// To a point of space: on a face (which is then not an occluder), or a point light (no
+    /// face, zero normal).
+    Point {
+        /// The point.
+        point: DVec3,
+        /// The unit normal of its face (zero for a point light).
+        normal: DVec3,
+        /// Its face, if it lies on one.
+        face: Option<u32>,
+    },
     /// Infinitely far along a unit direction: the ray must escape the scene.
     Direction(DVec3),
 }

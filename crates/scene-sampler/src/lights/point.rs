@@ -5,7 +5,7 @@
 //! (the glTF extension's reference implementation). A delta light: only shadow rays reach it.
 
 use super::{Light, LightSample, Receiver, ShadowTarget, toward};
-use crate::{BANDS, Bands, NO_FACE, SurfacePoint};
+use crate::{BANDS, Bands};
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -76,11 +76,11 @@ impl Light for PointLight {
         let (w, r2, cy) = toward(at, self.position)?;
         let f = self.falloff(-w);
         (f > 0.0).then(|| LightSample {
-            target: ShadowTarget::Point(SurfacePoint {
+            target: ShadowTarget::Point {
                 point: self.position,
                 normal: DVec3::ZERO,
-                face: NO_FACE,
-            }),
+                face: None,
+            },
             emission: self.intensity.map(|i| PI * i * f),
             g: cy / (PI * r2),
             pdf: 1.0,

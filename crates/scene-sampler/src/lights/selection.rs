@@ -8,7 +8,7 @@
 //! same face for the same random number, the same density.
 
 use super::{EmitterTable, Light, Receiver};
-use crate::{BANDS, Bands, Discrete, FlatlandScene, Scene};
+use crate::{BANDS, Bands, Discrete};
 use glam::DVec3;
 use std::f64::consts::PI;
 use std::sync::Arc;
@@ -59,21 +59,6 @@ impl LightSet {
             select,
             face_share,
         }
-    }
-
-    /// The lights of a 3-D scene: its emitting faces and [`Scene::lights`].
-    pub fn of_scene(scene: &Scene) -> Self {
-        let (lo, hi) = scene.bounds;
-        Self::new(
-            EmitterTable::of_scene(scene),
-            scene.lights.clone(),
-            0.5 * (hi - lo).length(),
-        )
-    }
-
-    /// The emitting segments of a Flatland scene (its only lights).
-    pub fn of_flatland(scene: &FlatlandScene) -> Self {
-        Self::new(EmitterTable::of_flatland(scene), Vec::new(), 0.0)
     }
 
     /// True when nothing gives light: no emitting face, and no other light of positive power.

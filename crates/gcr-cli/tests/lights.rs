@@ -1,0 +1,131 @@
+//! `gcr solve`'s light options end to end: a scene no face lights is refused with how to light it,
+//! the options light it (the work plane of the shipped side-lit room under an overcast sky, a
+//! point light's E = I/d²), and bad light options fail with a message and a non-zero exit.
+
+use std::process::Command;
+
+fn gcr(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_gcr"))
+        .args(args)
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+        .output()
+        .expect("gcr runs")
+}
+
+fn tmp(name: &str) -> String {
+    let dir = std::env::temp_dir().join(format!("gcr-cli-lights-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name).display().to_string()
+}
+
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn an_unlit_scene_is_refused_and_options_light_it() {
+    let (probes, out) = (tmp("floor.txt"), tmp("out.txt"));
+    // a point in the air 0.5 m below a point light, facing up: E = I/d² direct
+    std::fs::write(&probes, "2 2.0 2.5 0 1 0\n").unwrap();
+    let base = [
+        "solve",
+        "scenes/side-lit-room.obj",
+        "--probes",
+        &probes,
+        "--probe-out",
+        &out,
+        "--probe-quantity",
+        "irradiance",
+    ];
+    let o = gcr(&base);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("nothing gives light") && stderr(&o).contains("--sun"),
+        "{}",
+        stderr(&o)
+    );
+    let mut lit = base.to_vec();
+    lit.extend(["--point-light", "2,2.5,2.5,100", "--quality", "final"]);
+    let o = gcr(&lit);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e: f64 = std::fs::read_to_string(&out)
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    // direct: 100/0.25 = 400, plus the light the walls reflect onto it: more, not less
+    assert!(e > 400.0 && e < 800.0, "{e}");
+}
+
+#[test]
+fn a_daylit_work_plane_gets_daylight_factors() {
+    let out = tmp("plane.txt");
+    let o = gcr(&[
+        "solve",
+        "scenes/side-lit-room.obj",
+        "--sky",
+        "cie-overcast:10000",
+        "--probes",
+        "scenes/side-lit-room.pts",
+        "--probe-out",
+        &out,
+        "--probe-quantity",
+        "irradiance",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e: Vec<f64> = std::fs::read_to_string(&out)
+        .unwrap()
+        .lines()
+        .map(|l| l.split_whitespace().next().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(e.len(), 20);
+    // daylight factors (E / 10 000 lux): 0.2 to 50 percent, more near the window (z = 4.5) than at
+    // the back (z = 0.5) in every column
+    for col in e.chunks(5) {
+        assert!(col.iter().all(|v| (20.0..5000.0).contains(v)), "{col:?}");
+        assert!(col[4] > 2.0 * col[0], "{col:?}");
+    }
+}
+
+#[test]
+fn bad_light_options_fail_with_a_message() {
+    let cases: [(&[&str], &str); 5] = [
+        (&["--sun", "0,-5,1000"], "elevation"),
+        (&["--sun", "1,2"], "AZIMUTH,ELEVATION"),
+        (&["--sky", "foggy:100"], "unknown sky"),
+        (&["--sky", "cie-clear:100"], "needs a sun"),
+        (&["--spot-light", "0,1,0,0,-1,0,10,40,30"], "spot light"),
+    ];
+    for (extra, want) in cases {
+        let mut args = vec!["solve", "scenes/side-lit-room.obj", "--quiet"];
+        args.extend_from_slice(extra);
+        let o = gcr(&args);
+        assert!(
+            !o.status.success() && o.status.code() != Some(101),
+            "{extra:?}"
+        );
+        assert!(stderr(&o).contains(want), "{extra:?}: {}", stderr(&o));
+    }
+    let o = gcr(&["solve", "flatland-corner", "--sun", "0,45,1000", "--quiet"]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("need a 3-D scene"),
+        "{}",
+        stderr(&o)
+    );
+    let file = tmp("bad.json");
+    std::fs::write(&file, r#"{"sunn": {}}"#).unwrap();
+    let o = gcr(&[
+        "solve",
+        "scenes/side-lit-room.obj",
+        "--lights",
+        &file,
+        "--quiet",
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("unknown field"),
+        "{}",
+        stderr(&o)
+    );
+}

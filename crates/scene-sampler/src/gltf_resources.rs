@@ -180,10 +180,18 @@ pub(crate) fn decode_image(
         _ => None,
     };
     let what = format!("image {}", image.index());
-    let (bytes, format) = match image.source() {
+    // the gltf crate panics on an image with neither a `uri` nor a `bufferView` and `mimeType`
+    // (its validation lets them through)
+    let image_source = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| image.source()))
+        .map_err(|_| SceneError::Parse {
+            source_name: source.into(),
+            message: format!("{what}: neither a `uri` nor a `bufferView` with a `mimeType`"),
+        })?;
+    let (bytes, format) = match image_source {
         gltf::image::Source::View { view, mime_type } => {
             let data = buffers.get(view.buffer().index());
-            let bytes = data.and_then(|d| d.get(view.offset()..view.offset() + view.length()));
+            let end = view.offset().checked_add(view.length());
+            let bytes = data.zip(end).and_then(|(d, end)| d.get(view.offset()..end));
             let bytes = bytes.ok_or_else(|| SceneError::Parse {
                 source_name: source.into(),
                 message: format!("{what}: buffer view {} is outside its buffer", view.index()),

@@ -409,6 +409,25 @@ fn percent_decoding_to_invalid_utf8_is_an_error() {
     assert!(err.contains("%c3%28.png") && err.contains("UTF-8"), "{err}");
 }
 
+/// An image entry with neither a `uri` nor a `bufferView` with a `mimeType` (the gltf crate panics
+/// on it when asked for its source) is an error, not a panic.
+#[test]
+fn image_entries_without_a_source_are_errors() {
+    let (_, dir) = sandbox("nosource");
+    for image in [r#"{}"#, r#"{"bufferView": 0}"#] {
+        let doc = gltf_doc("geo.bin", "t.png", &[])
+            .replace(r#"[{"uri":"t.png"}]"#, &format!("[{image}]"));
+        assert!(doc.contains(&format!("[{image}]")), "{doc}");
+        let path = write_gltf(&dir, "geo.bin", "t.png", &[]);
+        std::fs::write(&path, doc).unwrap();
+        let err = load_err(&path);
+        assert!(
+            err.contains("image 0: neither a `uri` nor a `bufferView`"),
+            "{err}"
+        );
+    }
+}
+
 // ⟨Item 2: regular files only, size-bounded⟩
 
 /// A FIFO inside the folder named as a buffer, a material library, a texture or a probe file is

@@ -8,6 +8,8 @@ use gcr::output::{
 use gcr::{
     GatherMode, GatherSamples, NetworkTarget, OutputFit, PathSettings, SolveConfig, SurfaceClusters,
 };
+use scene_sampler::LoadOptions;
+use scene_sampler::confine::{DEFAULT_MAX_FILE_BYTES, DEFAULT_MAX_TEXTURE_BYTES};
 use std::path::PathBuf;
 
 /// The paths gather's first round with a target error: enough points for a first estimate of
@@ -227,6 +229,9 @@ pub struct SolveArgs {
     /// No progress output.
     #[arg(long)]
     pub quiet: bool,
+    /// What the scene file may make gcr read.
+    #[command(flatten)]
+    pub input: InputLimits,
     /// Lights beside the scene's own.
     #[command(flatten)]
     pub lights: LightArgs,
@@ -419,6 +424,38 @@ pub struct ReferenceArgs {
     /// Seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// What the scene file may make gcr read.
+    #[command(flatten)]
+    pub input: InputLimits,
+}
+
+/// What a scene file may make `gcr` read (docs/bad-input.md, "Running on untrusted scenes"): by
+/// default the files it names inside its own folder only, regular files of at most 2 GiB each, and
+/// at most 1 GiB of decoded textures.
+#[derive(Args, Clone, Copy, Debug)]
+pub struct InputLimits {
+    /// Let the scene read files it names outside its own folder (`../`, absolute paths, `file://`
+    /// URIs, symbolic links leading out): only for scenes you trust.
+    #[arg(long)]
+    pub allow_outside_files: bool,
+    /// The largest file read for the scene (the scene file, its buffers, images, material
+    /// libraries, textures), in MiB.
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_MAX_FILE_BYTES >> 20)]
+    pub max_file_mib: u64,
+    /// The largest memory the scene's textures may take decoded (12 bytes per texel), in MiB.
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_MAX_TEXTURE_BYTES >> 20)]
+    pub max_texture_mib: u64,
+}
+
+impl InputLimits {
+    /// The loader's options.
+    pub fn load_options(&self) -> LoadOptions {
+        LoadOptions {
+            allow_outside: self.allow_outside_files,
+            max_file_bytes: self.max_file_mib.saturating_mul(1 << 20),
+            max_texture_bytes: self.max_texture_mib.saturating_mul(1 << 20),
+        }
+    }
 }
 
 /// `X,Y,Z` as three numbers (NaN and infinities parse; the camera check rejects them).

@@ -22,7 +22,7 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
     if let Some(std_out) = &args.std_out {
         check_target(std_out, "standard error", None)?;
     }
-    let loaded = scene_sampler::load_or_builtin(&args.scene)
+    let loaded = scene_sampler::load_or_builtin_with(&args.scene, &args.input.load_options())
         .with_context(|| format!("loading scene `{}`", args.scene))?;
     for w in loaded.warnings() {
         eprintln!("warning: {w}");

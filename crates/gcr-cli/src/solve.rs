@@ -13,7 +13,7 @@ pub fn run(args: &SolveArgs) -> Result<()> {
     let config = args.config();
     config.validate()?;
     let started = Instant::now();
-    let loaded = scene_sampler::load_or_builtin(&args.scene)
+    let loaded = scene_sampler::load_or_builtin_with(&args.scene, &args.input.load_options())
         .with_context(|| format!("loading scene `{}`", args.scene))?;
     for w in loaded.warnings() {
         eprintln!("warning: {w}");

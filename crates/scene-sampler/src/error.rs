@@ -26,6 +26,62 @@ pub enum SceneError {
         /// What is wrong.
         message: String,
     },
+    /// A file a scene names (a glTF buffer or image, an OBJ's material library or texture) that lies
+    /// outside the scene file's folder: refused unless [`crate::LoadOptions::allow_outside`]. The
+    /// message is the same whether or not the file exists, and quotes nothing of it.
+    #[error(
+        "{source_name}: {what} refers to a file outside the scene's folder: {uri}; pass \
+         --allow-outside-files to allow it"
+    )]
+    OutsideFolder {
+        /// The scene file (with the line, where known).
+        source_name: String,
+        /// What names the file (e.g. `buffer 0`, `` `mtllib` ``).
+        what: String,
+        /// The URI or file name as the scene wrote it.
+        uri: String,
+    },
+    /// A path that is not a regular file (a device such as `/dev/zero`, a FIFO, a directory):
+    /// refused before it is opened.
+    #[error("{path}: not a regular file (a device, FIFO or directory): refused")]
+    NotRegularFile {
+        /// The path.
+        path: PathBuf,
+    },
+    /// A file larger than the bound on the size of each file read
+    /// ([`crate::LoadOptions::max_file_bytes`]).
+    #[error(
+        "{path}: larger than the bound of {limit} bytes per file (raise it with --max-file-mib, or \
+         LoadOptions::max_file_bytes)"
+    )]
+    FileTooLarge {
+        /// The file.
+        path: PathBuf,
+        /// The bound in bytes.
+        limit: u64,
+    },
+    /// A texture whose decoded size (12 bytes per texel: linear RGB in f32), added to the scene's
+    /// other textures, exceeds the bound on texture memory ([`crate::LoadOptions::max_texture_bytes`]);
+    /// found from the image's header, before decoding.
+    #[error(
+        "texture {name}: {width}×{height} texels would take {bytes} bytes decoded, over the bound of \
+         {limit} bytes on texture memory ({used} bytes already taken by the scene's other textures; \
+         raise it with --max-texture-mib, or LoadOptions::max_texture_bytes)"
+    )]
+    TextureMemory {
+        /// The texture's file or name.
+        name: String,
+        /// Width in texels (from the header).
+        width: u32,
+        /// Height in texels.
+        height: u32,
+        /// Its decoded size in bytes.
+        bytes: u64,
+        /// The decoded size of the textures loaded before it.
+        used: u64,
+        /// The bound in bytes.
+        limit: u64,
+    },
     /// The file is not well-formed in its format.
     #[error("{source_name}: malformed: {message}")]
     Parse {

@@ -6,6 +6,8 @@
 //! * **Scenes** — [`Scene`] (3-D triangles) and [`FlatlandScene`] (2-D segments), each face with reflectance ρ
 //!   and emitted radiosity E per colour band ([`Spectrum`]), validated on load ([`SceneError`]). Loaders:
 //!   [`load`] (OBJ + MTL, glTF/GLB, Flatland JSON), built-ins by name: [`builtin`], [`BUILTIN_NAMES`].
+//!   A scene file reads nothing outside its own folder, regular files only, within bounds on file size
+//!   and decoded texture memory ([`LoadOptions`], [`load_with`], [`confine`]).
 //! * **Sampling** — area-uniform parameterizations [`SurfaceSampler`] (`[0,1]² →` surface) and [`FlatSampler`]
 //!   (`[0,1] →` segments), with inverses (fig. B.2); cosine-weighted direction helpers.
 //! * **Visibility** — [`SceneBvh`] (a CWBVH from obvhs, f32, with a documented self-intersection policy):
@@ -35,9 +37,11 @@
 pub mod bench;
 pub mod builtin;
 pub mod bvh;
+pub mod confine;
 pub mod distribution;
 pub mod error;
 pub mod flatland;
+mod gltf_resources;
 pub mod kernel;
 pub mod lights;
 pub mod load;
@@ -53,6 +57,7 @@ pub mod warp;
 
 pub use builtin::{BUILTIN_NAMES, builtin, is_builtin, nearest_builtin, random_boxes};
 pub use bvh::{BuildQuality, FlatHit, FlatVisibility, Hit, SceneBvh};
+pub use confine::LoadOptions;
 pub use distribution::{Discrete, uniform_triangle};
 pub use error::{Result, SceneError};
 pub use flatland::{FlatView, FlatlandScene, Segment};
@@ -62,8 +67,8 @@ pub use lights::{
     Sky, SkyModel, Sun,
 };
 pub use load::{
-    load, load_flatland, load_gltf, load_obj, load_or_builtin, to_gltf, to_obj, write_flatland,
-    write_gltf, write_obj,
+    load, load_flatland, load_gltf, load_obj, load_or_builtin, load_or_builtin_with, load_with,
+    to_gltf, to_obj, write_flatland, write_gltf, write_obj,
 };
 pub use mis::PowerHeuristic;
 pub use nearest::{Nearest, NearestFaces};

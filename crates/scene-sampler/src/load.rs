@@ -4,11 +4,13 @@
 //! path tracer reads them; the scene stores emitted radiosity (exitance) `E = π·L_e`, and every solver reports
 //! radiosity B (exitance; `B = π·L` on a Lambertian surface). Flatland JSON gives E directly.
 
+use crate::confine::{Folder, Refusal, read_regular_text};
 use crate::provenance::{GltfSource, Part};
 use crate::scene::check_file_material;
+use crate::texture::TextureBudget;
 use crate::{
-    AnyScene, Camera, Face, FaceTexture, FlatlandScene, Result, Scene, SceneError, Spectrum,
-    Texture, Wrap,
+    AnyScene, Camera, Face, FaceTexture, FlatlandScene, LoadOptions, Result, Scene, SceneError,
+    Spectrum, Texture, Wrap,
 };
 use glam::{DMat4, DVec3};
 use std::f64::consts::PI;
@@ -27,17 +29,23 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> SceneError + '_ {
 }
 
 /// Loads a scene file, choosing the loader by extension: `.obj` (with its MTL), `.gltf`/`.glb`, `.json`
-/// (Flatland).
+/// (Flatland); within the default [`LoadOptions`] (nothing outside the file's folder, bounded sizes).
 pub fn load(path: impl AsRef<Path>) -> Result<AnyScene> {
+    load_with(path, &LoadOptions::default())
+}
+
+/// [`load`] within `options`: whether the files the scene names may lie outside its folder, and
+/// the bounds on file size and decoded texture memory ([`crate::confine`]).
+pub fn load_with(path: impl AsRef<Path>, options: &LoadOptions) -> Result<AnyScene> {
     let path = path.as_ref();
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     match ext.as_str() {
-        "obj" => load_obj(path).map(AnyScene::ThreeD),
-        "gltf" | "glb" => load_gltf(path).map(AnyScene::ThreeD),
-        "json" => load_flatland(path).map(AnyScene::Flatland),
+        "obj" => obj_with(path, options).map(AnyScene::ThreeD),
+        "gltf" | "glb" => gltf_with(path, options).map(AnyScene::ThreeD),
+        "json" => flatland_with(path, options).map(AnyScene::Flatland),
         _ => Err(SceneError::UnsupportedFormat { path: path.into() }),
     }
 }
@@ -49,6 +57,11 @@ pub fn load(path: impl AsRef<Path>) -> Result<AnyScene> {
 /// unknown built-in ([`SceneError::UnknownBuiltin`], with the nearest known name), not an "unsupported
 /// format".
 pub fn load_or_builtin(name: &str) -> Result<AnyScene> {
+    load_or_builtin_with(name, &LoadOptions::default())
+}
+
+/// [`load_or_builtin`], a file loaded within `options` ([`load_with`]).
+pub fn load_or_builtin_with(name: &str, options: &LoadOptions) -> Result<AnyScene> {
     if crate::builtin::is_builtin(name) {
         return crate::builtin(name);
     }
@@ -67,13 +80,16 @@ pub fn load_or_builtin(name: &str) -> Result<AnyScene> {
             ),
         });
     }
-    load(path)
+    load_with(path, options)
 }
 
 /// Loads a Flatland JSON scene (format in FORMATS.md and [`FlatlandScene::from_json`]).
 pub fn load_flatland(path: impl AsRef<Path>) -> Result<FlatlandScene> {
-    let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(io(path))?;
+    flatland_with(path.as_ref(), &LoadOptions::default())
+}
+
+fn flatland_with(path: &Path, options: &LoadOptions) -> Result<FlatlandScene> {
+    let text = read_regular_text(path, options.max_file_bytes)?;
     FlatlandScene::from_json(&stem(path), &path.display().to_string(), &text)
 }
 
@@ -85,9 +101,10 @@ fn line_of(bytes: &[u8], at: usize) -> usize {
         .count()
 }
 
-/// Reads a text file as UTF-8, or an error naming the first line that is not.
-fn read_text(path: &Path) -> Result<String> {
-    let bytes = std::fs::read(path).map_err(io(path))?;
+/// Reads a text file (a regular file of at most `limit` bytes) as UTF-8, or an error naming the
+/// first line that is not.
+fn read_text(path: &Path, limit: u64) -> Result<String> {
+    let bytes = crate::confine::read_regular_file(path, limit)?;
     String::from_utf8(bytes).map_err(|e| SceneError::Parse {
         source_name: path.display().to_string(),
         message: format!(
@@ -206,32 +223,43 @@ fn scan_obj(text: &str) -> Vec<Statement> {
 /// `mtllib` that cannot be read, is an error naming the line. Each OBJ object/group becomes an object; each
 /// input polygon one surface. Windings are kept as written (front side = counter-clockwise); faces whose `vn`
 /// normals point against their winding are counted in a warning naming the object.
+///
+/// Material libraries and textures are read from the OBJ file's folder only, within the default
+/// [`LoadOptions`] ([`load_with`] takes others).
 pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene> {
-    let path = path.as_ref();
+    obj_with(path.as_ref(), &LoadOptions::default())
+}
+
+fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let source = path.display().to_string();
-    let text = read_text(path)?;
+    let text = read_text(path, options.max_file_bytes)?;
+    let folder = Folder::of(path, options)?;
     let statements = scan_obj(&text);
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
         ..Default::default()
     };
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let problem: std::cell::RefCell<Option<SceneError>> = std::cell::RefCell::new(None);
     let material_loader = |mtl: &Path| -> tobj::MTLLoadResult {
-        let full = dir.join(mtl);
-        let read = std::fs::read(&full)
-            .map_err(|e| {
-                let line = statements
-                    .iter()
-                    .find(|s| s.key == "mtllib" && Path::new(&s.arg) == mtl)
-                    .map_or(0, |s| s.line);
-                SceneError::MaterialLibrary {
+        let full = folder.shown(mtl);
+        let line = (statements.iter())
+            .find(|s| s.key == "mtllib" && Path::new(&s.arg) == mtl)
+            .map_or(0, |s| s.line);
+        let read = (folder.read(mtl))
+            .map_err(|r| match r {
+                Refusal::Outside => SceneError::OutsideFolder {
+                    source_name: format!("{source}:{line}"),
+                    what: "`mtllib`".into(),
+                    uri: mtl.display().to_string(),
+                },
+                Refusal::Refused(e) => e,
+                Refusal::Io(e) => SceneError::MaterialLibrary {
                     source_name: source.clone(),
                     line,
                     path: full.clone(),
                     source: e,
-                }
+                },
             })
             .and_then(|bytes| {
                 let mtl_source = full.display().to_string();
@@ -297,13 +325,10 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene> {
     let mut textures: Vec<Texture> = Vec::new();
     // per material: its texture's index once loaded
     let mut texture_of: Vec<Option<u32>> = vec![None; materials.len()];
+    let mut budget = TextureBudget::new(options.max_texture_bytes);
     for (i, mat) in materials.iter().enumerate() {
         if let Some(file) = &mat.diffuse_texture {
-            let full = dir.join(file);
-            let tex = Texture::load(&full, [Wrap::Repeat; 2]).map_err(|e| SceneError::Parse {
-                source_name: source.clone(),
-                message: format!("material `{}`: map_Kd: {e}", mat.name),
-            })?;
+            let tex = obj_texture(&folder, file, &mat.name, &source, &mut budget)?;
             texture_of[i] = Some(textures.len() as u32);
             textures.push(tex);
         }
@@ -430,6 +455,60 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene> {
     Ok(scene)
 }
 
+/// An OBJ material's `map_Kd` texture `file`, read within the scene's folder and decoded within
+/// `budget`; a file that cannot be read or decoded is an error naming the material.
+fn obj_texture(
+    folder: &Folder,
+    file: &str,
+    material: &str,
+    source: &str,
+    budget: &mut TextureBudget,
+) -> Result<Texture> {
+    let full = folder.shown(Path::new(file));
+    let name = full.display().to_string();
+    let wrapped = |e: SceneError| SceneError::Parse {
+        source_name: source.into(),
+        message: format!("material `{material}`: map_Kd: {e}"),
+    };
+    let bytes = folder.read(Path::new(file)).map_err(|r| match r {
+        Refusal::Outside => SceneError::OutsideFolder {
+            source_name: source.into(),
+            what: format!("material `{material}`: `map_Kd`"),
+            uri: file.into(),
+        },
+        Refusal::Refused(e) => e,
+        Refusal::Io(e) => wrapped(SceneError::Texture {
+            name: name.clone(),
+            message: e.to_string(),
+        }),
+    })?;
+    Texture::from_file_bytes(&name, &full, &bytes, [Wrap::Repeat; 2], budget).map_err(|e| match e {
+        SceneError::TextureMemory { .. } => e,
+        e => wrapped(e),
+    })
+}
+
+/// The glTF document of `path`, its buffers and its folder: the file and every buffer it names
+/// read through the folder's confined reader (`gltf::import` would read any path it names).
+fn gltf_document(
+    path: &Path,
+    source: &str,
+    options: &LoadOptions,
+) -> Result<(gltf::Document, Vec<Vec<u8>>, Folder)> {
+    let bytes = crate::confine::read_regular_file(path, options.max_file_bytes)?;
+    let folder = Folder::of(path, options)?;
+    let parse = |message: String| SceneError::Parse {
+        source_name: source.into(),
+        message,
+    };
+    // gltf is third-party parsing of user input: a panic inside it becomes a parse error, never an abort.
+    let gltf::Gltf { document, blob } = std::panic::catch_unwind(|| gltf::Gltf::from_slice(&bytes))
+        .map_err(|_| parse("the glTF parser failed on this file".into()))?
+        .map_err(|e| parse(e.to_string()))?;
+    let buffers = crate::gltf_resources::read_buffers(&document, blob, source, &folder)?;
+    Ok((document, buffers, folder))
+}
+
 /// Loads a glTF 2.0 file (`.gltf` with its buffers, or `.glb`).
 ///
 /// Every triangle primitive of every mesh instance in the default scene (or the first) is loaded with its
@@ -446,20 +525,18 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene> {
 /// primitives a [`Part`] (node, mesh, primitive) that its faces name in [`Face::part`]; the
 /// document's node tree, meshes and materials are kept in [`Scene::gltf`], with the world
 /// transform applied to each node of the loaded scene.
+///
+/// Buffers and images are read from the file's folder only, and only the images a material's
+/// baseColorTexture uses are decoded, within the default [`LoadOptions`] ([`load_with`] takes
+/// others).
 pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
-    let path = path.as_ref();
+    gltf_with(path.as_ref(), &LoadOptions::default())
+}
+
+fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let source = path.display().to_string();
-    std::fs::metadata(path).map_err(io(path))?;
-    // gltf is third-party parsing of user input: a panic inside it becomes a parse error, never an abort.
-    let imported =
-        std::panic::catch_unwind(|| gltf::import(path)).map_err(|_| SceneError::Parse {
-            source_name: source.clone(),
-            message: "the glTF parser failed on this file".into(),
-        })?;
-    let (doc, buffers, images) = imported.map_err(|e| SceneError::Parse {
-        source_name: source.clone(),
-        message: e.to_string(),
-    })?;
+    let (doc, buffers, folder) = gltf_document(path, &source, options)?;
+    let mut budget = TextureBudget::new(options.max_texture_bytes);
     let scene = doc
         .default_scene()
         .or_else(|| doc.scenes().next())
@@ -549,7 +626,7 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
                     rho
                 }
             };
-            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
             // ⟨baseColorTexture × baseColorFactor, on its TEXCOORD set⟩
             let texture = match pbr.base_color_texture() {
                 Some(info) => {
@@ -567,11 +644,15 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
                                 || format!("{source}: image {image}"),
                                 |n| format!("{source}: image `{n}`"),
                             );
-                            let data = images.get(image).ok_or_else(|| SceneError::Texture {
-                                name: name.clone(),
-                                message: "not decoded by the glTF importer".into(),
-                            })?;
-                            textures.push(gltf_texture(&name, data, wrap)?);
+                            textures.push(crate::gltf_resources::decode_image(
+                                &tex.source(),
+                                &name,
+                                wrap,
+                                &source,
+                                &folder,
+                                &buffers,
+                                &mut budget,
+                            )?);
                             texture_of.push(((image, wrap), textures.len() as u32 - 1));
                             textures.len() as u32 - 1
                         }
@@ -687,50 +768,6 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene> {
     }
     scene.warnings.extend(warnings);
     Ok(scene)
-}
-
-/// A glTF image decoded by the importer as an albedo texture: 8-bit channels are sRGB (glTF 2.0
-/// §3.9.2: baseColorTexture is sRGB-encoded), 16-bit ones reduced to 8; alpha is dropped, grey (and
-/// grey + alpha) expanded to RGB.
-fn gltf_texture(name: &str, data: &gltf::image::Data, wrap: [Wrap; 2]) -> Result<Texture> {
-    use gltf::image::Format;
-    let (w, h) = (data.width, data.height);
-    let px = &data.pixels;
-    let rgb: Vec<u8> = match data.format {
-        Format::R8G8B8 => px.clone(),
-        Format::R8G8B8A8 => px
-            .chunks_exact(4)
-            .flat_map(|p| [p[0], p[1], p[2]])
-            .collect(),
-        Format::R8 => px.iter().flat_map(|&g| [g, g, g]).collect(),
-        Format::R8G8 => px.chunks_exact(2).flat_map(|p| [p[0]; 3]).collect(),
-        Format::R16G16B16 | Format::R16G16B16A16 | Format::R16 | Format::R16G16 => {
-            let channels = match data.format {
-                Format::R16G16B16 => 3,
-                Format::R16G16B16A16 => 4,
-                Format::R16 => 1,
-                _ => 2,
-            };
-            // little-endian u16 per channel: the high byte is the 8-bit value
-            let hi: Vec<u8> = px.chunks_exact(2).map(|b| b[1]).collect();
-            hi.chunks_exact(channels)
-                .flat_map(|p| {
-                    if channels >= 3 {
-                        [p[0], p[1], p[2]]
-                    } else {
-                        [p[0]; 3]
-                    }
-                })
-                .collect()
-        }
-        other => {
-            return Err(SceneError::Texture {
-                name: name.into(),
-                message: format!("pixel format {other:?} is not supported (8- or 16-bit colour)"),
-            });
-        }
-    };
-    Texture::from_srgb8(name, w, h, &rgb, wrap)
 }
 
 /// The camera of a glTF node, if it has a perspective one (glTF 2.0 §3.10: the lens looks along the

@@ -112,11 +112,10 @@ pub fn parse_flat_probes(source: &str, text: &str) -> Result<Vec<FlatProbe>> {
         .collect()
 }
 
+/// A probe file's text: a regular file (not `/dev/zero` or a FIFO) within the default bound on file
+/// size ([`crate::LoadOptions::max_file_bytes`]).
 fn read(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-        path: path.into(),
-        source,
-    })
+    crate::confine::read_regular_text(path, crate::confine::DEFAULT_MAX_FILE_BYTES)
 }
 
 /// Reads a 3-D probe file.

@@ -100,28 +100,61 @@ impl Texture {
         })
     }
 
-    /// Reads a PNG or JPEG file (alpha dropped, grey expanded to RGB).
+    /// Reads a PNG or JPEG file (alpha dropped, grey expanded to RGB), the format from its extension:
+    /// a regular file within [`crate::LoadOptions`]' default size bound, and an image within its
+    /// default bound on texture memory.
     ///
     /// # Errors
-    /// The file cannot be read or decoded.
+    /// The file cannot be read or decoded, or is over a bound.
     pub fn load(path: &std::path::Path, wrap: [Wrap; 2]) -> Result<Self> {
         let name = path.display().to_string();
-        let img = image::open(path).map_err(|e| SceneError::Texture {
-            name: name.clone(),
-            message: e.to_string(),
-        })?;
-        Self::decode(&name, img, wrap)
+        let options = crate::LoadOptions::default();
+        let bytes = crate::confine::read_bounded(path, path, options.max_file_bytes).map_err(
+            |r| match r {
+                crate::confine::Refusal::Io(e) => SceneError::Texture {
+                    name: name.clone(),
+                    message: e.to_string(),
+                },
+                crate::confine::Refusal::Refused(e) => e,
+                crate::confine::Refusal::Outside => {
+                    SceneError::NotRegularFile { path: path.into() }
+                }
+            },
+        )?;
+        let mut budget = TextureBudget::new(options.max_texture_bytes);
+        Self::from_file_bytes(&name, path, &bytes, wrap, &mut budget)
     }
 
-    /// Decodes an encoded PNG or JPEG image in memory (a glTF buffer view).
-    ///
-    /// # Errors
-    /// The bytes are not an image this build decodes.
-    pub fn from_encoded(name: &str, bytes: &[u8], wrap: [Wrap; 2]) -> Result<Self> {
-        let img = image::load_from_memory(bytes).map_err(|e| SceneError::Texture {
+    /// Decodes the bytes of the image file `path` (read by the caller), the format from the file's
+    /// extension as [`image::open`] picks it, after charging its size from the header to `budget`.
+    pub(crate) fn from_file_bytes(
+        name: &str,
+        path: &std::path::Path,
+        bytes: &[u8],
+        wrap: [Wrap; 2],
+        budget: &mut TextureBudget,
+    ) -> Result<Self> {
+        let format = image::ImageFormat::from_path(path).map_err(|e| SceneError::Texture {
             name: name.into(),
             message: e.to_string(),
         })?;
+        let img = budget.decode(name, bytes, format)?;
+        Self::decode(name, img, wrap)
+    }
+
+    /// Decodes an encoded PNG or JPEG image in memory (a glTF buffer view), within the default bound
+    /// on texture memory.
+    ///
+    /// # Errors
+    /// The bytes are not an image this build decodes, or the image is over the bound.
+    pub fn from_encoded(name: &str, bytes: &[u8], wrap: [Wrap; 2]) -> Result<Self> {
+        let texture_error = |e: image::ImageError| SceneError::Texture {
+            name: name.into(),
+            message: e.to_string(),
+        };
+        let format = image::guess_format(bytes).map_err(texture_error)?;
+        let mut budget = TextureBudget::new(crate::LoadOptions::default().max_texture_bytes);
+        let img = budget.decode(name, bytes, format)?;
         Self::decode(name, img, wrap)
     }
 
@@ -169,6 +202,57 @@ impl Texture {
             let bottom = f64::from(c[k]) * (1.0 - fx) + f64::from(d[k]) * fx;
             top * (1.0 - fy) + bottom * fy
         })
+    }
+}
+
+/// Bytes a decoded texel takes in a [`Texture`] (linear RGB, f32).
+const TEXEL_BYTES: u64 = 12;
+
+/// The decoded texture memory a scene may still use ([`crate::LoadOptions::max_texture_bytes`]):
+/// each image's size is read from its header and charged before it is decoded.
+#[derive(Debug)]
+pub(crate) struct TextureBudget {
+    used: u64,
+    limit: u64,
+}
+
+impl TextureBudget {
+    /// A budget of `limit` bytes, none used.
+    pub(crate) fn new(limit: u64) -> Self {
+        Self { used: 0, limit }
+    }
+
+    /// Charges the image `bytes` (of `format`) from its header, then decodes it (with the image
+    /// crate's own default limits, as before the budget). A panic inside a decoder becomes an error.
+    pub(crate) fn decode(
+        &mut self,
+        name: &str,
+        bytes: &[u8],
+        format: image::ImageFormat,
+    ) -> Result<image::DynamicImage> {
+        let texture_error = |message: String| SceneError::Texture {
+            name: name.into(),
+            message,
+        };
+        let reader = || image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
+        let (width, height) = reader()
+            .into_dimensions()
+            .map_err(|e| texture_error(e.to_string()))?;
+        let size = u64::from(width) * u64::from(height) * TEXEL_BYTES;
+        if self.used.saturating_add(size) > self.limit {
+            return Err(SceneError::TextureMemory {
+                name: name.into(),
+                width,
+                height,
+                bytes: size,
+                used: self.used,
+                limit: self.limit,
+            });
+        }
+        self.used += size;
+        std::panic::catch_unwind(|| image::load_from_memory_with_format(bytes, format))
+            .map_err(|_| texture_error("the image decoder failed on this file".into()))?
+            .map_err(|e| texture_error(e.to_string()))
     }
 }
 
@@ -289,6 +373,26 @@ mod tests {
         };
         let m = ft.mean_rho(&t).0[0];
         assert!((m - 0.4).abs() < 0.02, "{m}");
+    }
+
+    #[test]
+    fn the_budget_refuses_from_the_header_and_counts_every_image() {
+        let mut png = std::io::Cursor::new(Vec::new());
+        image::RgbImage::new(4, 4)
+            .write_to(&mut png, image::ImageFormat::Png)
+            .unwrap();
+        let png = png.into_inner();
+        let mut budget = TextureBudget::new(2 * 16 * TEXEL_BYTES);
+        for _ in 0..2 {
+            budget.decode("a", &png, image::ImageFormat::Png).unwrap();
+        }
+        let e = budget
+            .decode("c", &png, image::ImageFormat::Png)
+            .unwrap_err();
+        assert!(
+            matches!(e, SceneError::TextureMemory { used: 384, .. }),
+            "{e}"
+        );
     }
 
     #[test]

@@ -22,7 +22,7 @@ pub fn run(args: &SolveArgs) -> Result<()> {
     match loaded {
         AnyScene::ThreeD(mut s) => {
             // ⟨Lights beside the scene's own, then refuse a scene nothing lights⟩
-            s.lights.extend(lighting.lights()?);
+            s.add_lights(lighting.lights()?);
             s.check_lit()?;
             let bvh = SceneBvh::new(&s);
             let domain = Domain::ThreeD(KernelSampler::new(&s, &bvh));

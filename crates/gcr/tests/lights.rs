@@ -352,6 +352,9 @@ impl Light for Constant {
     fn power(&self, radius: f64) -> f64 {
         PI * radius * radius * PI * self.0
     }
+    fn is_grey(&self) -> bool {
+        true
+    }
     fn describe(&self) -> String {
         format!("constant environment {}", self.0)
     }

@@ -41,6 +41,7 @@ pub mod confine;
 pub mod distribution;
 pub mod error;
 pub mod flatland;
+mod gltf_lights;
 mod gltf_resources;
 pub mod kernel;
 pub mod lights;

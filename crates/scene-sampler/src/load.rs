@@ -554,6 +554,7 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let mut texture_of: Vec<((usize, [Wrap; 2]), u32)> = Vec::new();
     let mut surface = 0u32;
     let mut camera: Option<Camera> = None;
+    let mut lights = Vec::new();
     let mut provenance = GltfSource::of_document(&doc, &scene);
     let mut parts: Vec<Part> = Vec::new();
     let mut stack: Vec<(gltf::Node, DMat4, usize)> =
@@ -581,6 +582,7 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
         if camera.is_none() {
             camera = gltf_camera(&node, world, &source, &mut warnings);
         }
+        lights.extend(crate::gltf_lights::node_light(&node, world, &source)?);
         let Some(mesh) = node.mesh() else { continue };
         let obj = objects.len() as u32;
         let obj_name = node
@@ -759,6 +761,7 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
         Scene::new(&stem(path), &source, faces, objects, camera)?.with_textures(textures)?;
     scene.parts = parts;
     scene.gltf = Some(Box::new(provenance));
+    scene.add_lights(lights);
     if !skipped.is_empty() {
         warnings.push(format!(
             "{source}: skipped {} point/line primitive(s): {}",

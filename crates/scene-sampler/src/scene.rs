@@ -326,6 +326,17 @@ impl Scene {
         })
     }
 
+    /// Adds `lights` to [`Scene::lights`]; a light whose colour is not grey makes the scene RGB
+    /// ([`Scene::bands`] 3).
+    pub fn add_lights(&mut self, lights: impl IntoIterator<Item = Arc<dyn Light>>) {
+        for light in lights {
+            if !light.is_grey() {
+                self.bands = 3;
+            }
+            self.lights.push(light);
+        }
+    }
+
     /// Errs ([`SceneError::NoEmitter`], with how to light the scene) when nothing gives light: no
     /// face emits and no light of positive power is in [`Scene::lights`].
     pub fn check_lit(&self) -> Result<()> {

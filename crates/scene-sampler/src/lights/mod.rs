@@ -122,8 +122,17 @@ pub trait Light: Debug + Send + Sync + RefUnwindSafe {
     /// flux through a disc of the scene's bounding radius `radius`.
     fn power(&self, radius: f64) -> f64;
 
-    /// A one-line description for messages and metrics (`sun az 135° el 40°, 100000 lux`).
+    /// Whether the light's colour is grey (equal in every band): a coloured light makes the
+    /// scene's results RGB.
+    fn is_grey(&self) -> bool;
+
+    /// A one-line description for messages and metrics.
     fn describe(&self) -> String;
+}
+
+/// Whether every band of `b` equals the first.
+pub(crate) fn grey(b: &Bands) -> bool {
+    b.iter().all(|v| *v == b[0])
 }
 
 /// The geometric part of a point-to-point connection from receiver y to a point x: the unit

@@ -15,6 +15,8 @@ pub struct PointLight {
     position: DVec3,
     intensity: Bands,
     spot: Option<Spot>,
+    /// glTF's `range`: the distance at which the light is cut off smoothly.
+    range: Option<f64>,
 }
 
 /// A spot light's cone.
@@ -35,6 +37,7 @@ impl PointLight {
                 position,
                 intensity,
                 spot: None,
+                range: None,
             },
         )
     }
@@ -62,6 +65,29 @@ impl PointLight {
         })
     }
 
+    /// The light cut off smoothly at distance `range` (glTF `KHR_lights_punctual`): the
+    /// intensity at distance d is scaled by clamp(1 − (d/range)⁴, 0, 1)², the extension's
+    /// recommended window. `None` leaves it unbounded; `Some` of a range ≤ 0 or not finite is
+    /// refused (`None` returned).
+    pub fn with_range(self, range: Option<f64>) -> Option<Self> {
+        match range {
+            None => Some(self),
+            Some(r) if r > 0.0 && r.is_finite() => Some(Self {
+                range: Some(r),
+                ..self
+            }),
+            Some(_) => None,
+        }
+    }
+
+    /// The range window at squared distance `r2` (1 without a range).
+    fn window(&self, r2: f64) -> f64 {
+        self.range.map_or(1.0, |range| {
+            let q = r2 * r2 / range.powi(4);
+            (1.0 - q).clamp(0.0, 1.0).powi(2)
+        })
+    }
+
     /// The spot's falloff toward the unit direction `w` from the light (1 for a point light).
     fn falloff(&self, w: DVec3) -> f64 {
         let Some(s) = self.spot else { return 1.0 };
@@ -74,7 +100,7 @@ impl PointLight {
 impl Light for PointLight {
     fn sample(&self, at: &Receiver, _u: [f64; 2]) -> Option<LightSample> {
         let (w, r2, cy) = toward(at, self.position)?;
-        let f = self.falloff(-w);
+        let f = self.falloff(-w) * self.window(r2);
         (f > 0.0).then(|| LightSample {
             target: ShadowTarget::Point {
                 point: self.position,
@@ -99,11 +125,16 @@ impl Light for PointLight {
         }
     }
 
+    fn is_grey(&self) -> bool {
+        super::grey(&self.intensity)
+    }
+
     fn describe(&self) -> String {
         let p = self.position;
+        let range = self.range.map_or(String::new(), |r| format!(", range {r}"));
         let kind = if self.spot.is_some() { "spot" } else { "point" };
         format!(
-            "{kind} light at ({}, {}, {}), intensity {}",
+            "{kind} light at ({}, {}, {}), intensity {}{range}",
             p.x, p.y, p.z, self.intensity[0]
         )
     }
@@ -159,6 +190,24 @@ mod tests {
         assert!((value(25.0) - t * t).abs() < 1e-9);
         assert_eq!(value(30.1), 0.0);
         assert!(PointLight::spot(DVec3::ZERO, [1.0; BANDS], DVec3::Y, 0.5, 0.4).is_none());
+        // glTF's range window: 1 − (d/range)⁴ squared, nothing beyond the range
+        let ranged = light.clone().with_range(Some(4.0)).unwrap();
+        let at = |x: f64| Receiver {
+            p: DVec3::new(x, 0.0, 0.0),
+            n: DVec3::Y,
+        };
+        let ratio = |x: f64| {
+            let e = |l: &PointLight| l.sample(&at(x), [0.5; 2]).map_or(0.0, |s| s.emission[0]);
+            e(&ranged) / e(&light)
+        };
+        let d2: f64 = 4.0 + 1.0;
+        assert!((ratio(1.0) - (1.0 - d2 * d2 / 256.0).powi(2)).abs() < 1e-12);
+        assert!(light.sample(&at(4.0), [0.5; 2]).is_some());
+        assert!(
+            ranged.sample(&at(4.0), [0.5; 2]).is_none(),
+            "beyond the range"
+        );
+        assert!(light.clone().with_range(Some(0.0)).is_none());
         assert!(PointLight::new(DVec3::ZERO, [f64::NAN; BANDS]).is_none());
     }
 }

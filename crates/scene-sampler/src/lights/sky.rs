@@ -210,6 +210,10 @@ impl Light for Sky {
         PI * radius * radius * (mean(&self.horizontal) + PI * mean(&self.ground))
     }
 
+    fn is_grey(&self) -> bool {
+        super::grey(&self.horizontal) && super::grey(&self.ground)
+    }
+
     fn describe(&self) -> String {
         let model = match self.model {
             SkyModel::Uniform => "uniform",

@@ -108,6 +108,10 @@ impl Light for Sun {
         PI * radius * radius * self.normal_irradiance.iter().sum::<f64>() / BANDS as f64
     }
 
+    fn is_grey(&self) -> bool {
+        super::grey(&self.normal_irradiance)
+    }
+
     fn describe(&self) -> String {
         format!(
             "sun toward ({:.4}, {:.4}, {:.4}), {} normal irradiance, {}° across",

@@ -259,6 +259,11 @@ pub struct LightArgs {
     /// east +X).
     #[arg(long, value_name = "AXIS", default_value = "y", value_parser = ["y", "z"])]
     pub up: String,
+    /// A sky portal: an opening (window, skylight) through which the interior sees the sky, as
+    /// its four corners in order around a parallelogram; the sky's shadow rays then go mostly
+    /// through the portals (much less noise deep in daylit rooms). Repeatable.
+    #[arg(long, value_name = "X,Y,Z,X,Y,Z,X,Y,Z,X,Y,Z", value_parser = scene_sampler::lights::lighting::parse_portal, allow_hyphen_values = true, requires = "sky")]
+    pub portal: Vec<[[f64; 3]; 4]>,
     /// A point light at X,Y,Z with intensity CD (candela); repeatable.
     #[arg(long, value_name = "X,Y,Z,CD", value_parser = scene_sampler::lights::lighting::parse_point, allow_hyphen_values = true)]
     pub point_light: Vec<scene_sampler::lights::lighting::PointSpec>,
@@ -291,6 +296,7 @@ impl LightArgs {
                 ..sky.clone()
             });
         }
+        l.portals.extend(self.portal.iter().cloned());
         l.point_lights.extend(self.point_light.iter().cloned());
         l.spot_lights.extend(self.spot_light.iter().cloned());
         Ok(l)

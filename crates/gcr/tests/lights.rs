@@ -10,8 +10,8 @@ use gcr::output::raster::PinholeCamera;
 use gcr::{Domain, Emitters, GatherMode, Gathered, PathSettings, SolveConfig, Trained};
 use glam::DVec3;
 use scene_sampler::{
-    BANDS, Bands, Face, KernelSampler, Light, LightSample, PointLight, Receiver, Scene, SceneBvh,
-    ShadowTarget, Sky, SkyModel, Spectrum, Sun, cosine_hemisphere,
+    BANDS, Bands, Face, KernelSampler, Light, LightSample, PointLight, Portal, Portals, Receiver,
+    Scene, SceneBvh, ShadowTarget, Sky, SkyModel, Spectrum, Sun, cosine_hemisphere,
 };
 use std::f64::consts::PI;
 use std::sync::Arc;
@@ -258,7 +258,8 @@ fn quadrature(f: impl Fn(DVec3) -> f64) -> f64 {
 /// The sky component through an unglazed opening: a closed black room 4 × 3 × 4 with a window
 /// 2 × 1 in its +Z wall, under a CIE overcast sky (black ground): the irradiance at a point of
 /// the floor is ∫ over the opening of L(ω) cos θ_y cos θ_w/r² dA, here by a converged midpoint
-/// rule over the opening (Tregenza & Sharples' sky component, by quadrature).
+/// rule over the opening (Tregenza & Sharples' sky component, by quadrature); the same with the
+/// window marked as a sky portal.
 #[test]
 fn the_sky_through_a_window() {
     let (w, h, d) = (4.0, 3.0, 4.0);
@@ -282,7 +283,7 @@ fn the_sky_through_a_window() {
     wall(zw(0.0, w, y1, h));
     wall(zw(0.0, x0, y0, y1));
     wall(zw(x1, w, y0, y1));
-    let mut scene = Scene::new("window", "test", faces, vec!["room".into()], None).unwrap();
+    let bare = Scene::new("window", "test", faces, vec!["room".into()], None).unwrap();
     let sky = Sky::new(
         SkyModel::CieOvercast,
         DVec3::Y,
@@ -290,17 +291,35 @@ fn the_sky_through_a_window() {
         [0.0; BANDS],
     )
     .unwrap();
-    scene.lights = vec![Arc::new(sky.clone())];
+    // the same sky, its shadow rays mostly through the window marked as a portal: same values
+    let portal = Portal::new([v(x0, y0, d), v(x1, y0, d), v(x1, y1, d), v(x0, y1, d)]).unwrap();
+    let through = sky.clone().with_portals(Portals::new(vec![portal]));
+    let skies: [Arc<dyn Light>; 2] = [Arc::new(sky.clone()), Arc::new(through)];
+    for light in skies {
+        let mut scene = bare.clone();
+        scene.lights = vec![light];
+        window_matches_quadrature(&scene, &sky, (x0, x1, y0, y1, d));
+    }
+}
+
+/// The irradiance at three floor points of the window room against the quadrature over the
+/// opening `(x0, x1, y0, y1)` at z = d.
+fn window_matches_quadrature(
+    scene: &Scene,
+    sky: &Sky,
+    (x0, x1, y0, y1, d): (f64, f64, f64, f64, f64),
+) {
+    let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
     let points = [v(2.0, 0.0, 2.0), v(1.0, 0.0, 3.0), v(3.5, 0.0, 1.0)];
     let got = radiosity(
-        &scene,
+        scene,
         0.003,
         &points.iter().map(|&p| (p, DVec3::Y, 0)).collect::<Vec<_>>(),
     );
     for (g, &y) in got.iter().zip(&points) {
         // the floor's ρ is 0: B = 0; its irradiance through an irradiance probe instead
         assert_eq!(g.radiosity[0], 0.0);
-        let e = irradiance(&scene, 0.003, &[(y + DVec3::Y * 1e-4, DVec3::Y)])[0].radiosity[0];
+        let e = irradiance(scene, 0.003, &[(y + DVec3::Y * 1e-4, DVec3::Y)])[0].radiosity[0];
         let n = 400;
         let mut want = 0.0;
         for i in 0..n {

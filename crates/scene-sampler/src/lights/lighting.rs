@@ -14,12 +14,13 @@
 //! { "up": "y",
 //!   "sun": { "azimuth": 135, "elevation": 40, "illuminance": 80000, "diameter": 0.53 },
 //!   "sky": { "model": "cie-overcast", "illuminance": 12000, "ground_reflectance": 0.2 },
+//!   "portals": [ [[1.2, 0.9, 5], [2.8, 0.9, 5], [2.8, 2.1, 5], [1.2, 2.1, 5]] ],
 //!   "point_lights": [ { "position": [0, 2.5, 0], "intensity": 800 } ],
 //!   "spot_lights": [ { "position": [1, 2.5, 0], "direction": [0, -1, 0], "intensity": 1200,
 //!                      "inner_angle": 20, "outer_angle": 35 } ] }
 //! ```
 
-use super::{Light, PointLight, Sky, SkyModel, Sun};
+use super::{Light, PointLight, Portal, Portals, Sky, SkyModel, Sun};
 use crate::{BANDS, Result, SceneError};
 use glam::DVec3;
 use serde::Deserialize;
@@ -145,6 +146,11 @@ pub struct Lighting {
     /// Spot lights.
     #[serde(default)]
     pub spot_lights: Vec<SpotSpec>,
+    /// Sky portals: the openings (windows, skylights) through which the interior sees the sky,
+    /// each four corners in order around a parallelogram; the sky then draws most of its shadow
+    /// rays through them.
+    #[serde(default)]
+    pub portals: Vec<[[f64; 3]; 4]>,
 }
 
 impl Lighting {
@@ -159,10 +165,27 @@ impl Lighting {
 
     /// Whether the description gives no light.
     pub fn is_empty(&self) -> bool {
-        self.sun.is_none()
+        self.portals.is_empty()
+            && self.sun.is_none()
             && self.sky.is_none()
             && self.point_lights.is_empty()
             && self.spot_lights.is_empty()
+    }
+
+    /// The portals, checked.
+    fn sky_portals(&self) -> Result<Portals> {
+        let portals = (self.portals.iter().enumerate())
+            .map(|(i, c)| {
+                Portal::new(c.map(DVec3::from_array)).ok_or_else(|| {
+                    lighting_message(&format!(
+                        "bad portal {}: its four corners must be finite and form a parallelogram, \
+                         in order around it",
+                        i + 1
+                    ))
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Portals::new(portals))
     }
 
     /// The lights of the description, checked: an error names the bad value.
@@ -202,7 +225,9 @@ impl Lighting {
             let (up, _, _) = self.up.frame();
             let sky = Sky::new(model, up, [s.illuminance; BANDS], ground)
                 .ok_or_else(|| bad("sky: illuminance must be ≥ 0 and finite"))?;
-            out.push(Arc::new(sky));
+            out.push(Arc::new(sky.with_portals(self.sky_portals()?)));
+        } else if !self.portals.is_empty() {
+            return Err(bad("portals: they are openings to a sky; give one (--sky)"));
         }
         for p in &self.point_lights {
             let light = PointLight::new(DVec3::from_array(p.position), [p.intensity; BANDS])
@@ -282,6 +307,17 @@ pub fn parse_sky(s: &str) -> std::result::Result<SkySpec, String> {
         illuminance,
         ground_reflectance: default_ground(),
     })
+}
+
+/// Parses `--portal X,Y,Z,X,Y,Z,X,Y,Z,X,Y,Z` (four corners in order around a parallelogram).
+pub fn parse_portal(s: &str) -> std::result::Result<[[f64; 3]; 4], String> {
+    let v = numbers(s)?;
+    if v.len() != 12 {
+        return Err("expected the four corners X,Y,Z,X,Y,Z,X,Y,Z,X,Y,Z in order".into());
+    }
+    Ok(std::array::from_fn(|i| {
+        [v[3 * i], v[3 * i + 1], v[3 * i + 2]]
+    }))
 }
 
 /// Parses `--point-light X,Y,Z,CANDELA`.

@@ -15,7 +15,7 @@
 //! |---|---|---|
 //! | emissive faces (OBJ `Ke`, glTF emissive) | `area.rs` ([`EmitterTable`]) | area |
 //! | sun: a distant disc of directions | `sun.rs` ([`Sun`]) | solid angle (a direction when its diameter is 0) |
-//! | sky: uniform, CIE overcast, CIE clear; a ground below the horizon | `sky.rs` ([`Sky`]) | solid angle |
+//! | sky: uniform, CIE overcast, CIE clear; a ground below the horizon; portals | `sky.rs` ([`Sky`]), `portal.rs` | solid angle |
 //! | point and spot lights (glTF `KHR_lights_punctual`) | `point.rs` ([`PointLight`]) | a point (delta) |
 //!
 //! A scene holds its lights other than faces in [`crate::Scene::lights`] as `Arc<dyn Light>`; a new
@@ -36,6 +36,7 @@
 mod area;
 pub mod lighting;
 mod point;
+mod portal;
 mod selection;
 mod sky;
 mod sun;
@@ -43,6 +44,7 @@ mod sun;
 pub use area::{EmitterTable, geometry};
 pub use lighting::Lighting;
 pub use point::PointLight;
+pub use portal::{Portal, Portals};
 pub use selection::{LightSet, Pick};
 pub use sky::{Sky, SkyModel};
 pub use sun::Sun;

@@ -14,12 +14,15 @@
 //! the sun together and ρ_g the ground reflectance (0.2 by default in `gensky`); ρ_g = 0 makes it
 //! black.
 //!
+//! With portals ([`Sky::with_portals`]: the openings an interior sees the sky through), three
+//! quarters of the shadow rays go through them (`portal.rs`), the rest as follows.
+//!
 //! Sampled by a mixture of cosine-weighted hemispheres about the zenith and the nadir, chosen in
 //! proportion to the power each sends to the receiver's side (E_h·(1 + cos β) against
 //! π L_g·(1 − cos β) for a receiver tilted by β); MIS with the receivers' cosine rays keeps the
 //! weights bounded near the horizon, where the zenith density goes to 0.
 
-use super::{Light, LightSample, Receiver, ShadowTarget};
+use super::{Light, LightSample, Portals, Receiver, ShadowTarget};
 use crate::{BANDS, Bands, cosine_hemisphere};
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -52,7 +55,13 @@ pub struct Sky {
     horizontal: Bands,
     /// The upper and lower hemispheres' powers for sampling (E_h and π·L_g, band means).
     powers: (f64, f64),
+    /// Openings through which interiors see the sky ([`Sky::with_portals`]).
+    portals: Portals,
 }
+
+/// With portals, the share of a sky's shadow rays drawn through them (the rest by the
+/// hemispheres, so that directions no portal covers keep a positive density).
+const THROUGH_PORTALS: f64 = 0.75;
 
 /// Zenith angles and azimuths of the quadrature that normalises the clear sky.
 const QUAD: usize = 256;
@@ -85,6 +94,7 @@ impl Sky {
             ground,
             horizontal,
             powers: (mean(&horizontal), PI * mean(&ground)),
+            portals: Portals::default(),
         };
         // E_h of the model at L_z = 1, then L_z from the given E_h
         let unit = sky.unit_horizontal();
@@ -132,6 +142,12 @@ impl Sky {
         }
     }
 
+    /// The sky seen through `portals` (module docs of [`super::portal`]): most shadow rays go
+    /// through them.
+    pub fn with_portals(self, portals: Portals) -> Self {
+        Self { portals, ..self }
+    }
+
     /// The horizontal irradiance the sky gives (the value it was made with).
     pub fn horizontal(&self) -> Bands {
         self.horizontal
@@ -161,12 +177,35 @@ impl Sky {
         }
     }
 
-    fn pdf(&self, n: DVec3, dir: DVec3) -> f64 {
+    /// The hemispheres' density of `dir` for a receiver with normal `n`.
+    fn hemisphere_pdf(&self, n: DVec3, dir: DVec3) -> f64 {
         let (c, p_up) = (dir.dot(self.up), self.p_up(n));
         if c > 0.0 {
             p_up * c / PI
         } else {
             (1.0 - p_up) * (-c) / PI
+        }
+    }
+
+    /// The sampling density of `dir` at the receiver: the hemispheres', mixed with the portals'
+    /// when there are portals that the receiver has in view.
+    fn pdf(&self, at: &Receiver, dir: DVec3) -> f64 {
+        let hemi = self.hemisphere_pdf(at.n, dir);
+        let b = self.portal_share(at);
+        if b > 0.0 {
+            b * self.portals.pdf(at.p, dir) + (1.0 - b) * hemi
+        } else {
+            hemi
+        }
+    }
+
+    /// The share of shadow rays through the portals at `at` (0 without portals, or where none
+    /// has weight).
+    fn portal_share(&self, at: &Receiver) -> f64 {
+        if !self.portals.in_view(at.p) {
+            0.0
+        } else {
+            THROUGH_PORTALS
         }
     }
 }
@@ -177,15 +216,22 @@ fn mean(b: &Bands) -> f64 {
 
 impl Light for Sky {
     fn sample(&self, at: &Receiver, u: [f64; 2]) -> Option<LightSample> {
-        // the hemisphere by u[0], remapped to [0, 1) within it
-        let p_up = self.p_up(at.n);
-        let (axis, v) = if u[0] < p_up {
-            (self.up, u[0] / p_up)
+        // through a portal with probability b, by u[0] remapped within its share
+        let b = self.portal_share(at);
+        let w = if u[0] < b {
+            self.portals.sample(at.p, [u[0] / b, u[1]])?
         } else {
-            (-self.up, (u[0] - p_up) / (1.0 - p_up))
+            // the hemisphere by the rest of u[0], remapped to [0, 1) within it
+            let u0 = (u[0] - b) / (1.0 - b);
+            let p_up = self.p_up(at.n);
+            let (axis, v) = if u0 < p_up {
+                (self.up, u0 / p_up)
+            } else {
+                (-self.up, (u0 - p_up) / (1.0 - p_up))
+            };
+            cosine_hemisphere(axis, [v.min(1.0 - f64::EPSILON), u[1]])
         };
-        let w = cosine_hemisphere(axis, [v.min(1.0 - f64::EPSILON), u[1]]);
-        let (cy, pdf) = (at.n.dot(w), self.pdf(at.n, w));
+        let (cy, pdf) = (at.n.dot(w), self.pdf(at, w));
         (cy > 0.0 && pdf > 0.0).then(|| LightSample {
             target: ShadowTarget::Direction(w),
             emission: self.emission(w),
@@ -199,7 +245,7 @@ impl Light for Sky {
     }
 
     fn escaped_pdf(&self, at: &Receiver, dir: DVec3) -> f64 {
-        self.pdf(at.n, dir)
+        self.pdf(at, dir)
     }
 
     fn is_delta(&self) -> bool {
@@ -207,7 +253,15 @@ impl Light for Sky {
     }
 
     fn power(&self, radius: f64) -> f64 {
-        PI * radius * radius * (mean(&self.horizontal) + PI * mean(&self.ground))
+        // with portals, the flux that can come through them (at most E_h per unit area, each
+        // side), not through the scene's whole bounding disc
+        let disc = PI * radius * radius;
+        let area = if self.portals.is_empty() {
+            disc
+        } else {
+            self.portals.area().min(disc)
+        };
+        area * (mean(&self.horizontal) + PI * mean(&self.ground))
     }
 
     fn is_grey(&self) -> bool {

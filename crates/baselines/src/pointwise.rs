@@ -15,7 +15,8 @@ use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use scene_sampler::{
-    EmitterTable, NO_FACE, PowerHeuristic, Scene, SceneBvh, SurfacePoint, cosine_hemisphere,
+    Light, LightSet, NO_FACE, Pick, PowerHeuristic, Receiver, Scene, SceneBvh, SurfacePoint,
+    cosine_hemisphere,
 };
 use std::f64::consts::PI;
 
@@ -36,10 +37,15 @@ fn rng_of(seed: u64, p: &SurfacePoint) -> ChaCha8Rng {
 /// contribution is `E(y) + ρ(y)·…` with both factors 0).
 pub fn live_bands(scene: &Scene, face: u32) -> [bool; 3] {
     let f = &scene.faces[face as usize];
-    [0, 1, 2].map(|b| {
-        f.emission.0[b] > 0.0
-            || (f.rho.0[b] > 0.0 && scene.faces.iter().any(|g| g.emission.0[b] > 0.0))
-    })
+    let lit = lit_bands(scene);
+    [0, 1, 2].map(|b| f.emission.0[b] > 0.0 || (f.rho.0[b] > 0.0 && lit[b]))
+}
+
+/// The bands some light gives: an emitting face's, or every band when the scene has other lights
+/// (the light interface does not say which bands a light leaves dark; a band it does leave dark
+/// then runs to the path cap instead of being skipped).
+fn lit_bands(scene: &Scene) -> [bool; 3] {
+    [0, 1, 2].map(|b| !scene.lights.is_empty() || scene.faces.iter().any(|f| f.emission.0[b] > 0.0))
 }
 
 /// The area density of a cosine-weighted direction from `y` (normal `ny`) at the point `x` (normal `nx`):
@@ -66,7 +72,7 @@ fn geometry(y: DVec3, ny: DVec3, x: DVec3, nx: DVec3) -> f64 {
 fn path(
     scene: &Scene,
     bvh: &SceneBvh,
-    lights: &EmitterTable,
+    lights: &LightSet,
     p: SurfacePoint,
     rng: &mut ChaCha8Rng,
 ) -> [f64; 3] {
@@ -83,7 +89,7 @@ fn path(
 fn walk(
     scene: &Scene,
     bvh: &SceneBvh,
-    lights: &EmitterTable,
+    lights: &LightSet,
     p: SurfacePoint,
     (rho, e): ([f64; 3], [f64; 3]),
     rng: &mut ChaCha8Rng,
@@ -109,13 +115,17 @@ fn walk(
             rng.random::<f64>(),
             rng.random::<f64>(),
         );
-        if !lights.is_empty() {
-            let (ef, p_e) = lights
-                .pick_by_power(u0)
-                .map(|f| (f, lights.power_density(f)))
-                .expect("a table with emitters");
-            let e = &scene.faces[ef as usize];
-            if ef != at.face {
+        match lights.pick(u0) {
+            Some(Pick::Light(light, probability)) => {
+                // ⟨a light other than a face, through the light interface⟩
+                let d = other_light(bvh, &at, light, probability, [u1, u2]);
+                for b in 0..3 {
+                    out[b] += throughput[b] * d[b];
+                }
+            }
+            Some(Pick::Face(ef)) if ef != at.face => {
+                let p_e = lights.face_density(ef);
+                let e = &scene.faces[ef as usize];
                 let s = u1.sqrt();
                 let x = e.point(s * (1.0 - u2), s * u2);
                 let g = geometry(at.point, at.normal, x, e.normal);
@@ -133,10 +143,20 @@ fn walk(
                     }
                 }
             }
+            _ => {}
         }
-        // ⟨the cosine-weighted continuation; emission at its hit is the second technique⟩
+        // ⟨the cosine-weighted continuation; emission at its hit is the second technique, and
+        // so is the light at infinity where it leaves the scene⟩
         let dir = cosine_hemisphere(at.normal, [rng.random(), rng.random()]);
         let Some(hit) = bvh.trace_from(&at, dir) else {
+            let receiver = Receiver {
+                p: at.point,
+                n: at.normal,
+            };
+            let d = lights.escaped(&receiver, dir, |g, p| PowerHeuristic::ONE_EACH.cosine(g, p));
+            for b in 0..3 {
+                out[b] += throughput[b] * d[b];
+            }
             break;
         };
         let next = bvh.surface_point(&hit);
@@ -148,7 +168,7 @@ fn walk(
         if !nf.emission.is_zero() {
             let w = PowerHeuristic::ONE_EACH.cosine(
                 geometry(at.point, at.normal, next.point, next.normal),
-                lights.power_density(next.face),
+                lights.face_density(next.face),
             );
             for b in 0..3 {
                 out[b] += throughput[b] * w * nf.emission.0[b];
@@ -157,6 +177,33 @@ fn walk(
         at = next;
     }
     out
+}
+
+/// One shadow ray to a sample of `light` (drawn with `probability`) from the vertex `at`: E·g/(P·p)
+/// with the power heuristic against the one cosine continuation (none for a delta light).
+fn other_light(
+    bvh: &SceneBvh,
+    at: &SurfacePoint,
+    light: &dyn Light,
+    probability: f64,
+    u: [f64; 2],
+) -> [f64; 3] {
+    let receiver = Receiver {
+        p: at.point,
+        n: at.normal,
+    };
+    let Some(s) = light.sample(&receiver, u) else {
+        return [0.0; 3];
+    };
+    if !bvh.reaches(at, &s.target) {
+        return [0.0; 3];
+    }
+    let mis = PowerHeuristic {
+        light_samples: 1.0,
+        cosine_samples: if light.is_delta() { 0.0 } else { 1.0 },
+    };
+    let w = mis.light(s.g, probability * s.pdf);
+    s.emission.map(|e| w * e)
 }
 
 /// The estimator of MATH.md §8 as it was before next-event estimation: light is found only when a
@@ -221,7 +268,7 @@ pub fn radiosity_at(
     paths: usize,
     seed: u64,
 ) -> Vec<Estimate> {
-    let lights = EmitterTable::of_scene(scene);
+    let lights = LightSet::of_scene(scene);
     points
         .par_iter()
         .map(|&p| {
@@ -266,7 +313,7 @@ pub fn reference_at(
 ) -> Result<Vec<AdaptiveEstimate>, BaselineError> {
     adaptive.validate()?;
     check_faces(scene, points)?;
-    let lights = EmitterTable::of_scene(scene);
+    let lights = LightSet::of_scene(scene);
     Ok(points
         .par_iter()
         .map(|&p| {
@@ -292,8 +339,8 @@ pub fn irradiance_reference_at(
     adaptive: &Adaptive,
 ) -> Result<Vec<AdaptiveEstimate>, BaselineError> {
     adaptive.validate()?;
-    let lights = EmitterTable::of_scene(scene);
-    let live = [0, 1, 2].map(|b| scene.faces.iter().any(|f| f.emission.0[b] > 0.0));
+    let lights = LightSet::of_scene(scene);
+    let live = lit_bands(scene);
     Ok(points
         .par_iter()
         .map(|&(point, normal)| {

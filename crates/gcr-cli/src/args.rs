@@ -60,7 +60,7 @@ pub enum Command {
     Solve(Box<SolveArgs>),
     /// The pointwise path-traced reference (`baselines`) at probe points: B per probe with its
     /// standard error on stderr.
-    Reference(ReferenceArgs),
+    Reference(Box<ReferenceArgs>),
 }
 
 /// `gcr solve`.
@@ -433,6 +433,9 @@ pub struct ReferenceArgs {
     /// What the scene file may make gcr read.
     #[command(flatten)]
     pub input: InputLimits,
+    /// Lights beside the scene's own.
+    #[command(flatten)]
+    pub lights: LightArgs,
 }
 
 /// What a scene file may make `gcr` read (docs/bad-input.md, "Running on untrusted scenes"): by

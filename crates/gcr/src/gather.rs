@@ -35,8 +35,7 @@ use glam::{DVec2, DVec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use scene_sampler::{
-    Light, NO_FACE, Pick, PowerHeuristic, Receiver, ShadowTarget, cosine_halfplane,
-    cosine_hemisphere, uniform_triangle,
+    Light, Pick, PowerHeuristic, Receiver, cosine_halfplane, cosine_hemisphere, uniform_triangle,
 };
 use std::f64::consts::PI;
 
@@ -175,17 +174,7 @@ fn other_light_ray(
     };
     let s = light.sample(&Receiver { p: y, n }, u)?;
     let from = Domain::surface_point_3d(y, n, face);
-    let seen = match s.target {
-        ShadowTarget::Point {
-            point,
-            normal,
-            face,
-        } => {
-            let x = Domain::surface_point_3d(point, normal, face.unwrap_or(NO_FACE));
-            k.bvh.visible(&x, &from)
-        }
-        ShadowTarget::Direction(w) => k.bvh.escapes(&from, w),
-    };
+    let seen = k.bvh.reaches(&from, &s.target);
     if !seen {
         return None;
     }

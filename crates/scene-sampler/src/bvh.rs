@@ -273,6 +273,27 @@ impl SceneBvh {
         })
     }
 
+    /// Whether a light sample's shadow ray from the receiver `from` is clear: to a point, the
+    /// segment ([`SceneBvh::visible`], the point's face not an occluder); toward a direction, the
+    /// ray escapes the scene ([`SceneBvh::escapes`]).
+    pub fn reaches(&self, from: &SurfacePoint, target: &crate::ShadowTarget) -> bool {
+        match *target {
+            crate::ShadowTarget::Point {
+                point,
+                normal,
+                face,
+            } => {
+                let x = SurfacePoint {
+                    point,
+                    normal,
+                    face: face.unwrap_or(NO_FACE),
+                };
+                self.visible(&x, from)
+            }
+            crate::ShadowTarget::Direction(w) => self.escapes(from, w),
+        }
+    }
+
     /// The origin of a ray leaving `from` toward `dir` ([`SceneBvh::trace_from`]'s offsets).
     fn origin(&self, from: &SurfacePoint, dir: DVec3) -> DVec3 {
         if from.face == NO_FACE {

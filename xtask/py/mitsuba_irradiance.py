@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Mitsuba 3 irradiance at points (Radiance's `rtrace -I`), for `cargo xtask bench --only irradiance`.
 
-Usage: mitsuba_irradiance.py [--sampler NAME] FACES POINTS OUT SPP [SPP ...]
+Usage: mitsuba_irradiance.py [--sampler NAME] [--emitters JSON] FACES POINTS OUT SPP [SPP ...]
 
 FACES:  one triangle per line, as mitsuba_field.py.
 POINTS: one point per line, `x y z nx ny nz`: in the air, n the unit normal of the hemisphere whose
@@ -16,6 +16,11 @@ ray origin): the square's exitance is πL = ρ·E = E, estimated by Mitsuba's ow
 mitsuba_scene.py). The squares block and reflect a
 negligible 10⁻⁸ of the diagonal² each. The scene is loaded once per SPP and rendered with two seeds: E is their mean, the
 standard error half their difference. Exit code 3 when mitsuba or numpy is not importable.
+
+`--emitters JSON`: a file with a list of Mitsuba emitter dicts added to the scene (`point`,
+`directional`, `constant`, …), and one of ours: `{"type": "cie-overcast", "zenith": L_z}`, the CIE
+overcast sky L(θ) = L_z (1 + 2 cos θ)/3 above the horizon about +Y (black below) as an `envmap` of
+512 × 256 texels (Mitsuba's envmap has +Y up, the zenith at the image's top row).
 """
 import sys
 import time
@@ -40,8 +45,37 @@ def frame(n):
     return t, np.cross(n, t)
 
 
+def split_emitters(argv):
+    """(the emitter dicts of `--emitters FILE`, or [], and the other arguments)."""
+    if "--emitters" in argv:
+        i = argv.index("--emitters")
+        import json
+
+        with open(argv[i + 1]) as f:
+            emitters = json.load(f)
+        return emitters, argv[:i] + argv[i + 2 :]
+    return [], argv
+
+
+def overcast_envmap(zenith):
+    """The CIE overcast sky about +Y as a lat-long bitmap (rows: zenith angle from the top)."""
+    h, w = 256, 512
+    theta = (np.arange(h) + 0.5) / h * np.pi
+    c = np.cos(theta)
+    radiance = np.where(c > 0, zenith * (1 + 2 * c) / 3, 0.0)
+    img = np.repeat(radiance[:, None], w, axis=1)
+    return mi.Bitmap(np.repeat(img[:, :, None], 3, axis=2).astype(np.float32))
+
+
+def emitter_dict(e):
+    if e.get("type") == "cie-overcast":
+        return {"type": "envmap", "bitmap": overcast_envmap(float(e["zenith"]))}
+    return e
+
+
 def main():
-    sampler, args = split_sampler(sys.argv[1:])
+    emitters, argv = split_emitters(sys.argv[1:])
+    sampler, args = split_sampler(argv)
     faces_path, points_path, out, *spps = args
     spps = [int(s) for s in spps]
     t0 = time.perf_counter()
@@ -61,6 +95,8 @@ def main():
     if tri.shape[1] > 15:  # a textured scene's rows: the squares have no texture
         squares = np.hstack([squares, np.tile([-1, 0, 0, 0, 0, 0, 0], (len(squares), 1))])
     scene = scene_dict(np.vstack([tri, squares]), read_textures(faces_path))
+    for i, e in enumerate(emitters):
+        scene[f"light{i}"] = emitter_dict(e)
     n = len(pts)
     film = {"type": "hdrfilm", "width": 1, "height": 1, "rfilter": {"type": "box"},
             "pixel_format": "rgb"}

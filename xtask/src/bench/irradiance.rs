@@ -26,9 +26,9 @@ use std::fmt::Write;
 use std::time::Instant;
 
 /// Values with standard errors, per point and band.
-struct Estimates {
-    mean: Vec<[f64; 3]>,
-    se: Vec<[f64; 3]>,
+pub(super) struct Estimates {
+    pub(super) mean: Vec<[f64; 3]>,
+    pub(super) se: Vec<[f64; 3]>,
 }
 
 /// The work planes of `scene` (module docs), `n`×`n` points each.
@@ -55,7 +55,7 @@ fn work_planes(scene: &Scene, n: usize) -> Vec<(DVec3, DVec3)> {
 }
 
 /// (relative L2 difference, own noise ‖σ‖/‖E_ref‖, Σ d² / Σ (σ² + σ_ref²)).
-fn compare(a: &Estimates, r: &Estimates) -> (f64, f64, f64) {
+pub(super) fn compare(a: &Estimates, r: &Estimates) -> (f64, f64, f64) {
     let (mut d2, mut own, mut var, mut norm) = (0.0, 0.0, 0.0, 0.0);
     for i in 0..r.mean.len() {
         for b in 0..3 {
@@ -69,7 +69,7 @@ fn compare(a: &Estimates, r: &Estimates) -> (f64, f64, f64) {
 }
 
 /// One Mitsuba run: samples per point, seconds, estimates.
-type Run = (usize, f64, Estimates);
+pub(super) type Run = (usize, f64, Estimates);
 
 /// Mitsuba's estimates at `points` per spp with their seconds, or why it was skipped.
 fn mitsuba(
@@ -77,7 +77,23 @@ fn mitsuba(
     points: &[(DVec3, DVec3)],
     spp: &[usize],
 ) -> Result<std::result::Result<Vec<Run>, String>> {
-    let dir = std::env::temp_dir().join(format!("gcr-irradiance-{}", std::process::id()));
+    mitsuba_lit(scene, points, spp, "ldsampler", None)
+}
+
+/// [`mitsuba`] with Mitsuba's `sampler` and, beside the scene's emitting faces, the emitters of
+/// the JSON file `emitters` (`xtask/py/mitsuba_irradiance.py --emitters`).
+pub(super) fn mitsuba_lit(
+    scene: &Scene,
+    points: &[(DVec3, DVec3)],
+    spp: &[usize],
+    sampler: &str,
+    emitters: Option<&std::path::Path>,
+) -> Result<std::result::Result<Vec<Run>, String>> {
+    let dir = std::env::temp_dir().join(format!(
+        "gcr-irradiance-{}-{}",
+        std::process::id(),
+        emitters.map_or(0, |e| e.as_os_str().len())
+    ));
     std::fs::create_dir_all(&dir)?;
     let (ff, pf, of) = (dir.join("faces.txt"), dir.join("points.txt"), dir.join("e"));
     write_mitsuba_faces(scene, &ff)?;
@@ -86,7 +102,12 @@ fn mitsuba(
         .map(|(p, n)| format!("{} {} {} {} {} {}\n", p.x, p.y, p.z, n.x, n.y, n.z))
         .collect();
     std::fs::write(&pf, text)?;
-    let stdout = match run_mitsuba("mitsuba_irradiance.py", "ldsampler", &[&ff, &pf, &of], spp)? {
+    let flag = std::path::Path::new("--emitters");
+    let files: Vec<&std::path::Path> = match emitters {
+        Some(e) => vec![flag, e, &ff, &pf, &of],
+        None => vec![&ff, &pf, &of],
+    };
+    let stdout = match run_mitsuba("mitsuba_irradiance.py", sampler, &files, spp)? {
         Ok(o) => o,
         Err(why) => return Ok(Err(why)),
     };

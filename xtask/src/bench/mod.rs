@@ -10,6 +10,7 @@ mod images;
 mod irradiance;
 mod isgcs;
 mod isgcs_peers;
+mod lights;
 mod scenes;
 
 use crate::Ctx;
@@ -32,6 +33,7 @@ const GROUPS: &[Group] = &[
     ("field", field::run),
     ("images", images::run),
     ("irradiance", irradiance::run),
+    ("lights", lights::run),
 ];
 
 /// Runs every group whose name contains `only` (all when `None`).

@@ -1,0 +1,176 @@
+//! The `lights` group (issue 31, "peers at the same points"): each light type of
+//! `scene_sampler::lights` in the shipped side-lit room (`scenes/side-lit-room.obj`, its window
+//! open), irradiance at its 20 work-plane points (`scenes/side-lit-room.pts`), by
+//! * the `baselines` path tracer to a 0.3 % relative standard error per point (the reference);
+//! * `gcr` — the default paths gather to a 1 % target;
+//! * Mitsuba 3 — `xtask/py/mitsuba_irradiance.py --emitters` with the same light as Mitsuba's own
+//!   emitter (`point`, `directional`, `constant`, and the CIE overcast sky as an `envmap`),
+//!   `multijitter` (unbiased), skipped with a note without `mitsuba`.
+//!
+//! Writes `benchmarks-lights.md`. Spot lights are left out: Mitsuba's spot falloff is not glTF's
+//! (`crates/gcr/tests/lights.rs` checks ours against its closed form).
+
+use super::irradiance::{Estimates, compare, mitsuba_lit};
+use crate::Ctx;
+use anyhow::Result;
+use baselines::Adaptive;
+use gcr::{Domain, Emitters, GatherMode, PathSettings, SolveConfig, Trained};
+use glam::DVec3;
+use scene_sampler::lights::lighting::Up;
+use scene_sampler::{KernelSampler, Light, PointLight, SceneBvh, Sky, SkyModel, Sun};
+use std::f64::consts::PI;
+use std::fmt::Write;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// A light of the bench: its name, ours, and Mitsuba's emitter as JSON.
+struct Case {
+    name: &'static str,
+    light: Arc<dyn Light>,
+    mitsuba: serde_json::Value,
+}
+
+fn cases() -> Vec<Case> {
+    let sun = Up::Y.direction(200.0, 25.0);
+    let (e_h, e_n) = (10_000.0, 60_000.0);
+    let l_z = 9.0 * e_h / (7.0 * PI);
+    vec![
+        Case {
+            name: "point light, 800 cd",
+            light: Arc::new(PointLight::new(DVec3::new(2.0, 2.6, 2.5), [800.0; 3]).unwrap()),
+            mitsuba: serde_json::json!({"type": "point", "position": [2.0, 2.6, 2.5],
+                                        "intensity": 800.0}),
+        },
+        Case {
+            name: "sun (0° across), 60 000 lux at 25°",
+            light: Arc::new(Sun::new(sun, [e_n; 3], 0.0).unwrap()),
+            mitsuba: serde_json::json!({"type": "directional", "direction": (-sun).to_array(),
+                                        "irradiance": e_n}),
+        },
+        Case {
+            name: "constant environment (uniform sky and ground), L = 10 000/π",
+            light: Arc::new(
+                Sky::new(SkyModel::Uniform, DVec3::Y, [e_h; 3], [e_h / PI; 3]).unwrap(),
+            ),
+            mitsuba: serde_json::json!({"type": "constant", "radiance": e_h / PI}),
+        },
+        Case {
+            name: "CIE overcast sky, 10 000 lux, black ground",
+            light: Arc::new(Sky::new(SkyModel::CieOvercast, DVec3::Y, [e_h; 3], [0.0; 3]).unwrap()),
+            mitsuba: serde_json::json!({"type": "cie-overcast", "zenith": l_z}),
+        },
+    ]
+}
+
+/// Runs this group and writes `benchmarks-lights.md` into `ctx.out`.
+pub fn run(ctx: &Ctx) -> Result<()> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let base = scene_sampler::load(root.join("scenes/side-lit-room.obj"))?.into_3d()?;
+    let points: Vec<(DVec3, DVec3)> =
+        scene_sampler::read_probes(root.join("scenes/side-lit-room.pts"))?
+            .iter()
+            .map(|p| (p.point, p.normal))
+            .collect();
+    let (rel, spp): (f64, &[usize]) = if ctx.quick {
+        (0.03, &[16])
+    } else {
+        (0.003, &[256, 1024, 4096])
+    };
+    let mut md = String::from(
+        "| light | solver | seconds | rel. L2 vs reference | its noise | Σd²/Σσ² |\n|---|---|---:|---:|---:|---:|\n",
+    );
+    let mut skipped = None;
+    let dir = std::env::temp_dir().join(format!("gcr-lights-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    for (k, case) in cases().into_iter().enumerate() {
+        let mut scene = base.clone();
+        scene.add_lights([case.light.clone()]);
+        let bvh = SceneBvh::new(&scene);
+        // ⟨The reference⟩
+        let t = Instant::now();
+        let adaptive = Adaptive {
+            rel_error: rel,
+            max_paths: 4_000_000,
+            ..Adaptive::default()
+        };
+        let r = baselines::pointwise::irradiance_reference_at(&scene, &bvh, &points, &adaptive)?;
+        let reference = Estimates {
+            mean: r.iter().map(|e| e.estimate.mean).collect(),
+            se: r.iter().map(|e| e.estimate.std_error).collect(),
+        };
+        let t_ref = t.elapsed().as_secs_f64();
+        let name = case.name;
+        writeln!(
+            md,
+            "| {name} | reference (baselines, {:.1} %) | {t_ref:.2} | - | {:.4} | - |",
+            100.0 * rel,
+            compare(&reference, &reference).1
+        )?;
+        // ⟨GCR: the default paths gather to 1 %⟩
+        let t = Instant::now();
+        let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+        let config = SolveConfig {
+            gather: GatherMode::Paths,
+            paths: PathSettings {
+                target_error: Some(0.01),
+                ..PathSettings::default()
+            },
+            ..SolveConfig::default()
+        };
+        let trained = Trained::without_networks(&domain, &config);
+        let g = gcr::irradiance_at_points(
+            &domain,
+            &trained,
+            &Emitters::new(&domain),
+            &config,
+            &points,
+        )?;
+        let t_gcr = t.elapsed().as_secs_f64();
+        let ours = Estimates {
+            mean: g.iter().map(|x| x.radiosity).collect(),
+            se: g.iter().map(|x| x.std_error).collect(),
+        };
+        let (d, own, ratio) = compare(&ours, &reference);
+        writeln!(
+            md,
+            "| {name} | gcr (paths, 1 %) | {t_gcr:.2} | {d:.4} | {own:.4} | {ratio:.2} |"
+        )?;
+        // ⟨Mitsuba 3 with its own emitter⟩
+        let file = dir.join(format!("emitters{k}.json"));
+        std::fs::write(&file, serde_json::to_string(&[&case.mitsuba])?)?;
+        match mitsuba_lit(&scene, &points, spp, "multijitter", Some(&file))? {
+            Ok(runs) => {
+                for (spp, seconds, est) in runs {
+                    let (d, own, ratio) = compare(&est, &reference);
+                    writeln!(
+                        md,
+                        "| {name} | mitsuba 3 (2 × {spp} spp) | {seconds:.2} | {d:.4} | {own:.4} | {ratio:.2} |"
+                    )?;
+                }
+            }
+            Err(why) => skipped = Some(why),
+        }
+        println!("lights: {name} done");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    let note = skipped.map_or(String::new(), |why| format!("\nMitsuba skipped: {why}.\n"));
+    let out = format!(
+        "# Lights against Mitsuba 3 (issue 31)\n\n\
+         Generated by `cargo xtask bench --only lights{quick}` (release; overwritten by it), {threads} \
+         rayon threads. The side-lit room (`scenes/side-lit-room.obj`, a 1.6 × 1.2 window open to \
+         the outside) lit by one light at a time, irradiance at the 20 work-plane points of \
+         `scenes/side-lit-room.pts` (0.8 m, facing up). Reference: the `baselines` path tracer, \
+         which samples the lights through the same interface as gcr (an independent estimator, \
+         not independent light code); Mitsuba 3 has its own emitters (`point`, `directional`, \
+         `constant`, and the overcast sky as a 512 × 256 `envmap`), `scalar_rgb`, `path`, \
+         `multijitter`, two seeds per run (σ from their difference), at each point a tiny white \
+         square seen by a radiancemeter (`xtask/py/mitsuba_irradiance.py`). `its noise`: the \
+         estimate's own ‖σ‖/‖E_ref‖; Σd²/Σσ² ≈ 1 when an estimate differs from the reference by the \
+         two noises alone. The relative L2 is dominated by the brightest points (the sun patch, \
+         the window).\n\n{md}{note}",
+        quick = if ctx.quick { " --quick" } else { "" },
+        threads = rayon::current_num_threads(),
+    );
+    std::fs::write(ctx.out.join("benchmarks-lights.md"), out)?;
+    Ok(())
+}

@@ -129,3 +129,52 @@ fn bad_light_options_fail_with_a_message() {
         stderr(&o)
     );
 }
+
+/// A run whose light reaches no output point says so (before: `0 0 0` and exit 0 without a
+/// word); a target the ray cap keeps out of reach is named (before: silent); `--probe-out` equal
+/// to `--probes` is refused and the input is left as it was (before: overwritten).
+#[test]
+fn dark_outputs_unmet_targets_and_overwritten_inputs_are_reported() {
+    let (probes, out) = (tmp("dark.txt"), tmp("dark-out.txt"));
+    std::fs::write(&probes, "2 0.8 2.5 0 1 0\n").unwrap();
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "solve",
+            "scenes/side-lit-room.obj",
+            "--probes",
+            &probes,
+            "--probe-quantity",
+            "irradiance",
+        ];
+        args.extend_from_slice(extra);
+        gcr(&args)
+    };
+    // a lamp outside the room, behind a wall (the walls' backs do not reflect)
+    let o = run(&["--probe-out", &out, "--point-light", "-1,1,2.5,100"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("no light reaches them"),
+        "{}",
+        stderr(&o)
+    );
+    let o = run(&[
+        "--probe-out",
+        &out,
+        "--sky",
+        "cie-overcast:1000",
+        "--target-error",
+        "1e-9",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("was not met"), "{}", stderr(&o));
+    let o = run(&["--probe-out", &probes, "--sky", "uniform:1000"]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("probe input"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(
+        std::fs::read_to_string(&probes).unwrap(),
+        "2 0.8 2.5 0 1 0\n"
+    );
+}

@@ -410,6 +410,8 @@ pub struct GatherStats {
     pub relative_std_error: Option<f64>,
     /// The most shadow and cosine rays (each) any point got ([`Gathered::rays`]).
     pub rays: usize,
+    /// Every value is 0 in every band (and there is at least one): no light reached the points.
+    pub dark: bool,
 }
 
 impl GatherStats {
@@ -424,6 +426,10 @@ impl GatherStats {
             network_share: if total > 0.0 { net / total } else { 0.0 },
             relative_std_error: relative_std_error(gathered),
             rays: gathered.iter().map(|g| g.rays).max().unwrap_or(0),
+            dark: !gathered.is_empty()
+                && gathered
+                    .iter()
+                    .all(|g| g.radiosity.iter().all(|v| *v == 0.0)),
         }
     }
 }

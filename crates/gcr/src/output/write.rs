@@ -171,6 +171,15 @@ impl OutputPlan {
         if paths.probes_in.is_some() != paths.probe_out.is_some() {
             return Err(OutputError::ProbesWithoutOutput);
         }
+        if let (Some(input), Some(output)) = (&paths.probes_in, &paths.probe_out) {
+            if same_file(input, output) {
+                return Err(OutputError::SameTarget {
+                    first: "probe input",
+                    second: "probe",
+                    path: output.to_path_buf(),
+                });
+            }
+        }
         let mut targets = paths.targets();
         targets.extend(
             images
@@ -404,6 +413,24 @@ fn record_gather(metrics: &mut Metrics, stats: &GatherStats, config: &SolveConfi
     metrics.relative_std_error = stats.relative_std_error;
     metrics.gather_rays = stats.rays;
     metrics.target_error = config.paths.target_error;
+    // ⟨Say what the numbers cannot: no light at all, a target the ray cap kept out of reach⟩
+    if stats.dark {
+        metrics.warnings.push(
+            "every output point got 0: no light reaches them (a light inside closed geometry or \
+             behind the surfaces, a sun below the horizon, or reflectance 0 everywhere?)"
+                .into(),
+        );
+    }
+    if let (Some(target), Some(error)) = (config.paths.target_error, stats.relative_std_error) {
+        if error > target && stats.rays >= config.paths.max_rays {
+            metrics.warnings.push(format!(
+                "the target error {:.3} % was not met: {:.3} % at the cap of {} rays per point",
+                100.0 * target,
+                100.0 * error,
+                config.paths.max_rays
+            ));
+        }
+    }
 }
 
 /// Records the exposure of the tone-mapped outputs and where it came from.

@@ -8,6 +8,7 @@ use gcr::output::{
 use gcr::{
     GatherMode, GatherSamples, NetworkTarget, OutputFit, PathSettings, SolveConfig, SurfaceClusters,
 };
+use scene_sampler::AnyScene;
 use scene_sampler::LoadOptions;
 use scene_sampler::confine::{DEFAULT_MAX_FILE_BYTES, DEFAULT_MAX_TEXTURE_BYTES};
 use std::path::PathBuf;
@@ -264,6 +265,10 @@ pub struct LightArgs {
     /// through the portals (much less noise deep in daylit rooms). Repeatable.
     #[arg(long, value_name = "X,Y,Z,X,Y,Z,X,Y,Z,X,Y,Z", value_parser = scene_sampler::lights::lighting::parse_portal, allow_hyphen_values = true, requires = "sky")]
     pub portal: Vec<[[f64; 3]; 4]>,
+    /// Find the scene's openings (holes in walls and roofs: planar loops of boundary edges that no
+    /// face covers) and use them as sky portals; each is printed. For interiors.
+    #[arg(long, requires = "sky")]
+    pub auto_portals: bool,
     /// A point light at X,Y,Z with intensity CD (candela); repeatable.
     #[arg(long, value_name = "X,Y,Z,CD", value_parser = scene_sampler::lights::lighting::parse_point, allow_hyphen_values = true)]
     pub point_light: Vec<scene_sampler::lights::lighting::PointSpec>,
@@ -277,6 +282,39 @@ pub struct LightArgs {
 }
 
 impl LightArgs {
+    /// Lights `loaded` (a 3-D scene) with these options, its openings as portals with
+    /// `--auto-portals` (named on stderr unless `quiet`), and refuses a scene nothing lights;
+    /// errs for a Flatland scene given lights.
+    pub fn light(&self, loaded: AnyScene, quiet: bool) -> anyhow::Result<AnyScene> {
+        let mut lighting = self.lighting()?;
+        match loaded {
+            AnyScene::ThreeD(mut s) => {
+                if self.auto_portals {
+                    let found = scene_sampler::openings::openings(&s);
+                    if !quiet {
+                        eprintln!("portals: {} opening(s) found", found.len());
+                        for c in &found {
+                            let v: Vec<String> =
+                                c.iter().flatten().map(|x| format!("{x:.6}")).collect();
+                            eprintln!("  --portal {}", v.join(","));
+                        }
+                    }
+                    lighting.portals.extend(found);
+                }
+                s.add_lights(lighting.lights()?);
+                s.check_lit()?;
+                Ok(AnyScene::ThreeD(s))
+            }
+            AnyScene::Flatland(_) if !lighting.is_empty() || self.auto_portals => {
+                anyhow::bail!(
+                    "lights (--sun, --sky, --point-light, --spot-light, --lights) need a 3-D \
+                     scene; a Flatland scene is lit by its emitting segments"
+                )
+            }
+            flat => Ok(flat),
+        }
+    }
+
     /// The lighting these options describe (the file's, then the options').
     pub fn lighting(&self) -> scene_sampler::Result<scene_sampler::Lighting> {
         use scene_sampler::lights::lighting::Up;

@@ -34,18 +34,10 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
         tolerance: args.probe_tolerance,
     };
     settings.validate()?;
-    let lighting = args.lights.lighting()?;
-    let loaded = match loaded {
-        AnyScene::ThreeD(mut s) => {
-            s.add_lights(lighting.lights()?);
-            s.check_lit()?;
-            AnyScene::ThreeD(s)
-        }
-        AnyScene::Flatland(_) if !lighting.is_empty() => {
-            anyhow::bail!("{}: lights need a 3-D scene", args.scene)
-        }
-        flat => flat,
-    };
+    let loaded = args
+        .lights
+        .light(loaded, false)
+        .with_context(|| format!("lighting `{}`", args.scene))?;
     let (estimates, grey) = match loaded {
         AnyScene::ThreeD(s) if settings.quantity == ProbeQuantity::Irradiance => {
             let at: Vec<_> = (scene_sampler::read_probes(probes)?.iter())

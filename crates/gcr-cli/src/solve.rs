@@ -18,22 +18,16 @@ pub fn run(args: &SolveArgs) -> Result<()> {
     for w in loaded.warnings() {
         eprintln!("warning: {w}");
     }
-    let lighting = args.lights.lighting()?;
+    // ⟨Lights beside the scene's own, then refuse a scene nothing lights⟩
+    let loaded = args
+        .lights
+        .light(loaded, args.quiet)
+        .with_context(|| format!("lighting `{}`", args.scene))?;
     match loaded {
-        AnyScene::ThreeD(mut s) => {
-            // ⟨Lights beside the scene's own, then refuse a scene nothing lights⟩
-            s.add_lights(lighting.lights()?);
-            s.check_lit()?;
+        AnyScene::ThreeD(s) => {
             let bvh = SceneBvh::new(&s);
             let domain = Domain::ThreeD(KernelSampler::new(&s, &bvh));
             solve_and_write(&domain, args, &config, started)
-        }
-        AnyScene::Flatland(_) if !lighting.is_empty() => {
-            anyhow::bail!(
-                "{}: lights (--sun, --sky, --point-light, --spot-light, --lights) need a 3-D scene; \
-                 a Flatland scene is lit by its emitting segments",
-                args.scene
-            )
         }
         AnyScene::Flatland(s) => {
             let domain = Domain::Flat(FlatKernelSampler::new(&s));

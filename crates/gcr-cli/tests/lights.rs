@@ -178,3 +178,29 @@ fn dark_outputs_unmet_targets_and_overwritten_inputs_are_reported() {
         "2 0.8 2.5 0 1 0\n"
     );
 }
+
+/// `--auto-portals` finds the side-lit room's window and names it as a `--portal` to repeat.
+#[test]
+fn auto_portals_find_the_window() {
+    let out = tmp("auto.txt");
+    let o = gcr(&[
+        "solve",
+        "scenes/side-lit-room.obj",
+        "--sky",
+        "cie-overcast:10000",
+        "--auto-portals",
+        "--probes",
+        "scenes/side-lit-room.pts",
+        "--probe-out",
+        &out,
+        "--probe-quantity",
+        "irradiance",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("1 opening(s) found") && err.contains("--portal 2.8"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_to_string(&out).unwrap().lines().count(), 20);
+}

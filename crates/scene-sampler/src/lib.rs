@@ -48,6 +48,7 @@ pub mod lights;
 pub mod load;
 pub mod mis;
 pub mod nearest;
+pub mod openings;
 pub mod probe;
 pub mod provenance;
 pub mod sample;

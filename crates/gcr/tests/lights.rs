@@ -12,6 +12,7 @@ use glam::DVec3;
 use scene_sampler::{
     BANDS, Bands, Face, KernelSampler, Light, LightSample, PointLight, Portal, Portals, Receiver,
     Scene, SceneBvh, ShadowTarget, Sky, SkyModel, Spectrum, Sun, cosine_hemisphere,
+    hemisphere_quadrature,
 };
 use std::f64::consts::PI;
 use std::sync::Arc;
@@ -240,19 +241,9 @@ fn skies_over_an_open_plane() {
     );
 }
 
-/// ∫ f(ω) dω over the upper (+Y) hemisphere, midpoint rule in (cos θ, φ).
+/// ∫ f(ω) dω over the upper (+Y) hemisphere ([`hemisphere_quadrature`]).
 fn quadrature(f: impl Fn(DVec3) -> f64) -> f64 {
-    let n = 600;
-    let mut sum = 0.0;
-    for i in 0..n {
-        let c = (i as f64 + 0.5) / n as f64;
-        let s = (1.0 - c * c).sqrt();
-        for j in 0..n {
-            let phi = 2.0 * PI * (j as f64 + 0.5) / n as f64;
-            sum += f(DVec3::new(s * phi.cos(), c, s * phi.sin()));
-        }
-    }
-    sum * 2.0 * PI / (n * n) as f64
+    hemisphere_quadrature(DVec3::Y, 600, f)
 }
 
 /// The sky component through an unglazed opening: a closed black room 4 × 3 × 4 with a window

@@ -83,7 +83,8 @@ pub use scene::{Camera, Face, RHO_MAX, Scene};
 pub use spectrum::{BANDS, Bands, Spectrum};
 pub use texture::{FaceTexture, Texture, Wrap, srgb_to_linear};
 pub use warp::{
-    cosine_halfplane, cosine_hemisphere, orthonormal_basis, uniform_cone, uniform_cone_pdf,
+    cosine_halfplane, cosine_hemisphere, hemisphere_quadrature, orthonormal_basis, uniform_cone,
+    uniform_cone_pdf,
 };
 
 /// A scene of either dimension, as returned by [`load`] and [`builtin`].

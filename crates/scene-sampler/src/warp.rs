@@ -54,3 +54,20 @@ pub fn cosine_halfplane(n: DVec2, u: f64) -> DVec2 {
     let t = DVec2::new(-n.y, n.x);
     (n * c + t * s).normalize()
 }
+
+/// ∫ f(ω) dω over the hemisphere about the unit `axis`, by the midpoint rule on an n × n grid in
+/// (cos θ, φ) (cos θ uniform is area-uniform on the hemisphere): the reference quadrature of a
+/// sky's normalisation and of the lights' tests.
+pub fn hemisphere_quadrature(axis: DVec3, n: usize, mut f: impl FnMut(DVec3) -> f64) -> f64 {
+    let (t, b) = orthonormal_basis(axis);
+    let mut sum = 0.0;
+    for i in 0..n {
+        let c = (i as f64 + 0.5) / n as f64;
+        let s = (1.0 - c * c).sqrt();
+        for j in 0..n {
+            let phi = 2.0 * std::f64::consts::PI * (j as f64 + 0.5) / n as f64;
+            sum += f(t * (s * phi.cos()) + b * (s * phi.sin()) + axis * c);
+        }
+    }
+    sum * 2.0 * std::f64::consts::PI / (n * n) as f64
+}

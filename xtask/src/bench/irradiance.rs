@@ -68,6 +68,45 @@ pub(super) fn compare(a: &Estimates, r: &Estimates) -> (f64, f64, f64) {
     ((d2 / norm).sqrt(), (own / norm).sqrt(), d2 / var)
 }
 
+/// The `baselines` path tracer's irradiance at `points` (the reference).
+pub(super) fn reference_irradiance(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    points: &[(DVec3, DVec3)],
+    adaptive: &Adaptive,
+) -> Result<Estimates> {
+    let r = baselines::pointwise::irradiance_reference_at(scene, bvh, points, adaptive)?;
+    Ok(Estimates {
+        mean: r.iter().map(|e| e.estimate.mean).collect(),
+        se: r.iter().map(|e| e.estimate.std_error).collect(),
+    })
+}
+
+/// gcr's irradiance at `points`: the default paths gather to `target`, no networks.
+pub(super) fn gcr_irradiance(
+    scene: &Scene,
+    points: &[(DVec3, DVec3)],
+    target: f64,
+) -> Result<Estimates> {
+    let bvh = SceneBvh::new(scene);
+    let domain = Domain::ThreeD(KernelSampler::new(scene, &bvh));
+    let config = SolveConfig {
+        gather: GatherMode::Paths,
+        paths: PathSettings {
+            target_error: Some(target),
+            ..PathSettings::default()
+        },
+        ..SolveConfig::default()
+    };
+    let trained = Trained::without_networks(&domain, &config);
+    let emitters = Emitters::new(&domain);
+    let g = gcr::irradiance_at_points(&domain, &trained, &emitters, &config, points)?;
+    Ok(Estimates {
+        mean: g.iter().map(|x| x.radiosity).collect(),
+        se: g.iter().map(|x| x.std_error).collect(),
+    })
+}
+
 /// One Mitsuba run: samples per point, seconds, estimates.
 pub(super) type Run = (usize, f64, Estimates);
 
@@ -162,11 +201,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
             rel_error: if ctx.quick { 0.02 } else { 0.003 },
             ..Adaptive::default()
         };
-        let r = baselines::pointwise::irradiance_reference_at(&scene, &bvh, &points, &adaptive)?;
-        let reference = Estimates {
-            mean: r.iter().map(|e| e.estimate.mean).collect(),
-            se: r.iter().map(|e| e.estimate.std_error).collect(),
-        };
+        let reference = reference_irradiance(&scene, &bvh, &points, &adaptive)?;
         let t_ref = t.elapsed().as_secs_f64();
         let noise = compare(&reference, &reference).1;
         writeln!(
@@ -177,24 +212,8 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         )?;
         // ⟨GCR: the default paths gather to 1 %⟩
         let t = Instant::now();
-        let bvh = SceneBvh::new(&scene);
-        let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
-        let config = SolveConfig {
-            gather: GatherMode::Paths,
-            paths: PathSettings {
-                target_error: Some(0.01),
-                ..PathSettings::default()
-            },
-            ..SolveConfig::default()
-        };
-        let trained = Trained::without_networks(&domain, &config);
-        let emitters = Emitters::new(&domain);
-        let g = gcr::irradiance_at_points(&domain, &trained, &emitters, &config, &points)?;
+        let gcr_est = gcr_irradiance(&scene, &points, 0.01)?;
         let t_gcr = t.elapsed().as_secs_f64();
-        let gcr_est = Estimates {
-            mean: g.iter().map(|x| x.radiosity).collect(),
-            se: g.iter().map(|x| x.std_error).collect(),
-        };
         let (d, own, ratio) = compare(&gcr_est, &reference);
         writeln!(
             md,

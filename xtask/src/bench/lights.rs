@@ -10,14 +10,13 @@
 //! Writes `benchmarks-lights.md`. Spot lights are left out: Mitsuba's spot falloff is not glTF's
 //! (`crates/gcr/tests/lights.rs` checks ours against its closed form).
 
-use super::irradiance::{Estimates, compare, mitsuba_lit};
+use super::irradiance::{compare, gcr_irradiance, mitsuba_lit, reference_irradiance};
 use crate::Ctx;
 use anyhow::Result;
 use baselines::Adaptive;
-use gcr::{Domain, Emitters, GatherMode, PathSettings, SolveConfig, Trained};
 use glam::DVec3;
 use scene_sampler::lights::lighting::Up;
-use scene_sampler::{KernelSampler, Light, PointLight, SceneBvh, Sky, SkyModel, Sun};
+use scene_sampler::{Light, PointLight, SceneBvh, Sky, SkyModel, Sun};
 use std::f64::consts::PI;
 use std::fmt::Write;
 use std::sync::Arc;
@@ -93,11 +92,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
             max_paths: 4_000_000,
             ..Adaptive::default()
         };
-        let r = baselines::pointwise::irradiance_reference_at(&scene, &bvh, &points, &adaptive)?;
-        let reference = Estimates {
-            mean: r.iter().map(|e| e.estimate.mean).collect(),
-            se: r.iter().map(|e| e.estimate.std_error).collect(),
-        };
+        let reference = reference_irradiance(&scene, &bvh, &points, &adaptive)?;
         let t_ref = t.elapsed().as_secs_f64();
         let name = case.name;
         writeln!(
@@ -108,28 +103,8 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         )?;
         // ⟨GCR: the default paths gather to 1 %⟩
         let t = Instant::now();
-        let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
-        let config = SolveConfig {
-            gather: GatherMode::Paths,
-            paths: PathSettings {
-                target_error: Some(0.01),
-                ..PathSettings::default()
-            },
-            ..SolveConfig::default()
-        };
-        let trained = Trained::without_networks(&domain, &config);
-        let g = gcr::irradiance_at_points(
-            &domain,
-            &trained,
-            &Emitters::new(&domain),
-            &config,
-            &points,
-        )?;
+        let ours = gcr_irradiance(&scene, &points, 0.01)?;
         let t_gcr = t.elapsed().as_secs_f64();
-        let ours = Estimates {
-            mean: g.iter().map(|x| x.radiosity).collect(),
-            se: g.iter().map(|x| x.std_error).collect(),
-        };
         let (d, own, ratio) = compare(&ours, &reference);
         writeln!(
             md,

@@ -186,18 +186,8 @@ mod tests {
             q(2.0, 3.0, 0.0, 2.0, 1.0),
         ]);
         let p = DVec3::new(0.3, 0.2, 0.0);
-        // ∫ pdf dω over the sphere by a fine midpoint rule in (cos θ, φ) about +z
-        let n = 1500;
-        let mut sum = 0.0;
-        for i in 0..n {
-            let c = (i as f64 + 0.5) / n as f64;
-            let s = (1.0 - c * c).sqrt();
-            for j in 0..n {
-                let phi = 2.0 * std::f64::consts::PI * (j as f64 + 0.5) / n as f64;
-                sum += portals.pdf(p, DVec3::new(s * phi.cos(), s * phi.sin(), c));
-            }
-        }
-        let integral = sum * 2.0 * std::f64::consts::PI / (n * n) as f64;
+        // ∫ pdf dω over the directions (all toward +z, where the portals are)
+        let integral = crate::hemisphere_quadrature(DVec3::Z, 1500, |w| portals.pdf(p, w));
         assert!((integral - 1.0).abs() < 5e-3, "{integral}");
         for k in 0..100 {
             let u = [(k as f64 + 0.5) / 100.0, 0.37];

@@ -108,19 +108,7 @@ impl Sky {
             SkyModel::Uniform => PI,
             SkyModel::CieOvercast => 7.0 * PI / 9.0,
             SkyModel::CieClear { .. } => {
-                // midpoint rule in (cos θ, φ): ∫ shape(ω) cos θ dω
-                let (t, b) = crate::orthonormal_basis(self.up);
-                let mut sum = 0.0;
-                for i in 0..QUAD {
-                    let c = (i as f64 + 0.5) / QUAD as f64;
-                    let s = (1.0 - c * c).sqrt();
-                    for j in 0..QUAD {
-                        let phi = 2.0 * PI * (j as f64 + 0.5) / QUAD as f64;
-                        let w = t * (s * phi.cos()) + b * (s * phi.sin()) + self.up * c;
-                        sum += self.shape(w) * c;
-                    }
-                }
-                sum * 2.0 * PI / (QUAD * QUAD) as f64
+                crate::hemisphere_quadrature(self.up, QUAD, |w| self.shape(w) * w.dot(self.up))
             }
         }
     }
@@ -299,19 +287,8 @@ mod tests {
             SkyModel::CieClear { sun },
         ] {
             let sky = Sky::new(model.clone(), up, [10_000.0; BANDS], [0.0; BANDS]).unwrap();
-            let (t, b) = crate::orthonormal_basis(up);
-            let n = 1000;
-            let mut quad = 0.0;
-            for i in 0..n {
-                let c = (i as f64 + 0.5) / n as f64;
-                let s = (1.0 - c * c).sqrt();
-                for j in 0..n {
-                    let phi = 2.0 * PI * (j as f64 + 0.5) / n as f64;
-                    let w = t * (s * phi.cos()) + b * (s * phi.sin()) + up * c;
-                    quad += sky.escaped(w)[0] / PI * c;
-                }
-            }
-            quad *= 2.0 * PI / (n * n) as f64;
+            let quad =
+                crate::hemisphere_quadrature(up, 1000, |w| sky.escaped(w)[0] / PI * w.dot(up));
             assert!((quad / 10_000.0 - 1.0).abs() < 2e-3, "{model:?}: {quad}");
             let at = Receiver {
                 p: DVec3::ZERO,

@@ -43,15 +43,15 @@ fn the_readmes_main_command_writes_a_lit_image_a_valid_mesh_and_metrics() {
     assert_eq!(metrics["scene"], "cornell-box");
     assert_eq!(metrics["gather"], "paths");
     assert_eq!(metrics["bands"], 3);
-    assert!(metrics["kernel_cells"].as_u64().unwrap() >= 10, "{metrics}");
-    assert!(metrics["fem_steps"].as_u64().unwrap() >= 1, "{metrics}");
+    // nothing in the main command reads the networks: none is trained
+    assert_eq!(metrics["kernel_cells"], 0, "{metrics}");
+    assert_eq!(metrics["stopped_by"], "unused", "{metrics}");
     assert!(
         metrics["seconds"]["total"].as_f64().unwrap() > 0.0,
         "{metrics}"
     );
-    assert!(!metrics["stopped_by"].as_str().unwrap().is_empty());
-    // The default gather corrects every ray: no share of B comes from the networks (they set
-    // the mesh's resolution), and it ran to the default quality's 2 %.
+    // The default gather corrects every ray: no share of B comes from the networks, and it ran
+    // to the default quality's 2 %.
     assert_eq!(metrics["network_share"].as_f64().unwrap(), 0.0, "{metrics}");
     assert_eq!(metrics["target_error"].as_f64().unwrap(), 0.02);
     let e = metrics["relative_std_error"].as_f64().unwrap();

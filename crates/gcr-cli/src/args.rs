@@ -131,8 +131,9 @@ pub struct SolveArgs {
     /// (by default they are skipped: same result, less time).
     #[arg(long)]
     pub keep_base: bool,
-    /// Train the networks even when nothing reads them (the default paths gather writing only
-    /// probes skips them: same values, less time; the metrics then say `stopped_by: "unused"`).
+    /// Train the networks even when nothing reads them (the default paths gather skips them and
+    /// the metrics say `stopped_by: "unused"`: the same values at probes and pixels, less time;
+    /// an output mesh then starts from a uniform resolution instead of the shading network's).
     #[arg(long)]
     pub keep_networks: bool,
     /// Facing masks on the projected kernel's Gaussians: each lives only on surfaces facing

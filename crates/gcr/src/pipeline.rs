@@ -343,20 +343,30 @@ fn radiosity_at(
     }
 }
 
+/// The output mesh's starting resolution when no network was trained (the paths gather reads
+/// none): the edge of this many equilateral triangles covering the scene. Coarse on purpose:
+/// [`crate::refine`] then splits where B varies (shadows), which on cornell-box's floor resolves
+/// the short block's shadow better, and sooner, than starting from the networks' resolution
+/// (docs/bakes.md). Faces already smaller than the edge are kept as they are.
+pub const UNIFORM_MESH_TRIANGLES: f64 = 150.0;
+
 /// The local edge length the shading network asks for near `p`: the width (mean edge length,
-/// eq. 2.10) of the nearest shading cell.
+/// eq. 2.10) of the nearest shading cell. Without networks ([`Trained::without_networks`]) one
+/// edge everywhere: that of [`UNIFORM_MESH_TRIANGLES`] equilateral triangles covering the scene.
 pub struct LocalEdge {
     centres: Vec<DVec3>,
     widths: Vec<f64>,
     grid: BoxGrid,
     reach: f64,
+    /// The edge where there are no cells.
+    uniform: f64,
 }
 
 impl LocalEdge {
     /// Indexes the shading cells of the last FEM step; when the shading network was skipped
     /// (`SolveConfig::skip_unused_base`), the kernel cells' receiver halves and widths, which set
     /// the detail of B_refl.
-    pub fn new(trained: &Trained) -> Self {
+    pub fn new(trained: &Trained, total_area: f64) -> Self {
         let geo = &trained.fem.base.geo;
         let (centres, widths) = if geo.is_empty() {
             (trained.kernel.wy.clone(), trained.kernel.width.clone())
@@ -370,11 +380,16 @@ impl LocalEdge {
             centres,
             widths,
             reach,
+            // an equilateral triangle of edge e has area √3/4 · e²
+            uniform: (4.0 * total_area / (3f64.sqrt() * UNIFORM_MESH_TRIANGLES)).sqrt(),
         }
     }
 
-    /// Width of the nearest cell to `p` (infinite when there are no cells).
+    /// Width of the nearest cell to `p` (the uniform edge when there are no cells).
     pub fn at(&self, p: DVec3) -> f64 {
+        if self.centres.is_empty() {
+            return self.uniform;
+        }
         let mut near = Vec::new();
         let mut r = self.reach;
         for _ in 0..6 {
@@ -396,7 +411,7 @@ impl LocalEdge {
         } else {
             pick(&mut near.iter().map(|&i| i as usize))
         };
-        best.map_or(f64::INFINITY, |i| self.widths[i])
+        best.map_or(self.uniform, |i| self.widths[i])
     }
 }
 
@@ -475,7 +490,7 @@ pub fn output_mesh(
         return Ok((ShadedMesh::default(), GatherStats::default()));
     };
     let faces: Vec<[DVec3; 3]> = scene.faces.iter().map(|f| f.v).collect();
-    let local = LocalEdge::new(trained);
+    let local = LocalEdge::new(trained, scene.total_area());
     let tri = retriangulate(&faces, |p| local.at(p), limits);
     let mut vertex_face = vec![0u32; tri.positions.len()];
     for (t, f) in tri.triangles.iter().zip(&tri.face_of_triangle) {

@@ -87,11 +87,12 @@ pub struct OutputPlan {
 }
 
 impl OutputPlan {
-    /// Whether an output reads the networks whatever the gather: the output mesh (images, views,
-    /// glTF, PLY, the Flatland image) is re-triangulated to the shading network's resolution, and
-    /// the kernel image draws the kernel network. Probes and metrics do not.
+    /// Whether an output reads the networks whatever the gather: only the kernel image, which
+    /// draws the kernel network. The output mesh (images, views, glTF, PLY) is re-triangulated to
+    /// the shading network's resolution when there is one and to a uniform one otherwise
+    /// (`pipeline::LocalEdge`), then refined by B; probes and metrics read none.
     pub fn needs_networks(&self) -> bool {
-        self.needs_mesh() || self.paths.kernel_image.is_some()
+        self.paths.kernel_image.is_some()
     }
 
     /// Whether the outputs need the output mesh: glTF, PLY, images in mesh mode, and pixel

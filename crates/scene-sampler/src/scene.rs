@@ -503,10 +503,11 @@ fn kept_ids(n: usize, dropped: &[usize]) -> Vec<usize> {
 /// Removes coincident duplicate faces: the same three vertices (within `1e-9 · diagonal`, each coordinate
 /// rounded to that grid) in the same cyclic order, i.e. the same triangle with the same front side. A light
 /// quad written twice would otherwise emit twice: B doubles in the solvers that integrate over faces, and
-/// not in a path tracer (which sees only the face a ray hits first). Duplicates with the same material are
-/// merged (the first kept) with a warning naming them; with different materials the scene is refused
-/// ([`SceneError::ConflictingDuplicate`]), since which one a ray sees would be decided by rounding.
-/// Coincident faces with *opposite* windings are two-sided thin geometry and are kept.
+/// not in a path tracer (which sees only the face a ray hits first). Duplicates with the same material
+/// ([`same_material`]: for textured faces the same texture and factor, whatever their texture
+/// coordinates) are merged (the first kept) with a warning naming them; with different materials the
+/// scene is refused ([`SceneError::ConflictingDuplicate`]), since which one a ray sees would be decided
+/// by rounding. Coincident faces with *opposite* windings are two-sided thin geometry and are kept.
 fn merge_duplicates(
     source: &str,
     faces: Vec<Face>,
@@ -542,7 +543,7 @@ fn merge_duplicates(
         let key = key(&f);
         if let Some(&j) = first.get(&key) {
             let g = &out[j];
-            if g.rho != f.rho || g.emission != f.emission {
+            if !same_material(g, &f) {
                 return Err(SceneError::ConflictingDuplicate {
                     source_name: source.into(),
                     face: ids[k],
@@ -551,8 +552,13 @@ fn merge_duplicates(
                     other_object: name(g.object),
                 });
             }
+            let uv = if g.texture == f.texture {
+                ""
+            } else {
+                " (other texture coordinates)"
+            };
             merged.push(format!(
-                "face {} (object `{}`) = face {} (object `{}`)",
+                "face {} (object `{}`) = face {} (object `{}`){uv}",
                 ids[k],
                 name(f.object),
                 out_ids[j],
@@ -566,14 +572,26 @@ fn merge_duplicates(
     }
     if !merged.is_empty() {
         warnings.push(format!(
-            "{source}: merged {} coincident duplicate face(s) (same vertices, winding and material; each \
-             would have counted twice): {}{}",
+            "{source}: merged {} coincident duplicate face(s) (same vertices, winding and material, the \
+             first one's texture coordinates kept; each would have counted twice): {}{}",
             merged.len(),
             merged[..merged.len().min(10)].join(", "),
             if merged.len() > 10 { ", ..." } else { "" }
         ));
     }
     Ok(out)
+}
+
+/// Whether two coincident faces are of one material: the same emission and albedo, textured faces by
+/// the same texture times the same factor (their texture coordinates, and so their mean ρ, may differ:
+/// a model's UV seam written twice).
+fn same_material(a: &Face, b: &Face) -> bool {
+    a.emission == b.emission
+        && match (&a.texture, &b.texture) {
+            (Some(x), Some(y)) => x.texture == y.texture && x.factor == y.factor,
+            (None, None) => a.rho == b.rho,
+            _ => false,
+        }
 }
 
 /// Counts, per object, directed edges that appear twice within it (the two faces sharing them wind the same

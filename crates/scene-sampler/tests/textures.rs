@@ -119,3 +119,52 @@ fn the_glb_reads_the_same_textures_as_the_obj() {
         }
     }
 }
+
+/// A textured face written twice with other texture coordinates (a model's UV seam, 152 pairs in a
+/// public cathedral) is merged with a warning naming both faces, not refused; a coincident face
+/// with another texture still is.
+#[test]
+fn coincident_faces_differing_only_in_uvs_are_merged() {
+    let dir = std::env::temp_dir().join(format!("gcr-tex-dup-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut png = std::io::Cursor::new(Vec::new());
+    image::RgbImage::from_fn(4, 4, |x, y| image::Rgb([(40 * (x + y)) as u8; 3]))
+        .write_to(&mut png, image::ImageFormat::Png)
+        .unwrap();
+    std::fs::write(dir.join("t.png"), png.into_inner()).unwrap();
+    std::fs::write(dir.join("u.png"), std::fs::read(dir.join("t.png")).unwrap()).unwrap();
+    std::fs::write(
+        dir.join("t.mtl"),
+        "newmtl m\nKd 0.8 0.8 0.8\nmap_Kd t.png\nnewmtl n\nKd 0.8 0.8 0.8\nmap_Kd u.png\n\
+         newmtl l\nKe 1 1 1\n",
+    )
+    .unwrap();
+    let obj = |second: &str| {
+        format!(
+            "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\nvt 0.5 0.5\n\
+             o a\nusemtl m\nf 1/1 3/3 2/2\no b\nusemtl {second}\nf 1/4 3/3 2/2\n\
+             v 0 1 0\nv 0 1 1\nv 1 1 0\no lamp\nusemtl l\nf 4 5 6\n"
+        )
+    };
+    std::fs::write(dir.join("same.obj"), obj("m")).unwrap();
+    let s = scene_sampler::load_obj(dir.join("same.obj")).unwrap();
+    assert_eq!(s.faces.len(), 2, "{:?}", s.warnings);
+    let w: Vec<_> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("duplicate"))
+        .collect();
+    assert_eq!(w.len(), 1, "{:?}", s.warnings);
+    assert!(
+        w[0].contains("face 1 (object `b`) = face 0 (object `a`) (other texture coordinates)"),
+        "{w:?}"
+    );
+    // the first face's mapping is kept
+    assert_eq!(
+        s.faces[0].texture.unwrap().uv[0],
+        glam::DVec2::new(0.0, 1.0)
+    );
+    std::fs::write(dir.join("other.obj"), obj("n")).unwrap();
+    let e = scene_sampler::load_obj(dir.join("other.obj")).unwrap_err();
+    assert!(e.to_string().contains("different material"), "{e}");
+}

@@ -81,7 +81,7 @@ pub use provenance::{GltfMaterial, GltfMesh, GltfNode, GltfSource, NodeTransform
 pub use sample::{FlatPoint, FlatSampler, NO_FACE, SurfacePoint, SurfaceSampler};
 pub use scene::{Camera, Face, RHO_MAX, Scene};
 pub use spectrum::{BANDS, Bands, Spectrum};
-pub use texture::{FaceTexture, Texture, Wrap, srgb_to_linear};
+pub use texture::{FaceTexture, Mipmaps, Texture, Wrap, srgb_to_linear};
 pub use warp::{
     cosine_halfplane, cosine_hemisphere, hemisphere_quadrature, orthonormal_basis, uniform_cone,
     uniform_cone_pdf,

@@ -420,7 +420,6 @@ fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
                         uv: [a, b, d],
                         factor: rho,
                     };
-                    face.rho = ft.mean_rho(&textures);
                     face.texture = Some(ft);
                 }
             }
@@ -434,6 +433,7 @@ fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
             }
         }
     }
+    average_albedo(&mut faces, &textures);
     let mut scene =
         Scene::new(&stem(path), &source, faces, objects, None)?.with_textures(textures)?;
     warnings.extend(untextured.into_iter().map(|o| {
@@ -739,7 +739,6 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
                             uv: [a, b, c],
                             factor: rho,
                         };
-                        face.rho = ft.mean_rho(&textures);
                         face.texture = Some(ft);
                     }
                 }
@@ -757,6 +756,7 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
             ),
         });
     }
+    average_albedo(&mut faces, &textures);
     let mut scene =
         Scene::new(&stem(path), &source, faces, objects, camera)?.with_textures(textures)?;
     scene.parts = parts;
@@ -1004,6 +1004,21 @@ pub fn write_gltf(scene: &Scene, dir: impl AsRef<Path>) -> Result<std::path::Pat
     let p = dir.as_ref().join(format!("{}.gltf", scene.name));
     std::fs::write(&p, to_gltf(scene)).map_err(io(&p))?;
     Ok(p)
+}
+
+/// Sets every textured face's [`crate::Face::rho`] to its texture's mean over the face
+/// ([`crate::FaceTexture::mean_rho`]), in parallel over the faces.
+fn average_albedo(faces: &mut [Face], textures: &[crate::Texture]) {
+    use rayon::prelude::*;
+    if !faces.iter().any(|f| f.texture.is_some()) {
+        return;
+    }
+    let mipmaps = crate::Mipmaps::new(textures);
+    faces.par_iter_mut().for_each(|f| {
+        if let Some(t) = &f.texture {
+            f.rho = t.mean_rho(&mipmaps);
+        }
+    });
 }
 
 #[cfg(test)]

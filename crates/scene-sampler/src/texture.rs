@@ -276,24 +276,50 @@ impl FaceTexture {
         Spectrum(std::array::from_fn(|k| self.factor.0[k] * t[k]))
     }
 
-    /// The mean of ρ over the face: the centroids of an N × N subdivision of the triangle, N at
-    /// least twice the number of texels an edge spans (so that a regular pattern is not aliased),
-    /// 4 to 256.
-    pub fn mean_rho(&self, textures: &[Texture]) -> Spectrum {
-        let (w, h) = textures[self.texture as usize].size();
-        let scale = glam::DVec2::new(f64::from(w), f64::from(h));
-        let span = [(0, 1), (1, 2), (2, 0)]
-            .iter()
-            .map(|&(a, b)| ((self.uv[b] - self.uv[a]) * scale).abs().max_element())
-            .fold(0.0, f64::max);
-        let n = (2.0 * span).ceil().clamp(4.0, 256.0) as usize;
+    /// The mean of ρ over the face, read from the coarsest level of `mipmaps` on which the face's
+    /// longest edge still spans at most [`Mipmaps::SPAN`] texels (a face tiling a texture many times
+    /// reads its mean from the 1 × 1 level): the centroids of an N × N subdivision of the triangle,
+    /// N at least twice the texels an edge spans there (so that a regular pattern is not aliased),
+    /// 4 to 2 · [`Mipmaps::SPAN`]. At most 2 048 lookups per face, whatever its size in texels.
+    pub fn mean_rho(&self, mipmaps: &Mipmaps) -> Spectrum {
+        let levels = &mipmaps.levels[self.texture as usize];
+        let span_on = |t: &Texture| {
+            let (w, h) = t.size();
+            let scale = DVec2::new(f64::from(w), f64::from(h));
+            [(0, 1), (1, 2), (2, 0)]
+                .iter()
+                .map(|&(a, b)| ((self.uv[b] - self.uv[a]) * scale).abs().max_element())
+                .fold(0.0, f64::max)
+        };
+        // a clamped axis read outside [0, 1] repeats the full texture's edge texels, which a
+        // coarser level has blurred: those faces read the full texture, as many lookups as before
+        // the mip chain (rare: clamped textures are atlases and decals mapped inside [0, 1])
+        let outside = (0..2).any(|a| {
+            levels[0].wrap[a] == Wrap::ClampToEdge
+                && self
+                    .uv
+                    .iter()
+                    .any(|uv| !(-1e-6..=1.0 + 1e-6).contains(&uv[a]))
+        });
+        let (level, most) = if outside {
+            (&levels[0], 256.0)
+        } else {
+            let level = (levels.iter())
+                .find(|t| span_on(t) <= Mipmaps::SPAN)
+                .unwrap_or_else(|| levels.last().expect("a texture has at least its own level"));
+            (level, 2.0 * Mipmaps::SPAN)
+        };
+        let n = (2.0 * span_on(level)).ceil().clamp(4.0, most) as usize;
         let mut sum = [0.0; 3];
         let mut count = 0.0;
         for i in 0..n {
             for j in 0..n - i {
                 // the upward sub-triangle (i, j)'s centroid, and the downward one's where it exists
                 let mut add = |b1: f64, b2: f64| {
-                    let r = self.rho(textures, b1, b2).0;
+                    let uv = self.uv[0]
+                        + b1 * (self.uv[1] - self.uv[0])
+                        + b2 * (self.uv[2] - self.uv[0]);
+                    let r = level.sample(uv);
                     for k in 0..3 {
                         sum[k] += r[k];
                     }
@@ -306,8 +332,99 @@ impl FaceTexture {
                 }
             }
         }
-        Spectrum(sum.map(|s| s / count))
+        Spectrum(std::array::from_fn(|k| self.factor.0[k] * sum[k] / count))
     }
+}
+
+/// Every texture's mip chain: the texture, then box-filtered levels of half the size (rounded up)
+/// down to 1 × 1, each level's texel the area-weighted mean of the texels of the level above that
+/// it covers in (u, v) (so every level has the texture's mean, odd sizes included). Built at load
+/// to average ρ over faces ([`FaceTexture::mean_rho`]), then dropped: 1/3 more memory while it
+/// lives.
+pub struct Mipmaps {
+    levels: Vec<Vec<Texture>>,
+}
+
+impl Mipmaps {
+    /// The most texels a face's edge spans on the level its mean is read from.
+    pub const SPAN: f64 = 16.0;
+
+    /// The mip chains of `textures`.
+    pub fn new(textures: &[Texture]) -> Self {
+        let levels = (textures.iter())
+            .map(|t| {
+                let mut chain = vec![t.clone()];
+                while let Some(next) = chain.last().and_then(Texture::half) {
+                    chain.push(next);
+                }
+                chain
+            })
+            .collect();
+        Self { levels }
+    }
+}
+
+impl Texture {
+    /// The next mip level: ⌈w/2⌉ × ⌈h/2⌉ texels, each the area-weighted mean of the texels it
+    /// covers (a 1-D box resample along each axis). None at 1 × 1.
+    fn half(&self) -> Option<Texture> {
+        if self.width == 1 && self.height == 1 {
+            return None;
+        }
+        let (w, h) = (self.width as usize, self.height as usize);
+        let (w2, h2) = (w.div_ceil(2), h.div_ceil(2));
+        let (wx, wy) = (box_weights(w, w2), box_weights(h, h2));
+        // along u, then along v
+        let mut rows = vec![[0f32; 3]; w2 * h];
+        for j in 0..h {
+            for (o, taps) in wx.iter().enumerate() {
+                let mut acc = [0f64; 3];
+                for &(s, wt) in taps {
+                    let t = self.texels[j * w + s];
+                    for k in 0..3 {
+                        acc[k] += wt * f64::from(t[k]);
+                    }
+                }
+                rows[j * w2 + o] = acc.map(|a| a as f32);
+            }
+        }
+        let mut texels = vec![[0f32; 3]; w2 * h2];
+        for (o, taps) in wy.iter().enumerate() {
+            for i in 0..w2 {
+                let mut acc = [0f64; 3];
+                for &(s, wt) in taps {
+                    let t = rows[s * w2 + i];
+                    for k in 0..3 {
+                        acc[k] += wt * f64::from(t[k]);
+                    }
+                }
+                texels[o * w2 + i] = acc.map(|a| a as f32);
+            }
+        }
+        Some(Texture {
+            name: self.name.clone(),
+            width: w2 as u32,
+            height: h2 as u32,
+            texels,
+            wrap: self.wrap,
+        })
+    }
+}
+
+/// For each of `m` output texels covering `[o, o+1]·n/m` of an axis of `n` source texels, the source
+/// texels it overlaps and their weights (overlap / width, summing to 1).
+fn box_weights(n: usize, m: usize) -> Vec<Vec<(usize, f64)>> {
+    let r = n as f64 / m as f64;
+    (0..m)
+        .map(|o| {
+            let (lo, hi) = (o as f64 * r, (o + 1) as f64 * r);
+            (lo.floor() as usize..(hi.ceil() as usize).min(n))
+                .map(|s| (s, ((s + 1) as f64).min(hi) - (s as f64).max(lo)))
+                .filter(|&(_, w)| w > 0.0)
+                .map(|(s, w)| (s, w / r))
+                .collect()
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -371,8 +488,106 @@ mod tests {
             uv: [DVec2::ZERO, DVec2::new(4.0, 0.0), DVec2::new(0.0, 4.0)],
             factor: Spectrum::grey(0.8),
         };
-        let m = ft.mean_rho(&t).0[0];
+        let m = ft.mean_rho(&Mipmaps::new(&t)).0[0];
         assert!((m - 0.4).abs() < 0.02, "{m}");
+    }
+
+    /// The mean read from the mip chain against the same subdivision rule on the full texture
+    /// (N = 2 · span, up to 2 048), on a 61 × 37 texture (odd sizes on every level) of a gradient,
+    /// stripes and white noise, for triangles spanning 0.3 to 8 500 texels in every wrap mode.
+    /// Equal to rounding up to 16 texels; measured worst relative difference (the noise band, on
+    /// faces about the texture's size, where the coarse level's bilinear lookup blurs across the
+    /// face's edges) 1.7 % repeat, 3.4 % clamp, 3.7 % mirrored; below 0.1 % on faces that tile
+    /// the texture 5 times or more. Every level keeps the texture's mean.
+    #[test]
+    fn the_mip_chain_mean_matches_the_full_resolution_mean() {
+        let (w, h) = (61u32, 37u32);
+        let mut state = 12345u64;
+        let mut noise = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 56) as u8
+        };
+        let rgb: Vec<u8> = (0..w * h)
+            .flat_map(|i| {
+                let (x, y) = (i % w, i / w);
+                [
+                    (4 * x) as u8,
+                    if (x / 3 + y / 5) % 2 == 0 { 230 } else { 20 },
+                    noise(),
+                ]
+            })
+            .collect();
+        for wrap in [Wrap::Repeat, Wrap::ClampToEdge, Wrap::MirroredRepeat] {
+            let t = [Texture::from_srgb8("t", w, h, &rgb, [wrap; 2]).unwrap()];
+            let mips = Mipmaps::new(&t);
+            let chain = &mips.levels[0];
+            assert_eq!(chain.last().unwrap().size(), (1, 1));
+            let mean = |t: &Texture| {
+                let n = t.texels().len() as f64;
+                [0, 1, 2].map(|k| t.texels().iter().map(|p| f64::from(p[k])).sum::<f64>() / n)
+            };
+            for level in chain {
+                for k in 0..3 {
+                    assert!((mean(level)[k] - mean(&chain[0])[k]).abs() < 1e-5);
+                }
+            }
+            let mut worst = 0f64;
+            for f in 0..40 {
+                let scale = 0.005 * 1.3f64.powi(f);
+                let mut r = || f64::from(noise()) / 255.0;
+                let o = DVec2::new(r(), r());
+                let ft = FaceTexture {
+                    texture: 0,
+                    uv: [
+                        o,
+                        o + scale * DVec2::new(1.0, 0.2 * r()),
+                        o + scale * DVec2::new(0.3 * r(), 1.0),
+                    ],
+                    factor: Spectrum([0.9, 0.8, 0.7]),
+                };
+                let inside = ft
+                    .uv
+                    .iter()
+                    .all(|uv| (0.0..=1.0).contains(&uv.x) && (0.0..=1.0).contains(&uv.y));
+                if wrap == Wrap::ClampToEdge && !inside {
+                    continue; // read at full resolution by the rule below, capped at N = 256
+                }
+                // the full-resolution rule
+                let span = [(0, 1), (1, 2), (2, 0)]
+                    .iter()
+                    .map(|&(a, b)| {
+                        ((ft.uv[b] - ft.uv[a]) * DVec2::new(61.0, 37.0))
+                            .abs()
+                            .max_element()
+                    })
+                    .fold(0.0, f64::max);
+                let n = (2.0 * span).ceil().clamp(4.0, 2048.0) as usize;
+                let (mut sum, mut count) = ([0.0; 3], 0.0);
+                for i in 0..n {
+                    for j in 0..n - i {
+                        let (fi, fj, nf) = (i as f64, j as f64, n as f64);
+                        let mut add = |b1: f64, b2: f64| {
+                            let v = ft.rho(&t, b1, b2).0;
+                            (0..3).for_each(|k| sum[k] += v[k]);
+                            count += 1.0;
+                        };
+                        add((fi + 1.0 / 3.0) / nf, (fj + 1.0 / 3.0) / nf);
+                        if i + j + 1 < n {
+                            add((fi + 2.0 / 3.0) / nf, (fj + 2.0 / 3.0) / nf);
+                        }
+                    }
+                }
+                let fast = ft.mean_rho(&mips).0;
+                for k in 0..3 {
+                    let exact = sum[k] / count;
+                    worst = worst.max((fast[k] - exact).abs() / exact);
+                }
+            }
+            eprintln!("{wrap:?}: worst relative difference {worst:.2e}");
+            assert!(worst < 0.05, "{wrap:?}: {worst}");
+        }
     }
 
     #[test]

@@ -51,6 +51,7 @@ mod shading;
 mod shooting;
 mod solve;
 mod spatial;
+mod weld;
 
 pub use config::{
     BaseDomain, Breaking, ConfigError, GatherMode, GatherSamples, NetworkTarget, OutputFit,

@@ -509,7 +509,16 @@ pub fn output_mesh(
         radiosity_at_points(domain, trained, &emitters, config, &points)
     };
     let vertices: Vec<(DVec3, u32)> = tri.positions.iter().copied().zip(vertex_face).collect();
-    let gathered = gather_at(&vertices)?;
+    // ⟨Gather once where coplanar faces of one material share a vertex (crate::weld)⟩
+    let gathered = match domain {
+        Domain::ThreeD(k) => {
+            let welded = crate::weld::weld(&scene.faces, k.bvh, scene.diagonal(), &vertices);
+            let at: Vec<(DVec3, u32)> = welded.gathered.iter().map(|&v| vertices[v]).collect();
+            let once = gather_at(&at)?;
+            welded.representative.iter().map(|&r| once[r]).collect()
+        }
+        Domain::Flat(_) => gather_at(&vertices)?,
+    };
     // ⟨Refine where B varies faster than linear interpolation follows (shadow edges)⟩
     let (tri, gathered) = if config.gather == GatherMode::Paths {
         let refine_limits = RefineLimits::for_diagonal(scene.diagonal());

@@ -91,7 +91,7 @@ fn print_images(m: &gcr::Metrics) {
             v(i.target),
             v(i.up),
             i.fov_y_deg,
-            100.0 * i.front_share
+            100.0 * i.lit_share
         );
     }
 }

@@ -456,3 +456,70 @@ fn a_gltf_camera_node_is_the_default_camera() {
     // Looking into the lit box: most of the image is lit.
     assert!(lit_share(&png) > 0.5, "{}", lit_share(&png));
 }
+
+/// A closed room of thick walls (an inner box facing in, an outer one facing out, as models of
+/// buildings are) with a lamp inside: from outside the camera sees front faces that no light
+/// reaches. The image reports them as not lit and warns; the automatic camera goes inside.
+#[test]
+fn unlit_outer_walls_are_not_lit_and_the_automatic_camera_goes_inside() {
+    let d = dir("closed");
+    std::fs::write(
+        d.join("room.mtl"),
+        "newmtl lamp\nKd 0 0 0\nKe 5 5 5\nnewmtl wall\nKd 0.6 0.6 0.6\n",
+    )
+    .unwrap();
+    let mut obj = String::from("mtllib room.mtl\n");
+    for (lo, hi) in [(0.0, 2.0), (-0.1, 2.1)] {
+        for z in [lo, hi] {
+            for y in [lo, hi] {
+                for x in [lo, hi] {
+                    obj += &format!("v {x} {y} {z}\n");
+                }
+            }
+        }
+    }
+    // the six sides of the inner box facing in, of the outer box (vertices 9–16) facing out
+    obj += "o walls\nusemtl wall\n";
+    for q in [
+        [1, 2, 4, 3],
+        [5, 7, 8, 6],
+        [1, 5, 6, 2],
+        [3, 4, 8, 7],
+        [1, 3, 7, 5],
+        [2, 6, 8, 4],
+    ] {
+        obj += &format!("f {} {} {} {}\n", q[0], q[1], q[2], q[3]);
+        obj += &format!("f {} {} {} {}\n", q[3] + 8, q[2] + 8, q[1] + 8, q[0] + 8);
+    }
+    obj += "v 0.7 1.9 0.7\nv 1.3 1.9 0.7\nv 1.3 1.9 1.3\nv 0.7 1.9 1.3\n\
+            o lamp\nusemtl lamp\nf 17 18 19 20\n";
+    let path = d.join("room.obj");
+    std::fs::write(&path, obj).unwrap();
+    let (png, m) = (d.join("out.png"), d.join("m.json"));
+    let run = |camera: &[&str]| {
+        let mut args = vec![
+            "solve",
+            path.to_str().unwrap(),
+            "--quality",
+            "draft",
+            "--resolution",
+            "64x48",
+            "--image",
+            png.to_str().unwrap(),
+            "--metrics",
+            m.to_str().unwrap(),
+        ];
+        args.extend_from_slice(camera);
+        let err = ok(&gcr(&args));
+        (err, metrics(&m)["images"][0].clone())
+    };
+    let (err, outside) = run(&["--camera-eye", "1,1,-3", "--camera-target", "1,1,1"]);
+    assert!(outside["front_share"].as_f64().unwrap() > 0.5, "{outside}");
+    assert_eq!(outside["lit_share"].as_f64().unwrap(), 0.0, "{outside}");
+    assert!(err.contains("no light reaches"), "{err}");
+    assert!(err.contains("0 % of the pixels on lit surfaces"), "{err}");
+    let (err, auto) = run(&[]);
+    assert_eq!(auto["camera_source"], "automatic-inside", "{auto}");
+    assert!(auto["lit_share"].as_f64().unwrap() > 0.9, "{auto}");
+    assert!(!err.contains("warning"), "{err}");
+}

@@ -148,6 +148,9 @@ pub struct ImageRecord {
     pub camera_source: String,
     /// Share of the sub-samples that see the front (lit side) of a surface.
     pub front_share: f64,
+    /// Share that see the front of a surface with B > 0 (what the picture shows lit; the front of
+    /// a surface no light reaches is black).
+    pub lit_share: f64,
     /// Share that see a back face (drawn black).
     pub back_share: f64,
     /// Share that see no surface (black background).

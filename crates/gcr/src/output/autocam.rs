@@ -2,11 +2,12 @@
 //! and framing open ones tightly.
 //!
 //! Candidates are scored by a small ray-traced probe image (24 × 24 rays through the BVH): with
-//! `front` the share of rays that hit the front of a surface, and three qualities each divided
-//! by its best value over the candidates — the mean display brightness of what the rays hit
-//! (from the solved radiosity and the exposure), the mean hit distance (a view across the room
-//! rather than at a wall), and the number of distinct surfaces seen —
-//! score = front² · (½ + ⅙ · (brightness + distance + surfaces)). Candidates:
+//! `lit` the share of rays that hit the front of a surface some light reaches (display brightness
+//! above 0: the outside walls of a closed building under no sky are front faces, but black), and
+//! three qualities each divided by its best value over the candidates — the mean display
+//! brightness of what the rays hit (from the solved radiosity and the exposure), the mean hit
+//! distance (a view across the room rather than at a wall), and the number of distinct surfaces
+//! seen — score = lit² · (½ + ⅙ · (brightness + distance + surfaces)). Candidates:
 //!
 //! * **outside**: 8 azimuths × 2 elevations (15°, 35°) looking down at the bounding box, each
 //!   framing its eight corners tightly (the smallest distance at which they all fit, centred);
@@ -16,8 +17,9 @@
 //!   each, 8 azimuths × 2 tilts (0°, −20°), the eye backed off toward the wall behind (70 % of the
 //!   free distance) so that the view spans the room.
 //!
-//! A closed room seen from outside shows only back faces (score 0), so an inside view wins
-//! there; an open scene has no enclosed point, or its inside views see the background.
+//! A closed room seen from outside shows only back faces or unlit outer walls (score 0), so an
+//! inside view wins there; an open scene has no enclosed point, or its inside views see the
+//! background.
 
 use super::raster::PinholeCamera;
 use glam::DVec3;
@@ -87,7 +89,7 @@ pub fn automatic_camera(
         .iter()
         .map(|p| {
             let quality = (p.brightness / b + p.distance / d + p.surfaces / n) / 6.0;
-            p.front * p.front * (0.5 + quality)
+            p.lit * p.lit * (0.5 + quality)
         })
         .collect();
     let mut best = 0;
@@ -250,8 +252,8 @@ fn backed_off(
 
 /// What a camera's probe image sees.
 struct Probe {
-    /// Share of rays hitting the front of a surface.
-    front: f64,
+    /// Share of rays hitting the front of a surface with a display brightness above 0.
+    lit: f64,
     /// Mean display brightness over all rays (0 for misses and back faces).
     brightness: f64,
     /// Mean hit distance of the front hits.
@@ -268,7 +270,7 @@ fn probe(
     cam: &PinholeCamera,
     aspect: f64,
 ) -> Probe {
-    let (mut front, mut light, mut dist) = (0usize, 0.0, 0.0);
+    let (mut front, mut lit, mut light, mut dist) = (0usize, 0usize, 0.0, 0.0);
     let mut surfaces = std::collections::HashSet::new();
     for j in 0..PROBE {
         for i in 0..PROBE {
@@ -283,7 +285,9 @@ fn probe(
             let face = &scene.faces[hit.face as usize];
             if face.normal.dot(d) < 0.0 {
                 front += 1;
-                light += brightness.get(hit.face as usize).copied().unwrap_or(0.0);
+                let b = brightness.get(hit.face as usize).copied().unwrap_or(0.0);
+                lit += usize::from(b > 0.0);
+                light += b;
                 dist += hit.t;
                 surfaces.insert(face.surface);
             }
@@ -291,7 +295,7 @@ fn probe(
     }
     let n = (PROBE * PROBE) as f64;
     Probe {
-        front: front as f64 / n,
+        lit: lit as f64 / n,
         brightness: light / n,
         distance: dist / front.max(1) as f64,
         surfaces: surfaces.len() as f64,

@@ -64,15 +64,26 @@ pub struct PixelImage {
     pub stats: GatherStats,
 }
 
-/// Seen fractions of a list of sub-samples.
-fn coverage_of(seen: &[Seen]) -> Coverage {
+/// Seen fractions of a list of sub-samples; `lit(k, i)`: whether sub-sample `k`, which sees the
+/// front hit `i`, has B > 0.
+fn coverage_of(seen: &[Seen], lit: impl Fn(usize, usize) -> bool) -> Coverage {
     let n = seen.len().max(1) as f64;
     let count = |f: fn(&Seen) -> bool| seen.iter().filter(|s| f(s)).count() as f64 / n;
+    let lit = (seen.iter().enumerate())
+        .filter(|&(k, s)| matches!(s, Seen::Front(i) if lit(k, *i)))
+        .count() as f64
+        / n;
     Coverage {
+        lit,
         front: count(|s| matches!(s, Seen::Front(_))),
         back: count(|s| matches!(s, Seen::Back)),
         nothing: count(|s| matches!(s, Seen::Nothing)),
     }
+}
+
+/// Whether a gathered B is above 0 in some band.
+fn positive(g: &Gathered) -> bool {
+    g.radiosity.iter().any(|&b| b > 0.0)
 }
 
 /// Renders `camera`'s view of `domain` (3-D) at `width × height` with `spp` sub-samples per
@@ -148,7 +159,7 @@ pub fn render_pixels(
         width,
         height,
         spp,
-        coverage: coverage_of(&seen),
+        coverage: coverage_of(&seen, |_, i| positive(&gathered[i])),
         seen,
         radiosity: gathered.iter().map(|g| g.radiosity).collect(),
         lit,
@@ -245,7 +256,7 @@ fn render_footprints(
         seen: (0..n).map(Seen::Front).collect(),
         radiosity: gathered.iter().map(|g| g.radiosity).collect(),
         lit,
-        coverage: coverage_of(&centres),
+        coverage: coverage_of(&centres, |p, _| positive(&gathered[p])),
         stats: GatherStats::of(&gathered),
     }
 }
@@ -288,7 +299,7 @@ impl PixelImage {
             width,
             height,
             spp: spp.max(1),
-            coverage: coverage_of(&seen),
+            coverage: coverage_of(&seen, |_, _| false),
             seen,
             radiosity: Vec::new(),
             lit: Vec::new(),

@@ -202,6 +202,9 @@ impl Image {
 pub struct Coverage {
     /// The front (lit) side of a surface.
     pub front: f64,
+    /// Of those, the ones with B > 0 in some band: what the picture shows lit. The front of a
+    /// surface that no light reaches (the outside of a closed building under no sky) is black.
+    pub lit: f64,
     /// The back side of a surface (drawn black: the camera is inside a solid or behind a wall).
     pub back: f64,
     /// No surface (background, black).
@@ -212,13 +215,14 @@ impl Coverage {
     /// A warning when most of the image is black for want of a lit surface (the camera outside a
     /// closed scene, inside a solid, or looking away from everything); `None` otherwise.
     pub fn warning(&self, what: &str) -> Option<String> {
-        (self.front < 0.5).then(|| {
+        (self.lit < 0.5).then(|| {
             format!(
-                "{what}: only {:.0} % of the pixels see the front of a surface ({:.0} % see \
-                 nothing, {:.0} % back faces, drawn black): the camera looks away from the scene \
-                 or from behind its walls; set --camera-eye and --camera-target (or \
-                 --auto-camera)",
-                100.0 * self.front,
+                "{what}: only {:.0} % of the pixels show a lit surface ({:.0} % the front of a \
+                 surface no light reaches, {:.0} % nothing, {:.0} % back faces, all drawn black): \
+                 the camera looks away from the scene or from outside its walls; set \
+                 --camera-eye and --camera-target (or --auto-camera)",
+                100.0 * self.lit,
+                100.0 * (self.front - self.lit),
                 100.0 * self.nothing,
                 100.0 * self.back
             )
@@ -403,8 +407,13 @@ impl Samples {
     fn coverage(&self) -> Coverage {
         let n = self.seen.len().max(1) as f64;
         let count = |s: Seen| self.seen.iter().filter(|&&x| x == s).count() as f64 / n;
+        let lit = (self.seen.iter().zip(&self.colour))
+            .filter(|(s, c)| **s == Seen::Front && c.iter().any(|&v| v > 0.0))
+            .count() as f64
+            / n;
         Coverage {
             front: count(Seen::Front),
+            lit,
             back: count(Seen::Back),
             nothing: count(Seen::Nothing),
         }

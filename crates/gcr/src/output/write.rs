@@ -629,6 +629,7 @@ fn image_record(
         fov_y_deg: camera.fov_y_degrees,
         camera_source: source.into(),
         front_share: coverage.front,
+        lit_share: coverage.lit,
         back_share: coverage.back,
         nothing_share: coverage.nothing,
     }

@@ -1,14 +1,20 @@
-//! Progress on stderr: one line, rewritten in place, with the solver's phase, the network sizes
-//! and the elapsed time. No remaining-time estimate: the last FEM step and the output gather are
-//! not predictable from the training progress.
+//! Progress on stderr: one line, rewritten in place. While the networks train: the phase, the
+//! network sizes and the elapsed time (no time left: the last FEM step is not predictable from
+//! the training). While the outputs are gathered: the phase (mesh, refinement, probes, pixels),
+//! the points, the rays per point, the error against the target, the share done and the time
+//! left of that gather ([`gcr::GatherProgress`]).
 
-use gcr::{Metrics, Progress};
+use gcr::{GatherProgress, Metrics, Progress};
 use std::io::Write;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Prints solver progress to stderr unless quiet.
 pub struct ProgressLine {
     quiet: bool,
     shown: bool,
+    /// A gather's line is on screen (set from the gather's threads).
+    gather_shown: Arc<AtomicBool>,
 }
 
 impl ProgressLine {
@@ -17,6 +23,37 @@ impl ProgressLine {
         Self {
             quiet,
             shown: false,
+            gather_shown: Arc::new(AtomicBool::new(false)),
+        }
+    }
+
+    /// The observer of the output gathers ([`gcr::observe_gathers`]).
+    pub fn gathers(&self) -> impl Fn(&GatherProgress) + Send + Sync + 'static {
+        let (quiet, shown) = (self.quiet, Arc::clone(&self.gather_shown));
+        move |p: &GatherProgress| {
+            if quiet {
+                return;
+            }
+            shown.store(true, Ordering::Relaxed);
+            let error = p.error.map_or(String::from("error …"), |e| {
+                format!("error {:.2} %", 100.0 * e)
+            });
+            let left = p.remaining.map_or(String::new(), |r| {
+                let digits = usize::from(r < 10.0);
+                format!(", about {r:.digits$} s left")
+            });
+            let mut err = std::io::stderr().lock();
+            let _ = write!(
+                err,
+                "\r{:>10} {:>8} points  {:>6} rays  {error} (target {:.1} %)  {:>3.0} %  {:.1} s{left}     ",
+                p.phase,
+                p.points,
+                p.rays,
+                100.0 * p.target,
+                100.0 * p.done,
+                p.elapsed,
+            );
+            let _ = err.flush();
         }
     }
 
@@ -52,6 +89,9 @@ impl ProgressLine {
     /// The summary after the outputs are written.
     pub fn done(&mut self, m: &Metrics) {
         self.solved();
+        if !self.quiet && self.gather_shown.swap(false, Ordering::Relaxed) {
+            eprintln!();
+        }
         if !self.quiet {
             let error = m.relative_std_error.map_or(String::new(), |e| {
                 format!(", estimated error {:.2} % (standard error)", 100.0 * e)

@@ -59,7 +59,9 @@ fn solve_and_write(
     for w in &trained.metrics.warnings {
         eprintln!("warning: {w}");
     }
-    let metrics = write_outputs(domain, &trained, config, &plan, &args.scene, started)?;
+    let metrics = gcr::observe_gathers(progress.gathers(), || {
+        write_outputs(domain, &trained, config, &plan, &args.scene, started)
+    })?;
     for w in &metrics.warnings[trained.metrics.warnings.len().min(metrics.warnings.len())..] {
         eprintln!("warning: {w}");
     }

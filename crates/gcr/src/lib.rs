@@ -43,6 +43,7 @@ mod network;
 pub mod output;
 mod paths;
 mod pipeline;
+mod progress;
 mod projection;
 mod refine;
 mod retriangulate;
@@ -68,6 +69,7 @@ pub use pipeline::{
     GatherError, GatherStats, irradiance_at_points, output_mesh, point_seed, radiosity_at_points,
     relative_std_error, vertex_gather_point,
 };
+pub use progress::{GatherProgress, observe_gathers};
 pub use retriangulate::RetriangulateLimits;
 pub use sample::Sample;
 pub use solve::{Progress, SolveError, Trained, make_networks, solve, train};

@@ -199,10 +199,16 @@ pub(crate) fn rounds_to_target(
     target: f64,
     max_rays: usize,
 ) -> Vec<Gathered> {
+    let pilot_rays = pilot.direct.max(pilot.indirect).min(max_rays);
+    let reporter = crate::progress::Reporter::new(count, pilot_rays, target);
     let round = |first: usize, samples: GatherSamples| -> Vec<PointEstimate> {
         let per_group: Vec<Vec<PointEstimate>> = groups
             .par_iter()
-            .map(|g| estimate(g, first, samples))
+            .map(|g| {
+                let e = estimate(g, first, samples);
+                reporter.finished(g.len(), samples.direct.max(samples.indirect));
+                e
+            })
             .collect();
         let mut out = vec![PointEstimate::default(); count];
         for (g, e) in groups.iter().zip(per_group) {
@@ -214,7 +220,7 @@ pub(crate) fn rounds_to_target(
     };
     // ⟨Pilot round: the configured rays⟩
     let mut estimates = piloted.unwrap_or_else(|| round(0, pilot));
-    let mut rays = pilot.direct.max(pilot.indirect).min(max_rays);
+    let mut rays = pilot_rays;
     loop {
         let gathered: Vec<Gathered> = estimates.iter().map(PointEstimate::gathered).collect();
         // ⟨Stop at the target (its upper confidence bound) or the ray cap⟩
@@ -227,6 +233,7 @@ pub(crate) fn rounds_to_target(
             return gathered;
         };
         if bound <= target || rays >= max_rays {
+            reporter.round(bound, rays, rays);
             return gathered;
         }
         // ⟨Next round: each replicate's Sobol points up to the next power of two that covers the
@@ -244,6 +251,7 @@ pub(crate) fn rounds_to_target(
             .min(max_rays)
             .saturating_sub(rays)
             .max(REPLICATES);
+        reporter.round(bound, rays + more, needed.min(max_rays));
         // Each replicate has used ⌈rays / REPLICATES⌉ Sobol points of its sequence so far.
         let samples = GatherSamples {
             direct: more,
@@ -514,6 +522,7 @@ pub fn output_mesh(
         Domain::ThreeD(k) => {
             let welded = crate::weld::weld(&scene.faces, k.bvh, scene.diagonal(), &vertices);
             let at: Vec<(DVec3, u32)> = welded.gathered.iter().map(|&v| vertices[v]).collect();
+            let _phase = crate::progress::phase("mesh");
             let once = gather_at(&at)?;
             welded.representative.iter().map(|&r| once[r]).collect()
         }
@@ -522,6 +531,7 @@ pub fn output_mesh(
     // ⟨Refine where B varies faster than linear interpolation follows (shadow edges)⟩
     let (tri, gathered) = if config.gather == GatherMode::Paths {
         let refine_limits = RefineLimits::for_diagonal(scene.diagonal());
+        let _phase = crate::progress::phase("refinement");
         refine(tri, gathered, refine_limits, gather_at)?
     } else {
         (tri, gathered)

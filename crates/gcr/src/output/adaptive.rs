@@ -60,30 +60,20 @@ pub(super) fn allocated_rounds(
 ) -> Vec<Gathered> {
     // ⟨Pilot: the same rays at every pixel; it is the image when it meets the target⟩
     let pilot = pilot.min(max_rays).max(REPLICATES);
-    let pilot_estimates: Vec<PointEstimate> = (0..n)
-        .into_par_iter()
-        .map(|p| estimate(p, 0, pilot))
-        .collect();
-    let pilot_gathered: Vec<Gathered> = pilot_estimates.iter().map(|e| e.gathered()).collect();
-    let Some(bound) = error_bound(&pilot_gathered, measured(&pilot_gathered)) else {
-        return pilot_gathered;
+    let reporter = crate::progress::Reporter::new(n, pilot, target);
+    let needed = |rays: f64, bound: f64| (rays * (bound / target).powi(2)).min(max_rays as f64);
+    let (pilot_estimates, pilot_gathered, bound) = match pilot_round(n, estimate, pilot, &reporter)
+    {
+        (e, g, Some(bound)) if bound > target && pilot < max_rays => (e, g, bound),
+        (_, g, bound) => return reporter.last_round(bound, pilot, g),
     };
-    if bound <= target || pilot >= max_rays {
-        return pilot_gathered;
-    }
+    reporter.round(bound, pilot, needed(pilot as f64, bound) as usize);
     // ⟨Shares: each ray's standard deviation in the pilot, a quarter spread evenly⟩
     let sigma: Vec<f64> = (pilot_estimates.iter())
         .zip(&pilot_gathered)
         .map(|(e, g)| ray_sigma(e, g, pilot))
         .collect();
-    let mean_sigma = sigma.iter().sum::<f64>() / n as f64;
-    let share: Vec<f64> = if mean_sigma > 0.0 {
-        (sigma.iter())
-            .map(|s| EVEN_SHARE + (1.0 - EVEN_SHARE) * s / mean_sigma)
-            .collect()
-    } else {
-        vec![1.0; n]
-    };
+    let (mean_sigma, share) = shares(&sigma);
     // uniform rounds unless the allocation halves the rays (step 1)
     if neyman_gain(&sigma) > 0.5 {
         let samples = GatherSamples {
@@ -119,8 +109,12 @@ pub(super) fn allocated_rounds(
         let rounds: Vec<Option<PointEstimate>> = (0..n)
             .into_par_iter()
             .map(|p| {
-                (wanted[p] > done[p])
-                    .then(|| estimate(p, done[p], (wanted[p] - done[p]) * REPLICATES))
+                (wanted[p] > done[p]).then(|| {
+                    let rays = (wanted[p] - done[p]) * REPLICATES;
+                    let e = estimate(p, done[p], rays);
+                    reporter.finished(1, rays);
+                    e
+                })
             })
             .collect();
         for (p, round) in rounds.into_iter().enumerate() {
@@ -140,14 +134,50 @@ pub(super) fn allocated_rounds(
             })
             .collect();
         let capped = done.iter().all(|&d| d >= cap);
+        let rays = pilot + level as usize;
         match error_bound(&gathered, measured(&gathered)) {
             Some(bound) if bound > target && !capped => {
+                reporter.round(bound, rays, needed(rays as f64, bound) as usize);
                 // variance ∝ 1/level: the next level covers the missing part, 2× to 4×
                 level *= (bound / target).powi(2).clamp(2.0, 4.0);
             }
-            _ => return gathered,
+            bound => return reporter.last_round(bound, rays, gathered),
         }
     }
+}
+
+/// Each pixel's share of the rays (mean 1): a quarter spread evenly, the rest ∝ its σ; and the
+/// mean σ.
+fn shares(sigma: &[f64]) -> (f64, Vec<f64>) {
+    let mean_sigma = sigma.iter().sum::<f64>() / sigma.len().max(1) as f64;
+    let share = if mean_sigma > 0.0 {
+        (sigma.iter())
+            .map(|s| EVEN_SHARE + (1.0 - EVEN_SHARE) * s / mean_sigma)
+            .collect()
+    } else {
+        vec![1.0; sigma.len()]
+    };
+    (mean_sigma, share)
+}
+
+/// The pilot: `pilot` rays at every pixel; its estimates, their values and the error bound.
+fn pilot_round(
+    n: usize,
+    estimate: &Estimate,
+    pilot: usize,
+    reporter: &crate::progress::Reporter,
+) -> (Vec<PointEstimate>, Vec<Gathered>, Option<f64>) {
+    let estimates: Vec<PointEstimate> = (0..n)
+        .into_par_iter()
+        .map(|p| {
+            let e = estimate(p, 0, pilot);
+            reporter.finished(1, pilot);
+            e
+        })
+        .collect();
+    let gathered: Vec<Gathered> = estimates.iter().map(|e| e.gathered()).collect();
+    let bound = error_bound(&gathered, measured(&gathered));
+    (estimates, gathered, bound)
 }
 
 /// Neyman's gain over the pixels that vary (σ > 0): the mean of σ, squared, over the mean of

@@ -98,6 +98,7 @@ pub fn render_pixels(
     let Domain::ThreeD(k) = domain else {
         return Ok(PixelImage::empty(width, height, spp));
     };
+    let _phase = crate::progress::phase("pixels");
     if config.gather == GatherMode::Paths && !config.reads_networks() {
         return Ok(render_footprints(domain, config, camera, (width, height)));
     }

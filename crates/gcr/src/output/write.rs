@@ -271,6 +271,7 @@ pub fn write_outputs(
     if let Some(path) = &paths.probe_out {
         let tg = Instant::now();
         let probes = (plan.probes(), plan.probe_settings.quantity);
+        let _phase = crate::progress::phase("probes");
         let (text, stats) = probe_values(domain, trained, &emitters, config, probes)?;
         metrics.probe_quantity = plan.probe_settings.quantity.name().into();
         record_gather(&mut metrics, &stats, config);

@@ -181,7 +181,7 @@ fn grouped_rounds(
             paths.estimate_group(&members, &materials, &member_seeds, first, samples)
         },
         (config.gather_samples, None),
-        target,
+        (target, &error_bound),
         config.paths.max_rays,
     )
 }
@@ -196,7 +196,7 @@ pub(crate) fn rounds_to_target(
     groups: &[Vec<usize>],
     estimate: impl Fn(&[usize], usize, GatherSamples) -> Vec<PointEstimate> + Sync,
     (pilot, piloted): (GatherSamples, Option<Vec<PointEstimate>>),
-    target: f64,
+    (target, bound_of): (f64, &ErrorBound<'_>),
     max_rays: usize,
 ) -> Vec<Gathered> {
     let pilot_rays = pilot.direct.max(pilot.indirect).min(max_rays);
@@ -229,7 +229,7 @@ pub(crate) fn rounds_to_target(
         let dof = (groups.iter())
             .filter(|g| (g.iter()).any(|&i| gathered[i].std_error.iter().any(|s| *s != 0.0)))
             .count();
-        let Some(bound) = error_bound(&gathered, dof) else {
+        let Some(bound) = bound_of(&gathered, dof) else {
             return gathered;
         };
         if bound <= target || rays >= max_rays {
@@ -265,6 +265,11 @@ pub(crate) fn rounds_to_target(
     }
 }
 
+/// The error a round to a target compares with the target: of the values gathered so far and
+/// their degrees of freedom (one per group with a standard error), None when nothing was measured
+/// ([`error_bound`], or the per-pixel relative error of `output::adaptive`).
+pub(crate) type ErrorBound<'a> = dyn Fn(&[Gathered], usize) -> Option<f64> + 'a;
+
 /// Every estimate its own group ([`rounds_to_target`]).
 pub(crate) fn singletons(count: usize) -> Vec<Vec<usize>> {
     (0..count).map(|i| vec![i]).collect()
@@ -274,7 +279,13 @@ pub(crate) fn singletons(count: usize) -> Vec<Vec<usize>> {
 /// None when nothing was measured), its standard errors estimated with `dof` degrees of freedom
 /// in all: `error·√(dof/χ²₀.₁(dof))`. What rounds to a target compare with the target.
 pub(crate) fn error_bound(gathered: &[Gathered], dof: usize) -> Option<f64> {
-    relative_std_error(gathered).map(|error| error * (dof as f64 / chi2_lower(dof)).sqrt())
+    relative_std_error(gathered).map(|error| error * chi2_scale(dof))
+}
+
+/// `√(dof/χ²₀.₁(dof))`: an estimated standard error with `dof` degrees of freedom to its 90 %
+/// upper bound.
+pub(crate) fn chi2_scale(dof: usize) -> f64 {
+    (dof as f64 / chi2_lower(dof)).sqrt()
 }
 
 /// The lower 10 % quantile of χ² with `k` degrees of freedom (Wilson–Hilferty:

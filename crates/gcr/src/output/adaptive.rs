@@ -1,10 +1,13 @@
 //! Rays where an image needs them (beyond the dissertation): the paths gather's rays over the
-//! pixels of `--image-mode pixel` in proportion to each pixel's standard deviation.
+//! pixels of `--image-mode pixel` in proportion to each pixel's relative standard deviation.
 //!
-//! An image's squared error is `Σ_p σ_p²/n_p` over its pixels (σ_p the standard deviation of
-//! one ray's estimate of pixel p, n_p its rays). For a given total of rays it is smallest at
-//! `n_p ∝ σ_p` (Neyman's allocation), and it is then `(Σ σ_p)²/N` instead of `Σ σ_p²·P/N` with
-//! every pixel alike: the gain is the ratio of the mean of σ² to the square of the mean of σ.
+//! Image users judge an image by its per-pixel relative MSE, mean((x − r)²/(r² + ε)): a dim pixel
+//! weighs as much as a bright one. Its expectation is `Σ_p σ_p²/n_p / P` over the pixels, with
+//! σ_p² = Σ_k var_pk/(B_pk² + ε) the relative variance of one ray's estimate of pixel p (ε:
+//! [`relative_floor`]) and n_p its rays. For a given total of rays it is smallest at `n_p ∝ σ_p`
+//! (Neyman's allocation), and it is then `(Σ σ_p)²/N` instead of `Σ σ_p²·P/N` with every pixel
+//! alike: the gain is the ratio of the mean of σ² to the square of the mean of σ. The rounds stop
+//! on the same measure ([`pixel_error`], its χ² bound), so `--target-error` is per pixel.
 //! Images are far from uniform: an emitter's outline, a shadow's edge or a bright patch seen
 //! through a pixel's footprint have a σ many times that of a wall's interior.
 //!
@@ -38,11 +41,15 @@
 use crate::config::GatherSamples;
 use crate::gather::Gathered;
 use crate::paths::{PointEstimate, REPLICATES};
-use crate::pipeline::{error_bound, rounds_to_target, singletons};
+use crate::pipeline::{rounds_to_target, singletons};
 use rayon::prelude::*;
 
 /// Share of the rays spread evenly over the pixels (step 2).
 const EVEN_SHARE: f64 = 0.25;
+
+/// The floor of the per-pixel relative error's denominator, as a share of the image's mean B
+/// ([`relative_floor`]).
+const FLOOR: f64 = 0.1;
 
 /// Pixel `p`'s estimate over a footprint: `estimate(p, first, rays)` with `rays` rays from Sobol
 /// index `first` (per replicate) on.
@@ -62,19 +69,20 @@ pub(super) fn allocated_rounds(
     let pilot = pilot.min(max_rays).max(REPLICATES);
     let reporter = crate::progress::Reporter::new(n, pilot, target);
     let needed = |rays: f64, bound: f64| (rays * (bound / target).powi(2)).min(max_rays as f64);
-    let (pilot_estimates, pilot_gathered, bound) = match pilot_round(n, estimate, pilot, &reporter)
-    {
-        (e, g, Some(bound)) if bound > target && pilot < max_rays => (e, g, bound),
-        (_, g, bound) => return reporter.last_round(bound, pilot, g),
+    let (pilot_estimates, pilot_gathered) = pilot_round(n, estimate, pilot, &reporter);
+    let floor = relative_floor(&pilot_gathered);
+    let bound = match pixel_error_bound(&pilot_gathered, floor) {
+        Some(bound) if bound > target && pilot < max_rays => bound,
+        bound => return reporter.last_round(bound, pilot, pilot_gathered),
     };
     reporter.round(bound, pilot, needed(pilot as f64, bound) as usize);
-    // ⟨Shares: each ray's standard deviation in the pilot, a quarter spread evenly⟩
+    // ⟨Shares: each ray's relative standard deviation in the pilot, a quarter spread evenly;
+    // even shares unless the allocation halves the rays (step 1)⟩
     let sigma: Vec<f64> = (pilot_estimates.iter())
         .zip(&pilot_gathered)
-        .map(|(e, g)| ray_sigma(e, g, pilot))
+        .map(|(e, g)| ray_sigma(e, g, pilot, floor))
         .collect();
     let (mean_sigma, share) = shares(&sigma);
-    // uniform rounds unless the allocation halves the rays (step 1)
     if neyman_gain(&sigma) > 0.5 {
         let samples = GatherSamples {
             direct: pilot,
@@ -87,14 +95,16 @@ pub(super) fn allocated_rounds(
                 vec![estimate(g[0], first, samples.direct)]
             },
             (samples, Some(pilot_estimates)),
-            target,
+            (target, &move |g: &[Gathered], _| {
+                pixel_error_bound(g, floor)
+            }),
             max_rays,
         );
     }
-    // ⟨Rounds: raise the level until the bound meets the target or every pixel is capped⟩
     // Neyman's level over all pixels (shares of mean 1 over all of them): the uniform rays
     // times the mean of σ, squared, over the mean of σ²
     let gain = mean_sigma.powi(2) / (sigma.iter().map(|s| s * s).sum::<f64>() / n as f64);
+    // ⟨Rounds: raise the level until the bound meets the target or every pixel is capped⟩
     let uniform = pilot as f64 * (bound / target).powi(2);
     let start = pilot.div_ceil(REPLICATES);
     let cap = (max_rays / REPLICATES).max(2 * start);
@@ -135,7 +145,7 @@ pub(super) fn allocated_rounds(
             .collect();
         let capped = done.iter().all(|&d| d >= cap);
         let rays = pilot + level as usize;
-        match error_bound(&gathered, measured(&gathered)) {
+        match pixel_error_bound(&gathered, floor) {
             Some(bound) if bound > target && !capped => {
                 reporter.round(bound, rays, needed(rays as f64, bound) as usize);
                 // variance ∝ 1/level: the next level covers the missing part, 2× to 4×
@@ -160,13 +170,13 @@ fn shares(sigma: &[f64]) -> (f64, Vec<f64>) {
     (mean_sigma, share)
 }
 
-/// The pilot: `pilot` rays at every pixel; its estimates, their values and the error bound.
+/// The pilot: `pilot` rays at every pixel; its estimates and their values.
 fn pilot_round(
     n: usize,
     estimate: &Estimate,
     pilot: usize,
     reporter: &crate::progress::Reporter,
-) -> (Vec<PointEstimate>, Vec<Gathered>, Option<f64>) {
+) -> (Vec<PointEstimate>, Vec<Gathered>) {
     let estimates: Vec<PointEstimate> = (0..n)
         .into_par_iter()
         .map(|p| {
@@ -176,8 +186,44 @@ fn pilot_round(
         })
         .collect();
     let gathered: Vec<Gathered> = estimates.iter().map(|e| e.gathered()).collect();
-    let bound = error_bound(&gathered, measured(&gathered));
-    (estimates, gathered, bound)
+    (estimates, gathered)
+}
+
+/// The floor ε of the per-pixel relative error: (10 % of the mean B over the pixels and bands
+/// that vary)², so that a black pixel does not ask for endless rays. Scale-free: the relative MSE
+/// image users compute, mean((x − r)²/(r² + 0.01)), floors at 0.1 of an image of mean about 1.
+pub(super) fn relative_floor(gathered: &[Gathered]) -> f64 {
+    let varying = gathered
+        .iter()
+        .filter(|g| g.std_error.iter().any(|s| *s != 0.0));
+    let (sum, count) = varying.fold((0.0, 0.0), |(s, c), g| {
+        (
+            s + g.radiosity.iter().map(|b| b.abs()).sum::<f64>(),
+            c + g.radiosity.len() as f64,
+        )
+    });
+    let mean = if count > 0.0 { sum / count } else { 0.0 };
+    (FLOOR * mean).powi(2).max(1e-300)
+}
+
+/// The per-pixel relative error of an image: the root mean over pixels and bands of
+/// σ²/(B² + ε) (`floor` = ε, [`relative_floor`]); None when no pixel has a standard error.
+pub(super) fn pixel_error(gathered: &[Gathered], floor: f64) -> Option<f64> {
+    if measured(gathered) == 0 {
+        return None;
+    }
+    let sum: f64 = (gathered.iter())
+        .flat_map(|g| {
+            (0..g.radiosity.len())
+                .map(|k| g.std_error[k].powi(2) / (g.radiosity[k].powi(2) + floor))
+        })
+        .sum();
+    Some((sum / (gathered.len() * gathered[0].radiosity.len()) as f64).sqrt())
+}
+
+/// [`pixel_error`]'s 90 % upper bound: × √(dof/χ²₀.₁(dof)), dof the pixels with a standard error.
+fn pixel_error_bound(gathered: &[Gathered], floor: f64) -> Option<f64> {
+    pixel_error(gathered, floor).map(|e| e * crate::pipeline::chi2_scale(measured(gathered)))
 }
 
 /// Neyman's gain over the pixels that vary (σ > 0): the mean of σ, squared, over the mean of
@@ -209,12 +255,16 @@ fn end_index(start: usize, wanted: f64, cap: usize) -> usize {
     need.next_power_of_two().max(2 * start).min(cap)
 }
 
-/// The standard deviation of one ray's estimate (all bands, `√Σ_k var_k`) from a round of `rays`
-/// rays: the rays' mean square less the square of their mean, unbiased (× rays/(rays − 1)).
-fn ray_sigma(e: &PointEstimate, g: &Gathered, rays: usize) -> f64 {
+/// The relative standard deviation of one ray's estimate, `√Σ_k var_k/(B_k² + ε)`, from a round
+/// of `rays` rays: each band's variance the rays' mean square less the square of their mean,
+/// unbiased (× rays/(rays − 1)), over the pixel's B² floored by `floor` ([`relative_floor`]).
+fn ray_sigma(e: &PointEstimate, g: &Gathered, rays: usize, floor: f64) -> f64 {
     let n = rays as f64;
     let var: f64 = (0..e.ray_square.len())
-        .map(|k| (e.ray_square[k] - (g.radiosity[k] - e.emission[k]).powi(2)).max(0.0))
+        .map(|k| {
+            let v = (e.ray_square[k] - (g.radiosity[k] - e.emission[k]).powi(2)).max(0.0);
+            v / (g.radiosity[k].powi(2) + floor)
+        })
         .sum::<f64>()
         * n
         / (n - 1.0).max(1.0);

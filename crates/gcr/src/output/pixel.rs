@@ -258,7 +258,14 @@ fn render_footprints(
         radiosity: gathered.iter().map(|g| g.radiosity).collect(),
         lit,
         coverage: coverage_of(&centres, |p, _| positive(&gathered[p])),
-        stats: GatherStats::of(&gathered),
+        stats: GatherStats {
+            // what the rounds ran to: the per-pixel relative error (output::adaptive)
+            relative_std_error: super::adaptive::pixel_error(
+                &gathered,
+                super::adaptive::relative_floor(&gathered),
+            ),
+            ..GatherStats::of(&gathered)
+        },
     }
 }
 

@@ -505,9 +505,10 @@ pub fn output_mesh(
     config: &SolveConfig,
     limits: RetriangulateLimits,
 ) -> Result<(ShadedMesh, GatherStats), GatherError> {
-    let Some(scene) = domain.scene_3d() else {
+    let Domain::ThreeD(k) = domain else {
         return Ok((ShadedMesh::default(), GatherStats::default()));
     };
+    let scene = k.scene;
     let faces: Vec<[DVec3; 3]> = scene.faces.iter().map(|f| f.v).collect();
     let local = LocalEdge::new(trained, scene.total_area());
     let tri = retriangulate(&faces, |p| local.at(p), limits);
@@ -529,16 +530,12 @@ pub fn output_mesh(
     };
     let vertices: Vec<(DVec3, u32)> = tri.positions.iter().copied().zip(vertex_face).collect();
     // ⟨Gather once where coplanar faces of one material share a vertex (crate::weld)⟩
-    let gathered = match domain {
-        Domain::ThreeD(k) => {
-            let welded = crate::weld::weld(&scene.faces, k.bvh, scene.diagonal(), &vertices);
-            let at: Vec<(DVec3, u32)> = welded.gathered.iter().map(|&v| vertices[v]).collect();
-            let _phase = crate::progress::phase("mesh");
-            let once = gather_at(&at)?;
-            welded.representative.iter().map(|&r| once[r]).collect()
-        }
-        Domain::Flat(_) => gather_at(&vertices)?,
-    };
+    let welded = crate::weld::weld(&scene.faces, k.bvh, scene.diagonal(), &vertices);
+    let at: Vec<(DVec3, u32)> = welded.gathered.iter().map(|&v| vertices[v]).collect();
+    let phase = crate::progress::phase("mesh");
+    let once = gather_at(&at)?;
+    drop(phase);
+    let gathered = welded.representative.iter().map(|&r| once[r]).collect();
     // ⟨Refine where B varies faster than linear interpolation follows (shadow edges)⟩
     let (tri, gathered) = if config.gather == GatherMode::Paths {
         let refine_limits = RefineLimits::for_diagonal(scene.diagonal());

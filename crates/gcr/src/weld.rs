@@ -46,20 +46,20 @@ pub(crate) fn weld(
         let candidates = at.entry(key(p)).or_default();
         let shares = |r: usize| {
             let (q, g) = vertices[welded.gathered[r]];
+            if g == f {
+                return true;
+            }
             let other = &faces[g as usize];
-            let same = g == f
-                || (face.texture.is_none()
-                    && other.texture.is_none()
-                    && face.rho == other.rho
-                    && face.emission == other.emission
-                    && face.normal.dot(other.normal) > 1.0 - 1e-9);
-            same && (g == f || {
-                let side = |c: DVec3| {
-                    let t = (20.0 * eps / c.distance(q).max(1e-300)).clamp(0.1, 0.5);
-                    q + t * (c - q) + 10.0 * eps * face.normal
-                };
-                bvh.segment_clear(side(face.centroid()), side(other.centroid()), f, g)
-            })
+            let side = |c: DVec3| {
+                let t = (20.0 * eps / c.distance(q).max(1e-300)).clamp(0.1, 0.5);
+                q + t * (c - q) + 10.0 * eps * face.normal
+            };
+            face.texture.is_none()
+                && other.texture.is_none()
+                && face.rho == other.rho
+                && face.emission == other.emission
+                && face.normal.dot(other.normal) > 1.0 - 1e-9
+                && bvh.segment_clear(side(face.centroid()), side(other.centroid()), f, g)
         };
         match candidates.iter().copied().find(|&r| shares(r)) {
             Some(r) => welded.representative.push(r),

@@ -282,7 +282,8 @@ impl FaceTexture {
     /// N at least twice the texels an edge spans there (so that a regular pattern is not aliased),
     /// 4 to 2 · [`Mipmaps::SPAN`]. At most 2 048 lookups per face, whatever its size in texels.
     pub fn mean_rho(&self, mipmaps: &Mipmaps) -> Spectrum {
-        let levels = &mipmaps.levels[self.texture as usize];
+        let full = &mipmaps.textures[self.texture as usize];
+        let coarser = &mipmaps.coarser[self.texture as usize];
         let span_on = |t: &Texture| {
             let (w, h) = t.size();
             let scale = DVec2::new(f64::from(w), f64::from(h));
@@ -295,18 +296,18 @@ impl FaceTexture {
         // coarser level has blurred: those faces read the full texture, as many lookups as before
         // the mip chain (rare: clamped textures are atlases and decals mapped inside [0, 1])
         let outside = (0..2).any(|a| {
-            levels[0].wrap[a] == Wrap::ClampToEdge
+            full.wrap[a] == Wrap::ClampToEdge
                 && self
                     .uv
                     .iter()
                     .any(|uv| !(-1e-6..=1.0 + 1e-6).contains(&uv[a]))
         });
         let (level, most) = if outside {
-            (&levels[0], 256.0)
+            (full, 256.0)
         } else {
-            let level = (levels.iter())
+            let level = (std::iter::once(full).chain(coarser))
                 .find(|t| span_on(t) <= Mipmaps::SPAN)
-                .unwrap_or_else(|| levels.last().expect("a texture has at least its own level"));
+                .unwrap_or_else(|| coarser.last().unwrap_or(full));
             (level, 2.0 * Mipmaps::SPAN)
         };
         let n = (2.0 * span_on(level)).ceil().clamp(4.0, most) as usize;
@@ -340,27 +341,29 @@ impl FaceTexture {
 /// down to 1 × 1, each level's texel the area-weighted mean of the texels of the level above that
 /// it covers in (u, v) (so every level has the texture's mean, odd sizes included). Built at load
 /// to average ρ over faces ([`FaceTexture::mean_rho`]), then dropped: 1/3 more memory while it
-/// lives.
-pub struct Mipmaps {
-    levels: Vec<Vec<Texture>>,
+/// lives (the textures themselves are borrowed, not copied).
+pub struct Mipmaps<'a> {
+    textures: &'a [Texture],
+    /// Per texture, its levels below the full one.
+    coarser: Vec<Vec<Texture>>,
 }
 
-impl Mipmaps {
+impl<'a> Mipmaps<'a> {
     /// The most texels a face's edge spans on the level its mean is read from.
     pub const SPAN: f64 = 16.0;
 
     /// The mip chains of `textures`.
-    pub fn new(textures: &[Texture]) -> Self {
-        let levels = (textures.iter())
+    pub fn new(textures: &'a [Texture]) -> Self {
+        let coarser = (textures.iter())
             .map(|t| {
-                let mut chain = vec![t.clone()];
+                let mut chain: Vec<Texture> = t.half().into_iter().collect();
                 while let Some(next) = chain.last().and_then(Texture::half) {
                     chain.push(next);
                 }
                 chain
             })
             .collect();
-        Self { levels }
+        Self { textures, coarser }
     }
 }
 
@@ -522,7 +525,7 @@ mod tests {
         for wrap in [Wrap::Repeat, Wrap::ClampToEdge, Wrap::MirroredRepeat] {
             let t = [Texture::from_srgb8("t", w, h, &rgb, [wrap; 2]).unwrap()];
             let mips = Mipmaps::new(&t);
-            let chain = &mips.levels[0];
+            let chain = &mips.coarser[0];
             assert_eq!(chain.last().unwrap().size(), (1, 1));
             let mean = |t: &Texture| {
                 let n = t.texels().len() as f64;
@@ -530,7 +533,7 @@ mod tests {
             };
             for level in chain {
                 for k in 0..3 {
-                    assert!((mean(level)[k] - mean(&chain[0])[k]).abs() < 1e-5);
+                    assert!((mean(level)[k] - mean(&t[0])[k]).abs() < 1e-5);
                 }
             }
             let mut worst = 0f64;

@@ -253,6 +253,11 @@ pub struct LightArgs {
     /// illuminance LUX.
     #[arg(long, value_name = "MODEL:LUX", value_parser = scene_sampler::lights::lighting::parse_sky)]
     pub sky: Option<scene_sampler::lights::lighting::SkySpec>,
+    /// An environment map: an equirectangular .hdr or .exr of radiance (top row the zenith, the
+    /// left edge north, east a quarter across: Mitsuba's envmap), turned ROT degrees about the
+    /// zenith (its north then looks toward bearing ROT) and scaled by SCALE.
+    #[arg(long, value_name = "FILE[,ROT[,SCALE]]", value_parser = scene_sampler::lights::lighting::parse_env)]
+    pub env: Option<scene_sampler::lights::lighting::EnvSpec>,
     /// The ground's reflectance below the horizon (Radiance's ground glow: ρ·(sky + sun
     /// horizontal illuminance)/π); 0 for a black ground.
     #[arg(long, value_name = "RHO", default_value_t = 0.2, requires = "sky")]
@@ -264,11 +269,11 @@ pub struct LightArgs {
     /// A sky portal: an opening (window, skylight) through which the interior sees the sky, as
     /// its four corners in order around a parallelogram; the sky's shadow rays then go mostly
     /// through the portals (much less noise deep in daylit rooms). Repeatable.
-    #[arg(long, value_name = "X,Y,Z,X,Y,Z,X,Y,Z,X,Y,Z", value_parser = scene_sampler::lights::lighting::parse_portal, allow_hyphen_values = true, requires = "sky")]
+    #[arg(long, value_name = "X,Y,Z,X,Y,Z,X,Y,Z,X,Y,Z", value_parser = scene_sampler::lights::lighting::parse_portal, allow_hyphen_values = true)]
     pub portal: Vec<[[f64; 3]; 4]>,
     /// Find the scene's openings (holes in walls and roofs: planar loops of boundary edges that no
     /// face covers) and use them as sky portals; each is printed. For interiors.
-    #[arg(long, requires = "sky")]
+    #[arg(long)]
     pub auto_portals: bool,
     /// A point light at X,Y,Z with intensity CD (candela); repeatable.
     #[arg(long, value_name = "X,Y,Z,CD", value_parser = scene_sampler::lights::lighting::parse_point, allow_hyphen_values = true)]
@@ -288,6 +293,11 @@ impl LightArgs {
     /// errs for a Flatland scene given lights.
     pub fn light(&self, loaded: AnyScene, quiet: bool) -> anyhow::Result<AnyScene> {
         let mut lighting = self.lighting()?;
+        if self.auto_portals && lighting.sky.is_none() && lighting.env.is_none() {
+            anyhow::bail!(
+                "--auto-portals: portals are openings to a sky; give one (--sky or --env)"
+            );
+        }
         match loaded {
             AnyScene::ThreeD(mut s) => {
                 if self.auto_portals {
@@ -308,7 +318,7 @@ impl LightArgs {
             }
             AnyScene::Flatland(_) if !lighting.is_empty() || self.auto_portals => {
                 anyhow::bail!(
-                    "lights (--sun, --sky, --point-light, --spot-light, --lights) need a 3-D \
+                    "lights (--sun, --sky, --env, --point-light, --spot-light, --lights) need a 3-D \
                      scene; a Flatland scene is lit by its emitting segments"
                 )
             }
@@ -334,6 +344,9 @@ impl LightArgs {
                 ground_reflectance: self.ground_reflectance,
                 ..sky.clone()
             });
+        }
+        if let Some(env) = &self.env {
+            l.env = Some(env.clone());
         }
         l.portals.extend(self.portal.iter().cloned());
         l.point_lights.extend(self.point_light.iter().cloned());

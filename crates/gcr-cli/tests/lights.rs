@@ -91,12 +91,15 @@ fn a_daylit_work_plane_gets_daylight_factors() {
 
 #[test]
 fn bad_light_options_fail_with_a_message() {
-    let cases: [(&[&str], &str); 5] = [
+    let cases: [(&[&str], &str); 8] = [
         (&["--sun", "0,-5,1000"], "elevation"),
         (&["--sun", "1,2"], "AZIMUTH,ELEVATION"),
         (&["--sky", "foggy:100"], "unknown sky"),
         (&["--sky", "cie-clear:100"], "needs a sun"),
         (&["--spot-light", "0,1,0,0,-1,0,10,40,30"], "spot light"),
+        (&["--env", "scenes/checker-grey.png"], "not a .hdr"),
+        (&["--env", "scenes/no-such-map.exr"], "no-such-map.exr"),
+        (&["--auto-portals"], "give one (--sky or --env)"),
     ];
     for (extra, want) in cases {
         let mut args = vec!["solve", "scenes/side-lit-room.obj", "--quiet"];
@@ -203,4 +206,101 @@ fn auto_portals_find_the_window() {
         "{err}"
     );
     assert_eq!(std::fs::read_to_string(&out).unwrap().lines().count(), 20);
+}
+
+/// The work plane's irradiance values in `path`.
+fn column(path: &str) -> Vec<f64> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| l.split_whitespace().next().unwrap().parse().unwrap())
+        .collect()
+}
+
+/// An environment map that holds the CIE clear sky (each texel the mean of 4 × 4 directions of
+/// `Sky::escaped`, a black ground) lights the side-lit room's work plane as the clear sky itself
+/// does, through the same window portal: the map's rows, columns, compass and density are right
+/// (the sun at bearing 200° is in front of the south window; the map turned by 180° puts it behind
+/// the room, and the plane gets visibly less).
+#[test]
+fn an_environment_map_of_the_clear_sky_lights_as_the_sky() {
+    use scene_sampler::{Light, Sky, SkyModel, lights::lighting::Up};
+    let sun = Up::Y.direction(200.0, 25.0);
+    let sky = Sky::new(
+        SkyModel::CieClear { sun },
+        glam::DVec3::Y,
+        [12_000.0; 3],
+        [0.0; 3],
+    )
+    .unwrap();
+    let (w, h) = (256_u32, 128_u32);
+    let img = image::Rgb32FImage::from_fn(w, h, |i, j| {
+        let mut l = 0.0;
+        for a in 0..4 {
+            for b in 0..4 {
+                let phi = 2.0 * std::f64::consts::PI * (f64::from(i) + (a as f64 + 0.5) / 4.0)
+                    / f64::from(w);
+                let c0 = (std::f64::consts::PI * f64::from(j) / f64::from(h)).cos();
+                let c1 = (std::f64::consts::PI * f64::from(j + 1) / f64::from(h)).cos();
+                let c = c0 - (b as f64 + 0.5) / 4.0 * (c0 - c1);
+                let s = (1.0 - c * c).sqrt();
+                let d = glam::DVec3::new(s * phi.sin(), c, -s * phi.cos());
+                l += sky.escaped(d)[0] / std::f64::consts::PI / 16.0;
+            }
+        }
+        image::Rgb([l as f32; 3])
+    });
+    let map = tmp("clear-sky.exr");
+    img.save(&map).unwrap();
+    let window = "1.2,0.9,5,2.8,0.9,5,2.8,2.1,5,1.2,2.1,5";
+    let run = |light: &[&str], out: &str| {
+        let mut args = vec![
+            "solve",
+            "scenes/side-lit-room.obj",
+            "--portal",
+            window,
+            "--target-error",
+            "0.01",
+            "--probes",
+            "scenes/side-lit-room.pts",
+            "--probe-out",
+            out,
+            "--probe-quantity",
+            "irradiance",
+            "--quiet",
+        ];
+        args.extend_from_slice(light);
+        let o = gcr(&args);
+        assert!(o.status.success(), "{light:?}: {}", stderr(&o));
+        column(out)
+    };
+    let (a, b, c) = (tmp("sky.txt"), tmp("env.txt"), tmp("env180.txt"));
+    let by_sky = run(
+        &[
+            "--sun",
+            "200,25,0",
+            "--sky",
+            "cie-clear:12000",
+            "--ground-reflectance",
+            "0",
+        ],
+        &a,
+    );
+    let by_map = run(&["--env", &map], &b);
+    let turned = run(&["--env", &format!("{map},180")], &c);
+    let rms = |x: &[f64]| {
+        let s: f64 = x
+            .iter()
+            .zip(&by_sky)
+            .map(|(v, r)| (v / r - 1.0).powi(2))
+            .sum();
+        (s / x.len() as f64).sqrt()
+    };
+    assert_eq!(by_map.len(), 20);
+    assert!(rms(&by_map) < 0.03, "map vs sky: {:.4}", rms(&by_map));
+    assert!(
+        rms(&turned) > 0.15,
+        "turned map vs sky: {:.4}",
+        rms(&turned)
+    );
 }

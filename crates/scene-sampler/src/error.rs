@@ -206,7 +206,7 @@ pub enum SceneError {
     #[error(
         "{source_name}: nothing gives light: no face emits (set Ke in the MTL, emissiveFactor in glTF, \
          `emission` in Flatland JSON) and no light is given (3-D scenes: --sun AZ,EL,LUX, --sky MODEL:LUX, \
-         --point-light X,Y,Z,CD or a lighting file --lights FILE; docs/guide/lights.md)"
+         --env MAP.hdr, --point-light X,Y,Z,CD or a lighting file --lights FILE; docs/guide/lights.md)"
     )]
     NoEmitter {
         /// The file.

@@ -234,6 +234,13 @@ impl TextureBudget {
             name: name.into(),
             message,
         };
+        if !matches!(format, image::ImageFormat::Png | image::ImageFormat::Jpeg) {
+            // the build decodes HDR and EXR for environment maps: a texture of them would be
+            // clamped to 8 bits as if it were sRGB
+            return Err(texture_error(format!(
+                "{format:?} images are not read as textures (PNG and JPEG are)"
+            )));
+        }
         let reader = || image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
         let (width, height) = reader()
             .into_dimensions()

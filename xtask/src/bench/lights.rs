@@ -4,7 +4,8 @@
 //! * the `baselines` path tracer to a 0.3 % relative standard error per point (the reference);
 //! * `gcr` — the default paths gather to a 1 % target;
 //! * Mitsuba 3 — `xtask/py/mitsuba_irradiance.py --emitters` with the same light as Mitsuba's own
-//!   emitter (`point`, `directional`, `constant`, and the CIE overcast sky as an `envmap`),
+//!   emitter (`point`, `directional`, `constant`, the CIE overcast sky as an `envmap`, and an
+//!   environment map read by both from one EXR file),
 //!   `multijitter` (unbiased), skipped with a note without `mitsuba`.
 //!
 //! Writes `benchmarks-lights.md`. Spot lights are left out: Mitsuba's spot falloff is not glTF's
@@ -16,7 +17,7 @@ use anyhow::Result;
 use baselines::Adaptive;
 use glam::DVec3;
 use scene_sampler::lights::lighting::Up;
-use scene_sampler::{Light, PointLight, SceneBvh, Sky, SkyModel, Sun};
+use scene_sampler::{EnvMap, Light, PointLight, SceneBvh, Sky, SkyModel, Sun};
 use std::f64::consts::PI;
 use std::fmt::Write;
 use std::sync::Arc;
@@ -29,11 +30,11 @@ struct Case {
     mitsuba: serde_json::Value,
 }
 
-fn cases() -> Vec<Case> {
+fn cases(dir: &std::path::Path) -> Result<Vec<Case>> {
     let sun = Up::Y.direction(200.0, 25.0);
     let (e_h, e_n) = (10_000.0, 60_000.0);
     let l_z = 9.0 * e_h / (7.0 * PI);
-    vec![
+    Ok(vec![
         Case {
             name: "point light, 800 cd",
             light: Arc::new(PointLight::new(DVec3::new(2.0, 2.6, 2.5), [800.0; 3]).unwrap()),
@@ -58,7 +59,32 @@ fn cases() -> Vec<Case> {
             light: Arc::new(Sky::new(SkyModel::CieOvercast, DVec3::Y, [e_h; 3], [0.0; 3]).unwrap()),
             mitsuba: serde_json::json!({"type": "cie-overcast", "zenith": l_z}),
         },
-    ]
+        {
+            let file = clear_sky_map(dir, sun)?;
+            Case {
+                name: "environment map (512 × 256 EXR: CIE clear sky, 10 000 lux, grey ground)",
+                light: Arc::new(EnvMap::read(&file, Up::Y.frame(), 0.0, 1.0)?),
+                mitsuba: serde_json::json!({"type": "envmap", "filename": file}),
+            }
+        },
+    ])
+}
+
+/// An equirectangular EXR (Mitsuba's `envmap` layout, which ours follows): the CIE clear sky of
+/// 10 000 lux for the sun toward `sun` at texel centres, the ground at L = 1 000/π.
+fn clear_sky_map(dir: &std::path::Path, sun: DVec3) -> Result<std::path::PathBuf> {
+    let sky = Sky::new(SkyModel::CieClear { sun }, DVec3::Y, [1e4; 3], [1e3 / PI; 3])
+        .ok_or_else(|| anyhow::anyhow!("clear sky"))?;
+    let (w, h) = (512_u32, 256_u32);
+    let img = image::Rgb32FImage::from_fn(w, h, |i, j| {
+        let phi = 2.0 * PI * (f64::from(i) + 0.5) / f64::from(w);
+        let theta = PI * (f64::from(j) + 0.5) / f64::from(h);
+        let d = DVec3::new(theta.sin() * phi.sin(), theta.cos(), -theta.sin() * phi.cos());
+        image::Rgb([(sky.escaped(d)[0] / PI) as f32; 3])
+    });
+    let file = dir.join("clear-sky.exr");
+    img.save(&file)?;
+    Ok(file)
 }
 
 /// Runs this group and writes `benchmarks-lights.md` into `ctx.out`.
@@ -81,7 +107,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     let mut skipped = None;
     let dir = std::env::temp_dir().join(format!("gcr-lights-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
-    for (k, case) in cases().into_iter().enumerate() {
+    for (k, case) in cases(&dir)?.into_iter().enumerate() {
         let mut scene = base.clone();
         scene.add_lights([case.light.clone()]);
         let bvh = SceneBvh::new(&scene);
@@ -137,7 +163,9 @@ pub fn run(ctx: &Ctx) -> Result<()> {
          `scenes/side-lit-room.pts` (0.8 m, facing up). Reference: the `baselines` path tracer, \
          which samples the lights through the same interface as gcr (an independent estimator, \
          not independent light code); Mitsuba 3 has its own emitters (`point`, `directional`, \
-         `constant`, and the overcast sky as a 512 × 256 `envmap`), `scalar_rgb`, `path`, \
+         `constant`, the overcast sky as a 512 × 256 `envmap`, and the same EXR as ours for the \
+         environment map — Mitsuba interpolates it bilinearly, ours is constant per texel), \
+         `scalar_rgb`, `path`, \
          `multijitter`, two seeds per run (σ from their difference), at each point a tiny white \
          square seen by a radiancemeter (`xtask/py/mitsuba_irradiance.py`). `its noise`: the \
          estimate's own ‖σ‖/‖E_ref‖; Σd²/Σσ² ≈ 1 when an estimate differs from the reference by the \

@@ -15,12 +15,13 @@
 //!   "sun": { "azimuth": 135, "elevation": 40, "illuminance": 80000, "diameter": 0.53 },
 //!   "sky": { "model": "cie-overcast", "illuminance": 12000, "ground_reflectance": 0.2 },
 //!   "portals": [ [[1.2, 0.9, 5], [2.8, 0.9, 5], [2.8, 2.1, 5], [1.2, 2.1, 5]] ],
+//!   "env": { "file": "studio.hdr", "rotation": 90, "scale": 1.0 },
 //!   "point_lights": [ { "position": [0, 2.5, 0], "intensity": 800 } ],
 //!   "spot_lights": [ { "position": [1, 2.5, 0], "direction": [0, -1, 0], "intensity": 1200,
 //!                      "inner_angle": 20, "outer_angle": 35 } ] }
 //! ```
 
-use super::{Light, PointLight, Portal, Portals, Sky, SkyModel, Sun};
+use super::{EnvMap, Light, PointLight, Portal, Portals, Sky, SkyModel, Sun};
 use crate::{BANDS, Result, SceneError};
 use glam::DVec3;
 use serde::Deserialize;
@@ -103,6 +104,25 @@ fn default_ground() -> f64 {
     0.2
 }
 
+/// The environment map of a lighting description ([`EnvMap`]).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct EnvSpec {
+    /// An equirectangular `.hdr` or `.exr` image. In a lighting file, relative to the file's
+    /// folder and confined to it (as a scene's textures are); on the command line, as given.
+    pub file: std::path::PathBuf,
+    /// The map's turn about the zenith, degrees: its north column then looks toward this bearing.
+    #[serde(default)]
+    pub rotation: f64,
+    /// A factor on the map's radiance (default 1).
+    #[serde(default = "default_scale")]
+    pub scale: f64,
+}
+
+fn default_scale() -> f64 {
+    1.0
+}
+
 /// A point light of a lighting description.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -140,6 +160,8 @@ pub struct Lighting {
     pub sun: Option<SunSpec>,
     /// The sky.
     pub sky: Option<SkySpec>,
+    /// An environment map (beside or instead of a sky).
+    pub env: Option<EnvSpec>,
     /// Point lights.
     #[serde(default)]
     pub point_lights: Vec<PointSpec>,
@@ -160,7 +182,20 @@ impl Lighting {
             path: path.to_path_buf(),
             source,
         })?;
-        serde_json::from_str(&text).map_err(|e| lighting_error(&path.display().to_string(), e))
+        let mut lighting: Self = serde_json::from_str(&text)
+            .map_err(|e| lighting_error(&path.display().to_string(), e))?;
+        if let Some(env) = &mut lighting.env {
+            // the map is the file's neighbour: resolved in its folder, never outside it
+            let folder = crate::confine::Folder::of(path, &crate::LoadOptions::default())?;
+            env.file = folder.locate(&env.file).ok_or_else(|| {
+                lighting_message(&format!(
+                    "{}: the environment map {} is outside the lighting file's folder",
+                    path.display(),
+                    env.file.display()
+                ))
+            })?;
+        }
+        Ok(lighting)
     }
 
     /// Whether the description gives no light.
@@ -168,6 +203,7 @@ impl Lighting {
         self.portals.is_empty()
             && self.sun.is_none()
             && self.sky.is_none()
+            && self.env.is_none()
             && self.point_lights.is_empty()
             && self.spot_lights.is_empty()
     }
@@ -226,8 +262,16 @@ impl Lighting {
             let sky = Sky::new(model, up, [s.illuminance; BANDS], ground)
                 .ok_or_else(|| bad("sky: illuminance must be ≥ 0 and finite"))?;
             out.push(Arc::new(sky.with_portals(self.sky_portals()?)));
-        } else if !self.portals.is_empty() {
-            return Err(bad("portals: they are openings to a sky; give one (--sky)"));
+        }
+        if let Some(e) = &self.env {
+            let (up, north, east) = self.up.frame();
+            let map = EnvMap::read(&e.file, (up, north, east), e.rotation, e.scale)?;
+            out.push(Arc::new(map.with_portals(self.sky_portals()?)));
+        }
+        if self.sky.is_none() && self.env.is_none() && !self.portals.is_empty() {
+            return Err(bad(
+                "portals: they are openings to a sky; give one (--sky or --env)",
+            ));
         }
         for p in &self.point_lights {
             let light = PointLight::new(DVec3::from_array(p.position), [p.intensity; BANDS])
@@ -309,6 +353,31 @@ pub fn parse_sky(s: &str) -> std::result::Result<SkySpec, String> {
     })
 }
 
+/// Parses `--env FILE[,ROTATION[,SCALE]]` (the trailing numbers, if any, are the rotation in
+/// degrees and the scale).
+pub fn parse_env(s: &str) -> std::result::Result<EnvSpec, String> {
+    let mut parts: Vec<&str> = s.split(',').collect();
+    let mut numbers = Vec::new();
+    while parts.len() > 1 && numbers.len() < 2 {
+        match parts.last().map(|p| p.trim().parse::<f64>()) {
+            Some(Ok(v)) if v.is_finite() => {
+                numbers.insert(0, v);
+                parts.pop();
+            }
+            _ => break,
+        }
+    }
+    let file = parts.join(",");
+    if file.is_empty() {
+        return Err("expected FILE[,ROTATION[,SCALE]]".into());
+    }
+    Ok(EnvSpec {
+        file: file.into(),
+        rotation: numbers.first().copied().unwrap_or(0.0),
+        scale: numbers.get(1).copied().unwrap_or(1.0),
+    })
+}
+
 /// Parses `--portal X,Y,Z,X,Y,Z,X,Y,Z,X,Y,Z` (four corners in order around a parallelogram).
 pub fn parse_portal(s: &str) -> std::result::Result<[[f64; 3]; 4], String> {
     let v = numbers(s)?;
@@ -375,6 +444,12 @@ mod tests {
             SkyKind::CieOvercast
         );
         assert!(parse_sky("foggy:1").is_err() && parse_sky("uniform").is_err());
+        let env = parse_env("maps/a,b.hdr,90,2.5").unwrap();
+        assert_eq!(
+            (env.file.to_str(), env.rotation, env.scale),
+            (Some("maps/a,b.hdr"), 90.0, 2.5)
+        );
+        assert_eq!(parse_env("sky.exr").unwrap().scale, 1.0);
         let l: Lighting = serde_json::from_str(
             r#"{"up":"z","sun":{"azimuth":180,"elevation":30,"illuminance":50000},
                "sky":{"model":"cie-clear","illuminance":10000}}"#,

@@ -17,6 +17,7 @@
 //! | sun: a distant disc of directions | `sun.rs` ([`Sun`]) | solid angle (a direction when its diameter is 0) |
 //! | sky: uniform, CIE overcast, CIE clear; a ground below the horizon; portals | `sky.rs` ([`Sky`]), `portal.rs` | solid angle |
 //! | point and spot lights (glTF `KHR_lights_punctual`) | `point.rs` ([`PointLight`]) | a point (delta) |
+//! | environment map: an equirectangular `.hdr`/`.exr` | `envmap.rs` ([`EnvMap`]) | solid angle |
 //!
 //! A scene holds its lights other than faces in [`crate::Scene::lights`] as `Arc<dyn Light>`; a new
 //! light type is its own file implementing [`Light`] and one line that creates it (the lighting
@@ -34,6 +35,7 @@
 //! `p` the light's.
 
 mod area;
+mod envmap;
 pub mod lighting;
 mod point;
 mod portal;
@@ -42,6 +44,7 @@ mod sky;
 mod sun;
 
 pub use area::{EmitterTable, geometry};
+pub use envmap::EnvMap;
 pub use lighting::Lighting;
 pub use point::PointLight;
 pub use portal::{Portal, Portals};

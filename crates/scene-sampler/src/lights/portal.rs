@@ -120,6 +120,13 @@ impl Portals {
         self.weights(p).1 > 0.0
     }
 
+    /// The share of an infinite light's shadow rays drawn through the portals at `p`: 3/4 where
+    /// some portal is in view (the rest by the light's own sampling, so that directions no portal
+    /// covers keep a positive density), else 0.
+    pub fn share(&self, p: DVec3) -> f64 {
+        if self.in_view(p) { 0.75 } else { 0.0 }
+    }
+
     /// The portals' selection weights from `p` and their sum.
     fn weights(&self, p: DVec3) -> (Vec<f64>, f64) {
         let w: Vec<f64> = self.0.iter().map(|q| q.weight(p)).collect();

@@ -59,10 +59,6 @@ pub struct Sky {
     portals: Portals,
 }
 
-/// With portals, the share of a sky's shadow rays drawn through them (the rest by the
-/// hemispheres, so that directions no portal covers keep a positive density).
-const THROUGH_PORTALS: f64 = 0.75;
-
 /// Zenith angles and azimuths of the quadrature that normalises the clear sky.
 const QUAD: usize = 256;
 
@@ -179,21 +175,11 @@ impl Sky {
     /// when there are portals that the receiver has in view.
     fn pdf(&self, at: &Receiver, dir: DVec3) -> f64 {
         let hemi = self.hemisphere_pdf(at.n, dir);
-        let b = self.portal_share(at);
+        let b = self.portals.share(at.p);
         if b > 0.0 {
             b * self.portals.pdf(at.p, dir) + (1.0 - b) * hemi
         } else {
             hemi
-        }
-    }
-
-    /// The share of shadow rays through the portals at `at` (0 without portals, or where none
-    /// has weight).
-    fn portal_share(&self, at: &Receiver) -> f64 {
-        if !self.portals.in_view(at.p) {
-            0.0
-        } else {
-            THROUGH_PORTALS
         }
     }
 }
@@ -205,7 +191,7 @@ fn mean(b: &Bands) -> f64 {
 impl Light for Sky {
     fn sample(&self, at: &Receiver, u: [f64; 2]) -> Option<LightSample> {
         // through a portal with probability b, by u[0] remapped within its share
-        let b = self.portal_share(at);
+        let b = self.portals.share(at.p);
         let w = if u[0] < b {
             self.portals.sample(at.p, [u[0] / b, u[1]])?
         } else {

@@ -304,3 +304,50 @@ fn an_environment_map_of_the_clear_sky_lights_as_the_sky() {
         rms(&turned)
     );
 }
+
+/// A grille cut out by an alpha mask (`map_d`: transparent stripes at x ∈ [1, 1.5) and [2, 2.5))
+/// over a floor, the sun straight overhead: the floor gets the sun's full 1 000 lux under the
+/// open stripes and nothing under the solid ones (the grille's underside is its back).
+#[test]
+fn a_cut_out_grille_casts_a_striped_shadow() {
+    let dir = std::path::PathBuf::from(tmp("grille"));
+    std::fs::create_dir_all(&dir).unwrap();
+    image::GrayImage::from_raw(8, 1, vec![0, 0, 255, 255, 0, 0, 255, 255])
+        .unwrap()
+        .save(dir.join("mask.png"))
+        .unwrap();
+    std::fs::write(
+        dir.join("grille.mtl"),
+        "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl grille\nKd 0.5 0.5 0.5\nmap_d mask.png\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("grille.obj"),
+        "mtllib grille.mtl\nv 0 0 0\nv 4 0 0\nv 4 0 4\nv 0 0 4\nv 1 1 1\nv 3 1 1\nv 3 1 3\n\
+         v 1 1 3\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\no floor\nusemtl floor\nf 1 4 3 2\n\
+         o grille\nusemtl grille\nf 5/1 8/4 7/3 6/2\n",
+    )
+    .unwrap();
+    let (probes, out) = (dir.join("p.txt"), dir.join("out.txt"));
+    std::fs::write(&probes, "1.25 0 2 0 1 0\n1.75 0 2 0 1 0\n2.25 0 2 0 1 0\n2.75 0 2 0 1 0\n")
+        .unwrap();
+    let o = gcr(&[
+        "solve",
+        dir.join("grille.obj").to_str().unwrap(),
+        "--sun",
+        "0,90,1000,0",
+        "--probes",
+        probes.to_str().unwrap(),
+        "--probe-out",
+        out.to_str().unwrap(),
+        "--probe-quantity",
+        "irradiance",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = column(out.to_str().unwrap());
+    let want = [1000.0, 0.0, 1000.0, 0.0];
+    for (got, want) in e.iter().zip(want) {
+        assert!((got - want).abs() < 1.0, "{e:?}");
+    }
+}

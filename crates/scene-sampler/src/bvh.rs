@@ -23,7 +23,7 @@
 //! 10⁶ the spacing of representable numbers is 0.06, a tenth of the box). Inputs and outputs ([`Hit::point`])
 //! stay in the scene's own coordinates.
 
-use crate::{FlatPoint, FlatlandScene, NO_FACE, Scene, SurfacePoint};
+use crate::{AlphaMask, Face, FlatPoint, FlatlandScene, NO_FACE, Scene, SurfacePoint};
 use glam::{DVec2, DVec3, Vec3A};
 use obvhs::{
     BvhBuildParams, cwbvh::CwBvh, cwbvh::builder::build_cwbvh_from_tris, ray::Ray,
@@ -68,6 +68,13 @@ pub struct SceneBvh {
     /// The centre of the scene's bounds: the origin of the f32 frame (module docs).
     centre: DVec3,
     eps: f64,
+    /// Cut-outs (module docs): by face index, the index into `cut_faces` or `u32::MAX`; empty
+    /// when the scene has none, so that other scenes pay one length test per candidate hit.
+    cut_index: Vec<u32>,
+    /// The faces with a cut-out.
+    cut_faces: Vec<Face>,
+    /// The scene's alpha masks.
+    masks: Vec<AlphaMask>,
 }
 
 impl std::fmt::Debug for SceneBvh {
@@ -81,6 +88,21 @@ impl std::fmt::Debug for SceneBvh {
 
 fn v3a(p: DVec3) -> Vec3A {
     Vec3A::new(p.x as f32, p.y as f32, p.z as f32)
+}
+
+/// The BVH ray from `origin` along `dir` over `[tmin, tmax]`, with each direction component that
+/// is ±0 replaced by +10⁻³⁰: a direction with components of −0 (−Y is (−0, −1, −0)) has infinite
+/// inverse components of the wrong sign for obvhs's slab test and missed every triangle (found by
+/// the cut-out tests with a ray straight down). The change of direction is far below f32's
+/// resolution of any hit.
+fn ray(origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> Ray {
+    let nudge = |c: f32| if c == 0.0 { 1e-30 } else { c };
+    Ray::new(
+        origin,
+        Vec3A::new(nudge(dir.x), nudge(dir.y), nudge(dir.z)),
+        tmin,
+        tmax,
+    )
 }
 
 impl SceneBvh {
@@ -112,6 +134,18 @@ impl SceneBvh {
         // the largest |coordinate| in the f32 frame: (hi − lo)/2 per axis
         let max_abs = (0.5 * (hi - lo)).max_element();
         let eps = 1e-5 * scene.diagonal().max(max_abs);
+        let (mut cut_index, mut cut_faces) = (Vec::new(), Vec::new());
+        if scene.faces.iter().any(|f| f.cutout.is_some()) {
+            cut_index = (scene.faces.iter())
+                .map(|f| match f.cutout {
+                    Some(_) => {
+                        cut_faces.push(*f);
+                        cut_faces.len() as u32 - 1
+                    }
+                    None => u32::MAX,
+                })
+                .collect();
+        }
         SceneBvh {
             bvh,
             tris,
@@ -120,7 +154,35 @@ impl SceneBvh {
             centroids: scene.faces.iter().map(|f| f.centroid()).collect(),
             centre,
             eps,
+            cut_index,
+            cut_faces,
+            masks: scene.masks.clone(),
         }
+    }
+
+    /// The distance to BVH primitive `id` along the ray `r` (the BVH's frame), infinite for a miss
+    /// or a hit in a cut-out's hole: every query's primitive test.
+    #[inline]
+    fn hit_t(&self, r: &Ray, id: usize) -> f32 {
+        let t = self.tris[id].intersect(r);
+        if t.is_finite() && !self.cut_index.is_empty() && self.in_hole(self.face_of[id], r, t) {
+            f32::INFINITY
+        } else {
+            t
+        }
+    }
+
+    /// Whether the point at `t` along `r` on face `face` is in a hole of its cut-out.
+    fn in_hole(&self, face: u32, r: &Ray, t: f32) -> bool {
+        let Some(f) =
+            (self.cut_index.get(face as usize)).and_then(|&k| self.cut_faces.get(k as usize))
+        else {
+            return false;
+        };
+        let d = |v: Vec3A| DVec3::new(f64::from(v.x), f64::from(v.y), f64::from(v.z));
+        let p = self.centre + d(r.origin) + d(r.direction) * f64::from(t);
+        let (b1, b2) = f.barycentric(p);
+        f.cutout.is_some_and(|c| c.is_hole(&self.masks, b1, b2))
     }
 
     /// How far rays start *behind* their true origin (`2·10⁻⁴ + eps`, world units), with `tmin` raised by the
@@ -159,7 +221,7 @@ impl SceneBvh {
         }
         let dir = d / len;
         let back = self.backoff();
-        let ray = Ray::new(
+        let ray = ray(
             v3a(a - dir * back - self.centre),
             v3a(dir),
             (back + self.eps) as f32,
@@ -170,7 +232,7 @@ impl SceneBvh {
             if f == skip_a || f == skip_b {
                 f32::INFINITY
             } else {
-                self.tris[id].intersect(r)
+                self.hit_t(r, id)
             }
         })
     }
@@ -198,7 +260,7 @@ impl SceneBvh {
         } else {
             f32::INFINITY
         };
-        let ray = Ray::new(
+        let ray = ray(
             v3a(origin - u * back - self.centre),
             v3a(u),
             back as f32,
@@ -214,7 +276,7 @@ impl SceneBvh {
             if face == skip {
                 return f32::INFINITY;
             }
-            let t = self.tris[id].intersect(r);
+            let t = self.hit_t(r, id);
             if t.is_finite() && self.normals[face as usize].dot(u) > 0.0 {
                 t + tie
             } else {
@@ -258,7 +320,7 @@ impl SceneBvh {
         }
         let u = dir / len;
         let back = self.backoff();
-        let ray = Ray::new(
+        let ray = ray(
             v3a(self.origin(from, dir) - u * back - self.centre),
             v3a(u),
             back as f32,
@@ -268,7 +330,7 @@ impl SceneBvh {
             if self.face_of[id] == from.face {
                 f32::INFINITY
             } else {
-                self.tris[id].intersect(r)
+                self.hit_t(r, id)
             }
         })
     }

@@ -174,6 +174,20 @@ pub(crate) fn decode_image(
     buffers: &[Vec<u8>],
     budget: &mut TextureBudget,
 ) -> Result<Texture> {
+    let img = read_image(image, name, source, folder, buffers, budget)?;
+    gltf_texture(name, img, wrap)
+}
+
+/// Reads, checks against `budget` and decodes a glTF image ([`decode_image`]'s first steps): the
+/// image as decoded, for an albedo texture or an alpha mask ([`crate::cutout`]).
+pub(crate) fn read_image(
+    image: &gltf::Image,
+    name: &str,
+    source: &str,
+    folder: &Folder,
+    buffers: &[Vec<u8>],
+    budget: &mut TextureBudget,
+) -> Result<image::DynamicImage> {
     let from_media = |m: Option<&str>| match m {
         Some("image/png") => Some(image::ImageFormat::Png),
         Some("image/jpeg") => Some(image::ImageFormat::Jpeg),
@@ -215,8 +229,7 @@ pub(crate) fn decode_image(
         name: name.into(),
         message: "unsupported image encoding (PNG or JPEG, by its mimeType or extension)".into(),
     })?;
-    let img = budget.decode(name, &bytes, format)?;
-    gltf_texture(name, img, wrap)
+    budget.decode(name, &bytes, format)
 }
 
 /// A decoded glTF image as an albedo texture, as the gltf crate's importer gave it to the loader:

@@ -38,9 +38,11 @@ pub mod bench;
 pub mod builtin;
 pub mod bvh;
 pub mod confine;
+pub mod cutout;
 pub mod distribution;
 pub mod error;
 pub mod flatland;
+mod gltf_cutouts;
 mod gltf_lights;
 mod gltf_resources;
 pub mod kernel;
@@ -60,6 +62,7 @@ pub mod warp;
 pub use builtin::{BUILTIN_NAMES, builtin, is_builtin, nearest_builtin, random_boxes};
 pub use bvh::{BuildQuality, FlatHit, FlatVisibility, Hit, SceneBvh};
 pub use confine::LoadOptions;
+pub use cutout::{AlphaMask, FaceCutout};
 pub use distribution::{Discrete, uniform_triangle};
 pub use error::{Result, SceneError};
 pub use flatland::{FlatView, FlatlandScene, Segment};
@@ -88,6 +91,8 @@ pub use warp::{
 };
 
 /// A scene of either dimension, as returned by [`load`] and [`builtin`].
+// one value per loaded scene, moved a few times: boxing the larger variant would buy nothing
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 pub enum AnyScene {
     /// A 3-D triangle scene.

@@ -118,8 +118,9 @@ fn read_text(path: &Path, limit: u64) -> Result<String> {
 /// their syntax.
 const MTL_COLOURS: [&str; 5] = ["Ka", "Kd", "Ks", "Ke", "Tf"];
 
-/// Rewrites MTL text into the subset tobj parses without trouble: only `newmtl`, `Kd`, `Ke` and `map_Kd` lines
-/// are kept (`map_Kd` with its file name alone: texture options are an error naming the line),
+/// Rewrites MTL text into the subset tobj parses without trouble: only `newmtl`, `Kd`, `Ke`, `map_Kd`, `d`
+/// and `map_d` lines are kept (maps with their file name alone: texture options are an error naming the
+/// line; `d` one number in [0, 1]; `Tr` is dropped: exporters disagree on its sense),
 /// and a colour with one number (`Kd 0.5`, grey in the MTL format) is written out as three. A colour
 /// keyword with no number, two numbers, or a word that is not a number is an error naming file and line
 /// (tobj 4 panics on the one-number form and names no line for the others).
@@ -169,20 +170,28 @@ fn sanitize_mtl(source: &str, text: &str) -> Result<String> {
             if key == "Kd" || key == "Ke" {
                 out.push_str(&format!("{key} {:?} {:?} {:?}\n", rgb[0], rgb[1], rgb[2]));
             }
-        } else if key == "map_Kd" {
+        } else if key == "map_Kd" || key == "map_d" {
             // `map_Kd [options] file`: the options (scale, offset, …) are not supported; the file
             // is the last word.
             let args: Vec<&str> = words.collect();
             let Some(file) = args.last() else {
-                return Err(err("`map_Kd` without a file name".into()));
+                return Err(err(format!("`{key}` without a file name")));
             };
             if args.len() > 1 {
                 return Err(err(format!(
-                    "`map_Kd` options ({}) are not supported: give the file name alone",
+                    "`{key}` options ({}) are not supported: give the file name alone",
                     args[..args.len() - 1].join(" ")
                 )));
             }
-            out.push_str(&format!("map_Kd {file}\n"));
+            out.push_str(&format!("{key} {file}\n"));
+        } else if key == "d" {
+            // dissolve (opacity): one number in [0, 1]; `-halo` is not supported
+            let d = match words.collect::<Vec<_>>()[..] {
+                [v] => v.parse::<f64>().ok().filter(|d| (0.0..=1.0).contains(d)),
+                _ => None,
+            };
+            let d = d.ok_or_else(|| err("`d` needs one number in [0, 1] (opacity)".into()))?;
+            out.push_str(&format!("d {d:?}\n"));
         }
     }
     Ok(out)
@@ -333,6 +342,8 @@ fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
             textures.push(tex);
         }
     }
+    let (masks, alpha_of) = obj_alphas(&materials, &folder, &source, &mut budget, &mut warnings)?;
+    let mut hidden = 0usize;
     let mut untextured: Vec<String> = Vec::new();
     let mut checked: Vec<Option<(Spectrum, Spectrum)>> = vec![None; materials.len()];
     let mut faces = Vec::new();
@@ -397,6 +408,9 @@ fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
             let i = i as usize * 2;
             (mesh.texcoords.get(i..i + 2)).map(|t| glam::DVec2::new(t[0], 1.0 - t[1]))
         };
+        let alpha = (mesh.material_id)
+            .and_then(|i| alpha_of.get(i).copied())
+            .unwrap_or(ObjAlpha::Opaque);
         let mut against = 0usize;
         // tobj gives face_arities only when not triangulating; with triangulation each polygon's fan shares a
         // surface id only if we track it, which tobj does not expose: one surface per triangle then.
@@ -412,6 +426,23 @@ fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
                 }
             }
             let mut face = Face::new(v, rho, e, oi as u32, surface);
+            match (alpha, with_uv) {
+                (ObjAlpha::Hidden, _) => {
+                    hidden += 1;
+                    continue;
+                }
+                (ObjAlpha::Cut(mask, threshold), true) => {
+                    let c = &mesh.texcoord_indices[3 * k..3 * k + 3];
+                    if let (Some(a), Some(b), Some(d)) = (uv(c[0]), uv(c[1]), uv(c[2])) {
+                        face.cutout = Some(crate::FaceCutout {
+                            mask,
+                            uv: [a, b, d],
+                            threshold,
+                        });
+                    }
+                }
+                _ => {}
+            }
             if let (Some(tex), true) = (texture, with_uv) {
                 let c = &mesh.texcoord_indices[3 * k..3 * k + 3];
                 if let (Some(a), Some(b), Some(d)) = (uv(c[0]), uv(c[1]), uv(c[2])) {
@@ -434,8 +465,15 @@ fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
         }
     }
     average_albedo(&mut faces, &textures);
-    let mut scene =
-        Scene::new(&stem(path), &source, faces, objects, None)?.with_textures(textures)?;
+    if hidden > 0 {
+        warnings.push(format!(
+            "{source}: dropped {hidden} face(s) whose material's opacity `d` is below 0.5 (fully \
+             cut out)"
+        ));
+    }
+    let mut scene = Scene::new(&stem(path), &source, faces, objects, None)?
+        .with_textures(textures)?
+        .with_masks(masks)?;
     warnings.extend(untextured.into_iter().map(|o| {
         format!("{source}: object `{o}`: a textured material (map_Kd) but no `vt`: its Kd is used")
     }));
@@ -455,6 +493,53 @@ fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
     Ok(scene)
 }
 
+/// How an OBJ material's opacity cuts its faces ([`crate::cutout`]).
+#[derive(Clone, Copy, Debug)]
+enum ObjAlpha {
+    Opaque,
+    /// `d` below 0.5 and no `map_d`: the faces are dropped.
+    Hidden,
+    /// A `map_d` mask (index) and its threshold 0.5/d.
+    Cut(u32, f64),
+}
+
+/// The OBJ materials' alpha masks and, per material, how its opacity (`d`, `map_d`, cut off at
+/// 0.5) cuts it; an emitting material's opacity is ignored with a warning.
+fn obj_alphas(
+    materials: &[tobj::Material],
+    folder: &Folder,
+    source: &str,
+    budget: &mut TextureBudget,
+    warnings: &mut Vec<String>,
+) -> Result<(Vec<crate::AlphaMask>, Vec<ObjAlpha>)> {
+    let mut masks = Vec::new();
+    let mut alpha_of = vec![ObjAlpha::Opaque; materials.len()];
+    for (i, mat) in materials.iter().enumerate() {
+        let d = mat.dissolve.unwrap_or(1.0);
+        if d >= 1.0 && mat.dissolve_texture.is_none() {
+            continue;
+        }
+        if mat.emissive.is_some_and(|e| e.iter().any(|v| *v > 0.0)) {
+            warnings.push(format!(
+                "{source}: material `{}`: an emitting material's opacity (`d`, `map_d`) is \
+                 ignored (solid)",
+                mat.name
+            ));
+            continue;
+        }
+        alpha_of[i] = match &mat.dissolve_texture {
+            Some(_) if d <= 0.0 => ObjAlpha::Hidden,
+            Some(file) => {
+                masks.push(obj_mask(folder, file, &mat.name, source, budget)?);
+                ObjAlpha::Cut(masks.len() as u32 - 1, 0.5 / d)
+            }
+            None if d < 0.5 => ObjAlpha::Hidden,
+            None => ObjAlpha::Opaque,
+        };
+    }
+    Ok((masks, alpha_of))
+}
+
 /// An OBJ material's `map_Kd` texture `file`, read within the scene's folder and decoded within
 /// `budget`; a file that cannot be read or decoded is an error naming the material.
 fn obj_texture(
@@ -464,28 +549,78 @@ fn obj_texture(
     source: &str,
     budget: &mut TextureBudget,
 ) -> Result<Texture> {
-    let full = folder.shown(Path::new(file));
+    let (full, bytes) = obj_map(folder, file, material, source, "map_Kd")?;
     let name = full.display().to_string();
-    let wrapped = |e: SceneError| SceneError::Parse {
-        source_name: source.into(),
-        message: format!("material `{material}`: map_Kd: {e}"),
-    };
+    Texture::from_file_bytes(&name, &full, &bytes, [Wrap::Repeat; 2], budget)
+        .map_err(|e| obj_map_error(e, source, material, "map_Kd"))
+}
+
+/// An OBJ material's `map_d` alpha mask `file` ([`crate::cutout`]: its alpha channel, or its grey
+/// level when it has none), read and decoded as [`obj_texture`].
+fn obj_mask(
+    folder: &Folder,
+    file: &str,
+    material: &str,
+    source: &str,
+    budget: &mut TextureBudget,
+) -> Result<crate::AlphaMask> {
+    let (full, bytes) = obj_map(folder, file, material, source, "map_d")?;
+    let name = full.display().to_string();
+    let decoded = image::ImageFormat::from_path(&full)
+        .map_err(|e| SceneError::Texture {
+            name: name.clone(),
+            message: e.to_string(),
+        })
+        .and_then(|format| budget.decode(&name, &bytes, format));
+    let img = decoded.map_err(|e| obj_map_error(e, source, material, "map_d"))?;
+    crate::AlphaMask::of_image(&name, &img, [Wrap::Repeat; 2], true).ok_or_else(|| {
+        SceneError::Texture {
+            name,
+            message: "an empty image".into(),
+        }
+    })
+}
+
+/// The path (as messages show it) and bytes of the image `file` that statement `key` of an OBJ
+/// material names, read within the scene's folder.
+fn obj_map(
+    folder: &Folder,
+    file: &str,
+    material: &str,
+    source: &str,
+    key: &str,
+) -> Result<(std::path::PathBuf, Vec<u8>)> {
+    let full = folder.shown(Path::new(file));
     let bytes = folder.read(Path::new(file)).map_err(|r| match r {
         Refusal::Outside => SceneError::OutsideFolder {
             source_name: source.into(),
-            what: format!("material `{material}`: `map_Kd`"),
+            what: format!("material `{material}`: `{key}`"),
             uri: file.into(),
         },
         Refusal::Refused(e) => e,
-        Refusal::Io(e) => wrapped(SceneError::Texture {
-            name: name.clone(),
-            message: e.to_string(),
-        }),
+        Refusal::Io(e) => obj_map_error(
+            SceneError::Texture {
+                name: full.display().to_string(),
+                message: e.to_string(),
+            },
+            source,
+            material,
+            key,
+        ),
     })?;
-    Texture::from_file_bytes(&name, &full, &bytes, [Wrap::Repeat; 2], budget).map_err(|e| match e {
+    Ok((full, bytes))
+}
+
+/// An image error of an OBJ material's statement `key`, naming the material (over the texture
+/// memory bound: as it is).
+fn obj_map_error(e: SceneError, source: &str, material: &str, key: &str) -> SceneError {
+    match e {
         SceneError::TextureMemory { .. } => e,
-        e => wrapped(e),
-    })
+        e => SceneError::Parse {
+            source_name: source.into(),
+            message: format!("material `{material}`: {key}: {e}"),
+        },
+    }
 }
 
 /// The glTF document of `path`, its buffers and its folder: the file and every buffer it names
@@ -552,6 +687,7 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let mut textures: Vec<Texture> = Vec::new();
     // (image, wrap modes) → index into `textures`
     let mut texture_of: Vec<((usize, [Wrap; 2]), u32)> = Vec::new();
+    let mut cutouts = crate::gltf_cutouts::Cutouts::default();
     let mut surface = 0u32;
     let mut camera: Option<Camera> = None;
     let mut lights = Vec::new();
@@ -679,6 +815,25 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
                 }
                 None => None,
             };
+            // ⟨alphaMode: cut-outs⟩
+            let alpha = cutouts.of_primitive(
+                &mat,
+                e.max() > 0.0,
+                |k| {
+                    (reader.read_tex_coords(k)).map(|c| {
+                        (c.into_f32())
+                            .map(|[u, v]| glam::DVec2::new(f64::from(u), f64::from(v)))
+                            .collect()
+                    })
+                },
+                &mut crate::gltf_cutouts::Images {
+                    source: &source,
+                    folder: &folder,
+                    buffers: &buffers,
+                    budget: &mut budget,
+                },
+                &mut warnings,
+            )?;
             let Some(pos) = reader.read_positions() else {
                 return Err(SceneError::Parse {
                     source_name: source.clone(),
@@ -731,6 +886,27 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
                     part,
                     ..Face::new(v, rho, e, obj, surface)
                 };
+                match &alpha {
+                    crate::gltf_cutouts::Alpha::Opaque => {}
+                    crate::gltf_cutouts::Alpha::Hidden => {
+                        cutouts.hidden += 1;
+                        continue;
+                    }
+                    crate::gltf_cutouts::Alpha::Cut {
+                        mask,
+                        uv,
+                        threshold,
+                    } => {
+                        let at = |i: u32| uv.get(i as usize).copied();
+                        if let [Some(a), Some(b), Some(c)] = corners.map(at) {
+                            face.cutout = Some(crate::FaceCutout {
+                                mask: *mask,
+                                uv: [a, b, c],
+                                threshold: *threshold,
+                            });
+                        }
+                    }
+                }
                 if let Some((index, uv)) = &texture {
                     let at = |i: u32| uv.get(i as usize).copied();
                     if let [Some(a), Some(b), Some(c)] = corners.map(at) {
@@ -757,8 +933,15 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
         });
     }
     average_albedo(&mut faces, &textures);
-    let mut scene =
-        Scene::new(&stem(path), &source, faces, objects, camera)?.with_textures(textures)?;
+    if cutouts.hidden > 0 {
+        warnings.push(format!(
+            "{source}: dropped {} face(s) whose material's alpha is below its alphaCutoff              everywhere (fully cut out)",
+            cutouts.hidden
+        ));
+    }
+    let mut scene = Scene::new(&stem(path), &source, faces, objects, camera)?
+        .with_textures(textures)?
+        .with_masks(cutouts.masks)?;
     scene.parts = parts;
     scene.gltf = Some(Box::new(provenance));
     scene.add_lights(lights);

@@ -1,7 +1,10 @@
 //! The 3-D scene model: triangles with per-face reflectance and emission, validated on construction.
 
 use crate::provenance::{GltfSource, Part};
-use crate::{EmitterTable, FaceTexture, Light, LightSet, Result, SceneError, Spectrum, Texture};
+use crate::{
+    AlphaMask, EmitterTable, FaceCutout, FaceTexture, Light, LightSet, Result, SceneError,
+    Spectrum, Texture,
+};
 use glam::DVec3;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -61,6 +64,8 @@ pub struct Face {
     /// Part index (into [`Scene::parts`]): the input primitive of the node instance the face came
     /// from (glTF), or its object ([`Face::new`] sets `part = object`).
     pub part: u32,
+    /// The alpha mask that cuts holes in the face ([`crate::cutout`]), if any.
+    pub cutout: Option<FaceCutout>,
 }
 
 impl Face {
@@ -86,6 +91,7 @@ impl Face {
             surface,
             texture: None,
             part: object,
+            cutout: None,
         }
     }
 
@@ -186,6 +192,8 @@ pub struct Scene {
     /// Lights other than the emitting faces (sun, sky, point and spot lights: [`crate::lights`]),
     /// from the input (glTF `KHR_lights_punctual`) or given by the caller before solving.
     pub lights: Vec<Arc<dyn Light>>,
+    /// Alpha masks, indexed by [`FaceCutout::mask`] (empty without cut-outs).
+    pub masks: Vec<AlphaMask>,
 }
 
 impl Scene {
@@ -243,6 +251,7 @@ impl Scene {
             let f = Face {
                 texture: f.texture,
                 part: f.part,
+                cutout: f.cutout,
                 ..Face::new(f.v, f.rho, f.emission, f.object, f.surface)
             };
             if f.area <= 1e-14 * diag2 || f.normal == DVec3::ZERO || !f.normal.is_finite() {
@@ -323,6 +332,7 @@ impl Scene {
             parts,
             gltf: None,
             lights: Vec::new(),
+            masks: Vec::new(),
         })
     }
 
@@ -368,6 +378,32 @@ impl Scene {
         }
         self.textures = textures;
         Ok(self)
+    }
+
+    /// Attaches the alpha masks the faces' [`Face::cutout`]s index (a loader's last step).
+    ///
+    /// # Errors
+    /// A face that names a mask that is not in `masks`.
+    pub fn with_masks(mut self, masks: Vec<AlphaMask>) -> Result<Self> {
+        if let Some(i) = (self.faces.iter())
+            .position(|f| f.cutout.is_some_and(|c| c.mask as usize >= masks.len()))
+        {
+            return Err(SceneError::Parse {
+                source_name: self.source.clone(),
+                message: format!("face {i} names an alpha mask that was not loaded"),
+            });
+        }
+        self.masks = masks;
+        Ok(self)
+    }
+
+    /// Whether `point` on face `face` lies in one of its cut-out holes ([`crate::cutout`]).
+    pub fn is_hole(&self, face: u32, point: DVec3) -> bool {
+        let f = &self.faces[face as usize];
+        f.cutout.is_some_and(|c| {
+            let (b1, b2) = f.barycentric(point);
+            c.is_hole(&self.masks, b1, b2)
+        })
     }
 
     /// ρ at `point` on face `face`: the face's constant ρ, or for a textured face its texture

@@ -176,33 +176,42 @@ impl Texture {
     /// The linear colour at texture coordinates `uv` ((0, 0) the image's top-left corner),
     /// bilinear between texel centres, wrapped per axis.
     pub fn sample(&self, uv: DVec2) -> [f64; 3] {
-        let x = uv.x * f64::from(self.width) - 0.5;
-        let y = uv.y * f64::from(self.height) - 0.5;
-        if !(x.is_finite() && y.is_finite()) {
-            return [0.0; 3];
-        }
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = (x - x0, y - y0);
-        let (x0, y0) = (x0 as i64, y0 as i64);
-        let at = |i: i64, j: i64| {
-            let (i, j) = (
-                self.wrap[0].index(i, self.width),
-                self.wrap[1].index(j, self.height),
-            );
-            self.texels[j * self.width as usize + i]
-        };
-        let (a, b, c, d) = (
-            at(x0, y0),
-            at(x0 + 1, y0),
-            at(x0, y0 + 1),
-            at(x0 + 1, y0 + 1),
-        );
-        std::array::from_fn(|k| {
-            let top = f64::from(a[k]) * (1.0 - fx) + f64::from(b[k]) * fx;
-            let bottom = f64::from(c[k]) * (1.0 - fx) + f64::from(d[k]) * fx;
-            top * (1.0 - fy) + bottom * fy
-        })
+        bilinear((self.width, self.height), self.wrap, uv, |k| self.texels[k])
     }
+}
+
+/// The bilinear lookup of every image the scenes read (albedo textures, alpha masks): the value at
+/// texture coordinates `uv` ((0, 0) the top-left corner) of a `size` image whose texel k (row-major
+/// from the top row) is `texel(k)`, between texel centres, wrapped per axis; 0 for non-finite `uv`.
+pub(crate) fn bilinear<const N: usize>(
+    (width, height): (u32, u32),
+    wrap: [Wrap; 2],
+    uv: DVec2,
+    texel: impl Fn(usize) -> [f32; N],
+) -> [f64; N] {
+    let x = uv.x * f64::from(width) - 0.5;
+    let y = uv.y * f64::from(height) - 0.5;
+    if !(x.is_finite() && y.is_finite()) {
+        return [0.0; N];
+    }
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let (x0, y0) = (x0 as i64, y0 as i64);
+    let at = |i: i64, j: i64| {
+        let (i, j) = (wrap[0].index(i, width), wrap[1].index(j, height));
+        texel(j * width as usize + i)
+    };
+    let (a, b, c, d) = (
+        at(x0, y0),
+        at(x0 + 1, y0),
+        at(x0, y0 + 1),
+        at(x0 + 1, y0 + 1),
+    );
+    std::array::from_fn(|k| {
+        let top = f64::from(a[k]) * (1.0 - fx) + f64::from(b[k]) * fx;
+        let bottom = f64::from(c[k]) * (1.0 - fx) + f64::from(d[k]) * fx;
+        top * (1.0 - fy) + bottom * fy
+    })
 }
 
 /// Bytes a decoded texel takes in a [`Texture`] (linear RGB, f32).

@@ -364,3 +364,53 @@ fn coincident_two_sided_faces_report_the_front_face() {
         .unwrap();
     assert_eq!(up.segment, 1, "from below: the down-facing underside");
 }
+
+/// Rays along a negative coordinate axis (−Y = (−0, −1, −0)) hit a flat floor: obvhs's traversal
+/// missed them before `SceneBvh` nudged ±0 direction components (found by the cut-out tests).
+#[test]
+fn axis_aligned_rays_hit_a_flat_floor() {
+    let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    let grey = Spectrum::grey(0.5);
+    let faces = vec![
+        Face::new(
+            [v(0., 0., 0.), v(0., 0., 4.), v(4., 0., 4.)],
+            grey,
+            Spectrum::ZERO,
+            0,
+            0,
+        ),
+        Face::new(
+            [v(0., 0., 0.), v(4., 0., 4.), v(4., 0., 0.)],
+            grey,
+            Spectrum::ZERO,
+            0,
+            0,
+        ),
+        Face::new(
+            [v(1., 1., 1.), v(1., 1., 3.), v(3., 1., 3.)],
+            grey,
+            Spectrum::ZERO,
+            1,
+            1,
+        ),
+        Face::new(
+            [v(1., 1., 1.), v(3., 1., 3.), v(3., 1., 1.)],
+            grey,
+            Spectrum::ZERO,
+            1,
+            1,
+        ),
+    ];
+    let scene = Scene::new("floor", "test", faces, vec![], None).unwrap();
+    let bvh = SceneBvh::new(&scene);
+    for (x, z) in [(0.5, 2.0), (0.5, 2.01), (3.5, 0.5), (2.0, 3.9)] {
+        let h = bvh.closest_hit(v(x, 1.5, z), -DVec3::Y, f64::INFINITY, u32::MAX);
+        assert!(h.is_some_and(|h| h.face < 2), "({x}, {z}): {h:?}");
+        let up = SurfacePoint {
+            point: v(x, 0.0, z),
+            normal: DVec3::Y,
+            face: 0,
+        };
+        assert!(bvh.escapes(&up, DVec3::Y), "({x}, {z}) up");
+    }
+}

@@ -1,0 +1,211 @@
+//! Cut-outs (`scene_sampler::cutout`): an OBJ grille (`map_d`, grey stripes) and a glTF grille
+//! (`alphaMode` MASK, the base colour texture's alpha) let rays through their transparent stripes
+//! and stop them on the solid ones; `d` below 0.5 drops a material's faces; BLEND is read as MASK
+//! with a warning; OPAQUE ignores alpha.
+
+use glam::DVec3;
+use scene_sampler::{SceneBvh, load};
+use std::path::PathBuf;
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("cutouts-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A floor (y = 0, 4 × 4) and a grille above it (y = 1, x, z ∈ [1, 3]) whose texture u runs
+/// along x: stripes of 2 texels of an 8-texel row, transparent at x ∈ [1, 1.5) and [2, 2.5).
+const GRILLE_OBJ: &str = "mtllib grille.mtl
+v 0 0 0
+v 4 0 0
+v 4 0 4
+v 0 0 4
+v 1 1 1
+v 3 1 1
+v 3 1 3
+v 1 1 3
+v 0 2 0
+v 4 2 0
+v 4 2 4
+vt 0 0
+vt 1 0
+vt 1 1
+vt 0 1
+o floor
+usemtl floor
+f 1 4 3 2
+o grille
+usemtl grille
+f 5/1 8/4 7/3 6/2
+o ghost
+usemtl ghost
+f 9 11 10
+";
+
+const STRIPES: [u8; 8] = [0, 0, 255, 255, 0, 0, 255, 255];
+
+/// Which face a ray straight down from (x, 1.5, 2) hits first (the ghost is above, at y = 2).
+fn hit_below(bvh: &SceneBvh, x: f64) -> Option<u32> {
+    bvh.closest_hit(DVec3::new(x, 1.5, 2.0), -DVec3::Y, f64::INFINITY, u32::MAX)
+        .map(|h| h.face)
+}
+
+#[test]
+fn an_obj_grille_lets_rays_through_its_transparent_stripes() {
+    let d = dir("obj");
+    image::GrayImage::from_raw(8, 1, STRIPES.to_vec())
+        .unwrap()
+        .save(d.join("mask.png"))
+        .unwrap();
+    std::fs::write(
+        d.join("grille.mtl"),
+        "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl grille\nKd 0.5 0.5 0.5\nmap_d mask.png\n\
+         newmtl ghost\nKd 0.5 0.5 0.5\nd 0.3\n",
+    )
+    .unwrap();
+    std::fs::write(d.join("grille.obj"), GRILLE_OBJ).unwrap();
+    let scene = load(d.join("grille.obj")).unwrap().into_3d().unwrap();
+    assert_eq!(
+        scene.faces.len(),
+        4,
+        "floor 2, grille 2; the ghost (d 0.3) dropped"
+    );
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("dropped 1 face")),
+        "{:?}",
+        scene.warnings
+    );
+    assert_eq!(scene.masks.len(), 1);
+    let bvh = SceneBvh::new(&scene);
+    let floor = |f: Option<u32>| f.is_some_and(|f| scene.faces[f as usize].v[0].y == 0.0);
+    for (x, open) in [
+        (1.1, true),
+        (1.4, true),
+        (1.6, false),
+        (1.9, false),
+        (2.2, true),
+        (2.8, false),
+    ] {
+        assert_eq!(floor(hit_below(&bvh, x)), open, "x = {x}");
+        // a shadow ray from the floor up toward a light at infinity
+        let from = scene_sampler::SurfacePoint {
+            point: DVec3::new(x, 0.0, 2.0),
+            normal: DVec3::Y,
+            face: 0,
+        };
+        assert_eq!(bvh.escapes(&from, DVec3::Y), open, "escapes at x = {x}");
+    }
+    // `d` out of range is refused, naming the line
+    std::fs::write(d.join("grille.mtl"), "newmtl floor\nd 1.5\n").unwrap();
+    let e = load(d.join("grille.obj")).unwrap_err().to_string();
+    assert!(e.contains("line 2") && e.contains("`d`"), "{e}");
+}
+
+fn base64(bytes: &[u8]) -> String {
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for c in bytes.chunks(3) {
+        let n = (u32::from(c[0]) << 16)
+            | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
+            | u32::from(*c.get(2).unwrap_or(&0));
+        for k in 0..4 {
+            if k <= c.len() {
+                out.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+/// The grille as glTF: a floor and a grille primitive whose material has `alpha_mode`, the
+/// stripes in the alpha of an RGBA base colour texture.
+fn gltf_grille(d: &std::path::Path, alpha_mode: &str) -> PathBuf {
+    let pos: [[f32; 3]; 8] = [
+        [0., 0., 0.],
+        [0., 0., 4.],
+        [4., 0., 4.],
+        [4., 0., 0.],
+        [1., 1., 1.],
+        [1., 1., 3.],
+        [3., 1., 3.],
+        [3., 1., 1.],
+    ];
+    let uv: [[f32; 2]; 8] = [[0., 0.]; 4]
+        .into_iter()
+        .chain([[0., 1.], [0., 0.], [1., 0.], [1., 1.]])
+        .collect::<Vec<_>>()
+        .try_into()
+        .unwrap();
+    let idx: [u16; 12] = [0, 1, 2, 0, 2, 3, 0, 1, 2, 0, 2, 3];
+    let mut buf: Vec<u8> = pos.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    buf.extend(uv.iter().flatten().flat_map(|v| v.to_le_bytes()));
+    buf.extend(idx.iter().flat_map(|v| v.to_le_bytes()));
+    let rgba: Vec<u8> = STRIPES.iter().flat_map(|&a| [200, 200, 200, a]).collect();
+    let mut png = Vec::new();
+    image::RgbaImage::from_raw(8, 1, rgba)
+        .unwrap()
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    // views: positions (floor, grille), texture coordinates (floor, grille), indices (each 0..4)
+    let accessor = |view: u32, offset: u32, ty: &str, component: u32, count: u32| {
+        serde_json::json!({"bufferView": view, "byteOffset": offset, "componentType": component,
+                           "count": count, "type": ty})
+    };
+    let mut accessors = vec![
+        accessor(0, 0, "VEC3", 5126, 4),
+        accessor(1, 0, "VEC2", 5126, 4),
+        accessor(2, 0, "SCALAR", 5123, 6),
+        accessor(0, 48, "VEC3", 5126, 4),
+        accessor(1, 32, "VEC2", 5126, 4),
+        accessor(2, 12, "SCALAR", 5123, 6),
+    ];
+    accessors[0]["min"] = serde_json::json!([0, 0, 0]);
+    accessors[0]["max"] = serde_json::json!([4, 0, 4]);
+    accessors[3]["min"] = serde_json::json!([1, 1, 1]);
+    accessors[3]["max"] = serde_json::json!([3, 1, 3]);
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [
+            {"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0},
+            {"attributes": {"POSITION": 3, "TEXCOORD_0": 4}, "indices": 5, "material": 1}]}],
+        "materials": [
+            {"name": "floor"},
+            {"name": "grille", "alphaMode": alpha_mode, "alphaCutoff": 0.5,
+             "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+        "textures": [{"source": 0}],
+        "images": [{"uri": format!("data:image/png;base64,{}", base64(&png))}],
+        "buffers": [{"byteLength": buf.len(),
+                     "uri": format!("data:application/octet-stream;base64,{}", base64(&buf))}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 96},
+            {"buffer": 0, "byteOffset": 96, "byteLength": 64},
+            {"buffer": 0, "byteOffset": 160, "byteLength": 24}],
+        "accessors": accessors
+    });
+    let path = d.join(format!("grille-{alpha_mode}.gltf"));
+    std::fs::write(&path, serde_json::to_string(&json).unwrap()).unwrap();
+    path
+}
+
+#[test]
+fn a_gltf_mask_cuts_and_blend_is_read_as_mask_with_a_warning() {
+    let d = dir("gltf");
+    for (mode, cut, warned) in [
+        ("MASK", true, false),
+        ("BLEND", true, true),
+        ("OPAQUE", false, false),
+    ] {
+        let scene = load(gltf_grille(&d, mode)).unwrap().into_3d().unwrap();
+        let bvh = SceneBvh::new(&scene);
+        let floor = |f: Option<u32>| f.is_some_and(|f| scene.faces[f as usize].v[0].y == 0.0);
+        for (x, open) in [(1.2, true), (1.7, false), (2.3, true), (2.7, false)] {
+            assert_eq!(floor(hit_below(&bvh, x)), open && cut, "{mode}: x = {x}");
+        }
+        let blend = scene.warnings.iter().any(|w| w.contains("BLEND"));
+        assert_eq!(blend, warned, "{mode}: {:?}", scene.warnings);
+    }
+}

@@ -73,13 +73,22 @@ fn cases(dir: &std::path::Path) -> Result<Vec<Case>> {
 /// An equirectangular EXR (Mitsuba's `envmap` layout, which ours follows): the CIE clear sky of
 /// 10 000 lux for the sun toward `sun` at texel centres, the ground at L = 1 000/π.
 fn clear_sky_map(dir: &std::path::Path, sun: DVec3) -> Result<std::path::PathBuf> {
-    let sky = Sky::new(SkyModel::CieClear { sun }, DVec3::Y, [1e4; 3], [1e3 / PI; 3])
-        .ok_or_else(|| anyhow::anyhow!("clear sky"))?;
+    let sky = Sky::new(
+        SkyModel::CieClear { sun },
+        DVec3::Y,
+        [1e4; 3],
+        [1e3 / PI; 3],
+    )
+    .ok_or_else(|| anyhow::anyhow!("clear sky"))?;
     let (w, h) = (512_u32, 256_u32);
     let img = image::Rgb32FImage::from_fn(w, h, |i, j| {
         let phi = 2.0 * PI * (f64::from(i) + 0.5) / f64::from(w);
         let theta = PI * (f64::from(j) + 0.5) / f64::from(h);
-        let d = DVec3::new(theta.sin() * phi.sin(), theta.cos(), -theta.sin() * phi.cos());
+        let d = DVec3::new(
+            theta.sin() * phi.sin(),
+            theta.cos(),
+            -theta.sin() * phi.cos(),
+        );
         image::Rgb([(sky.escaped(d)[0] / PI) as f32; 3])
     });
     let file = dir.join("clear-sky.exr");

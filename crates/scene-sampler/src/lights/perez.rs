@@ -11,13 +11,13 @@
 //!
 //! with a…e from the sky clearness ε, the sky brightness Δ and the solar zenith angle Z (radians)
 //! through the paper's Table 1: eight ε bins, and in each x = x₁ + x₂·Z + Δ·(x₃ + x₄·Z) for every
-//! coefficient x — except in the first (overcast) bin, where c = exp((Δ·(c₁ + c₂·Z))^c₃) − c₄ and
-//! d = −exp(Δ·(d₁ + d₂·Z)) + d₃ + Δ·d₄ (the paper's eq. (2)). As in `gendaylit`, Δ is raised to
-//! 0.2 in the bins 1.065 ≤ ε < 2.8 (its correction of the model), ε is kept in [1, 12.01) and Δ in
+//! coefficient x — except in the first (overcast) bin, where the paper gives c = exp((Δ·(c₁ +
+//! c₂·Z))^c₃) − c₄ and d = −exp(Δ·(d₁ + d₂·Z)) + d₃ + Δ·d₄. As in `gendaylit`, Δ is raised to 0.2
+//! in the bins 1.065 ≤ ε < 2.8 (its correction of the model), ε is kept in [1, 12.01) and Δ in
 //! [0.01, 0.6], and cos θ is taken as at least 0.01 (`perezlum.cal`'s floor at the horizon).
 //!
 //! The parameters (Perez et al. 1990, "Modeling daylight availability and irradiance components
-//! from direct and global irradiance", Solar Energy 44(5), 271–289, eqs. (1)–(2)):
+//! from direct and global irradiance", Solar Energy 44(5), 271–289):
 //!
 //! ```text
 //! ε = ((E_dh + E_dn)/E_dh + κ·Z³) / (1 + κ·Z³),   κ = 1.041
@@ -29,7 +29,7 @@
 //! irradiance at the mean Earth–Sun distance (no date: no eccentricity correction).
 //! [`parameters_from_illuminance`] takes illuminances (lux), as `gendaylit -L` does: starting from
 //! the solar constants' ratio 127 500 lx / 1367 W/m², it converts each with the Perez et al. (1990)
-//! luminous efficacy models — diffuse (their Table 4) and direct normal (Table 5) — at the ε and
+//! luminous efficacy models — diffuse horizontal and direct normal, per ε bin — at the ε and
 //! Δ found so far, with 2 cm of precipitable water (`gendaylit`'s default dew point), until they
 //! settle.
 
@@ -101,7 +101,7 @@ const EPSILON_RANGE: (f64, f64) = (1.0, 12.009);
 /// The range `gendaylit` keeps Δ in.
 const DELTA_RANGE: (f64, f64) = (0.01, 0.6);
 
-/// κ of the clearness ε (Perez et al. 1990, eq. (1); Z in radians).
+/// κ of the clearness ε (Perez et al. 1990; Z in radians).
 const KAPPA: f64 = 1.041;
 /// Extraterrestrial normal irradiance at the mean Earth–Sun distance, W/m².
 const SOLAR_CONSTANT: f64 = 1367.0;
@@ -124,7 +124,7 @@ pub fn clamp(epsilon: f64, delta: f64) -> (f64, f64) {
 }
 
 /// The coefficients a, b, c, d, e of eq. (1) for clearness `epsilon`, brightness `delta` and the
-/// solar zenith angle `zenith` (radians): Table 1 through eq. (2) (module docs).
+/// solar zenith angle `zenith` (radians): Table 1 and the first bin's special forms (module docs).
 pub fn coefficients(epsilon: f64, delta: f64, zenith: f64) -> [f64; 5] {
     let (epsilon, mut delta) = clamp(epsilon, delta);
     let k = bin(epsilon);
@@ -174,7 +174,7 @@ pub fn brightness(diffuse_horizontal: f64, zenith: f64) -> f64 {
     diffuse_horizontal * air_mass(zenith) / SOLAR_CONSTANT
 }
 
-/// The Perez et al. (1990) diffuse luminous efficacy (lm/W, their Table 4): per ε bin
+/// The Perez et al. (1990) diffuse luminous efficacy (lm/W; the table gendaylit uses): per ε bin
 /// (a, b, c, d) of a + b·W + c·cos Z + d·ln Δ.
 const DIFFUSE_EFFICACY: [[f64; 4]; 8] = [
     [97.24, -0.46, 12.00, -8.91],
@@ -187,7 +187,7 @@ const DIFFUSE_EFFICACY: [[f64; 4]; 8] = [
     [152.23, 0.35, -45.27, -7.98],
 ];
 
-/// The Perez et al. (1990) direct normal luminous efficacy (lm/W, their Table 5): per ε bin
+/// The Perez et al. (1990) direct normal luminous efficacy (lm/W; the table gendaylit uses): per ε bin
 /// (a, b, c, d) of a + b·W + c·exp(5.73·Z − 5) + d·Δ, at least 0.
 const DIRECT_EFFICACY: [[f64; 4]; 8] = [
     [57.20, -4.55, -2.98, 117.12],
@@ -265,7 +265,7 @@ mod tests {
         assert_eq!(coefficients(1.3, 0.1, 0.7), coefficients(1.3, 0.2, 0.7));
     }
 
-    /// ε of eq. (1) and Δ with Kasten & Young's air mass (m = 1/cos Z within 0.1 % up high,
+    /// ε and Δ with Kasten & Young's air mass (m = 1/cos Z within 0.1 % up high,
     /// 2.356 at Z = 65°, about 38 at the horizon).
     #[test]
     fn clearness_brightness_and_air_mass() {

@@ -376,8 +376,8 @@ mod tests {
     }
 
     /// The Perez sky's radiance relative to the zenith's, with the sun 30° from the zenith, against
-    /// values worked independently from the paper's eq. (1)–(2) and Table 1 (a short Python
-    /// evaluation): a clear sky (ε = 6.3, Δ = 0.12: `gendaylit`'s CIE-clear-like example) is
+    /// values worked independently from the paper's eq. (1), Table 1 and the first bin's forms (a
+    /// short Python evaluation): a clear sky (ε = 6.3, Δ = 0.12: `gendaylit`'s CIE-clear-like example) is
     /// brightest about the sun and brighter at the horizon under the sun than opposite it; an
     /// overcast one (ε = 1.02, Δ = 0.2) falls from the zenith toward the horizon, loosely as the
     /// CIE overcast sky does, and hardly depends on the sun's azimuth.

@@ -249,8 +249,9 @@ pub struct LightArgs {
     /// illuminance LUX, and angular diameter DIAM degrees (default 0.53; 0: sharp shadows).
     #[arg(long, value_name = "AZ,EL,LUX[,DIAM]", value_parser = scene_sampler::lights::lighting::parse_sun, allow_hyphen_values = true)]
     pub sun: Option<scene_sampler::lights::lighting::SunSpec>,
-    /// A sky: uniform, cie-overcast or cie-clear (needs --sun), with its horizontal (diffuse)
-    /// illuminance LUX.
+    /// A sky: uniform, cie-overcast, cie-clear (needs --sun) or perez (the Perez all-weather sky:
+    /// needs --sun, whose normal illuminance and LUX set its clearness and brightness; lux), with
+    /// its horizontal (diffuse) illuminance LUX.
     #[arg(long, value_name = "MODEL:LUX", value_parser = scene_sampler::lights::lighting::parse_sky)]
     pub sky: Option<scene_sampler::lights::lighting::SkySpec>,
     /// An environment map: an equirectangular .hdr or .exr of radiance (top row the zenith, the

@@ -85,6 +85,10 @@ pub enum SkyKind {
     CieOvercast,
     /// CIE clear (needs the sun's position: the description's sun).
     CieClear,
+    /// The Perez all-weather sky ([`super::perez`]): needs the description's sun, whose normal
+    /// illuminance and the sky's diffuse horizontal illuminance (both in lux) give its clearness
+    /// and brightness.
+    Perez,
 }
 
 /// The sky of a lighting description.
@@ -224,6 +228,34 @@ impl Lighting {
         Ok(Portals::new(portals))
     }
 
+    /// The Perez sky of `sky` under the description's sun: ε and Δ from the sun's normal
+    /// illuminance and the sky's diffuse horizontal illuminance ([`super::perez`]).
+    fn perez(&self, sky: &SkySpec) -> Result<SkyModel> {
+        let s = self.sun.as_ref().ok_or_else(|| {
+            lighting_message(
+                "bad sky: the Perez sky needs a sun (--sun AZ,EL,LUX: its position and direct \
+                 normal illuminance)",
+            )
+        })?;
+        let zenith = (90.0 - s.elevation).to_radians();
+        let (epsilon, delta) =
+            super::perez::parameters_from_illuminance(s.illuminance, sky.illuminance, zenith);
+        let model = SkyModel::Perez {
+            sun: self.up.direction(s.azimuth, s.elevation),
+            epsilon,
+            delta,
+        };
+        let (up, _, _) = self.up.frame();
+        if Sky::new(model.clone(), up, [1.0; BANDS], [0.0; BANDS]).is_none() {
+            return Err(lighting_message(&format!(
+                "bad sky: the Perez sky of ε = {epsilon:.3}, Δ = {delta:.3} (from the sun's and \
+                 the sky's illuminances) would brighten toward the horizon without bound; \
+                 gendaylit refuses it too"
+            )));
+        }
+        Ok(model)
+    }
+
     /// The lights of the description, checked: an error names the bad value.
     pub fn lights(&self) -> Result<Vec<Arc<dyn Light>>> {
         let mut out: Vec<Arc<dyn Light>> = Vec::new();
@@ -251,6 +283,7 @@ impl Lighting {
                         .ok_or_else(|| bad("sky: the CIE clear sky needs a sun (--sun)"))?
                         .0,
                 },
+                SkyKind::Perez => self.perez(s)?,
             };
             if !(0.0..1.0).contains(&s.ground_reflectance) {
                 return Err(bad("sky: ground reflectance must be in [0, 1)"));
@@ -327,7 +360,7 @@ pub fn parse_sun(s: &str) -> std::result::Result<SunSpec, String> {
     }
 }
 
-/// Parses `--sky MODEL:LUX` (models `uniform`, `cie-overcast`, `cie-clear`).
+/// Parses `--sky MODEL:LUX` (models `uniform`, `cie-overcast`, `cie-clear`, `perez`).
 pub fn parse_sky(s: &str) -> std::result::Result<SkySpec, String> {
     let (model, lux) = s
         .split_once(':')
@@ -336,9 +369,10 @@ pub fn parse_sky(s: &str) -> std::result::Result<SkySpec, String> {
         "uniform" => SkyKind::Uniform,
         "cie-overcast" | "overcast" => SkyKind::CieOvercast,
         "cie-clear" | "clear" => SkyKind::CieClear,
+        "perez" => SkyKind::Perez,
         m => {
             return Err(format!(
-                "unknown sky `{m}` (uniform, cie-overcast, cie-clear)"
+                "unknown sky `{m}` (uniform, cie-overcast, cie-clear, perez)"
             ));
         }
     };
@@ -468,6 +502,28 @@ mod tests {
                 .unwrap_err()
                 .to_string()
                 .contains("needs a sun")
+        );
+        let perez = Lighting {
+            sky: Some(parse_sky("perez:15000").unwrap()),
+            ..Lighting::default()
+        };
+        assert!(
+            perez
+                .lights()
+                .unwrap_err()
+                .to_string()
+                .contains("needs a sun")
+        );
+        let l: Lighting = serde_json::from_str(
+            r#"{"sun":{"azimuth":200,"elevation":25,"illuminance":60000},
+               "sky":{"model":"perez","illuminance":15000}}"#,
+        )
+        .unwrap();
+        let lights = l.lights().unwrap();
+        assert!(
+            lights[1].describe().starts_with("Perez (ε = 3.54"),
+            "{}",
+            lights[1].describe()
         );
         let low = Lighting {
             sun: Some(parse_sun("0,-5,1000").unwrap()),

@@ -37,6 +37,7 @@
 mod area;
 mod envmap;
 pub mod lighting;
+pub mod perez;
 mod point;
 mod portal;
 mod selection;

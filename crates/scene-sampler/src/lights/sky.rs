@@ -6,7 +6,10 @@
 //!   E_h = 7π L_z/9;
 //! * **CIE clear** (CIE 1973/ISO 15469 type 12, as `gensky +s`): L(θ, γ) = L_z ·
 //!   f(γ) φ(θ)/(f(Z₀) φ(0)), φ(θ) = 1 − exp(−0.32/cos θ), f(γ) = 0.91 + 10 exp(−3γ) +
-//!   0.45 cos² γ, with γ the angle to the sun and Z₀ the sun's zenith angle; E_h by quadrature.
+//!   0.45 cos² γ, with γ the angle to the sun and Z₀ the sun's zenith angle; E_h by quadrature;
+//! * **Perez all-weather** (Perez, Seals & Michalsky 1993, as `gendaylit`): L(θ, γ) ∝
+//!   (1 + a·exp(b/cos θ))·(1 + c·exp(d·γ) + e·cos² γ), a…e from the sky clearness ε, brightness
+//!   Δ and Z₀ ([`super::perez`]); E_h by quadrature.
 //!
 //! Every model is given by its horizontal irradiance E_h (diffuse horizontal illuminance, in lux
 //! for photometric scenes). The **ground** is the lower hemisphere at constant radiance
@@ -39,6 +42,26 @@ pub enum SkyModel {
         /// Unit direction toward the sun (above the horizon).
         sun: DVec3,
     },
+    /// The Perez all-weather sky ([`super::perez`]) for the sun in the unit direction given, of
+    /// clearness ε and brightness Δ (kept in [1, 12.01) and [0.01, 0.6]).
+    Perez {
+        /// Unit direction toward the sun (above the horizon).
+        sun: DVec3,
+        /// Sky clearness ε (1: overcast, above 6: clear).
+        epsilon: f64,
+        /// Sky brightness Δ.
+        delta: f64,
+    },
+}
+
+impl SkyModel {
+    /// The direction toward the sun, for the models that have one.
+    fn sun(&self) -> Option<DVec3> {
+        match self {
+            SkyModel::CieClear { sun } | SkyModel::Perez { sun, .. } => Some(*sun),
+            _ => None,
+        }
+    }
 }
 
 /// The sky and its ground (module docs).
@@ -57,6 +80,8 @@ pub struct Sky {
     powers: (f64, f64),
     /// Openings through which interiors see the sky ([`Sky::with_portals`]).
     portals: Portals,
+    /// The Perez sky's coefficients a…e (zeros for the other models).
+    perez: [f64; 5],
 }
 
 /// Zenith angles and azimuths of the quadrature that normalises the clear sky.
@@ -65,22 +90,46 @@ const QUAD: usize = 256;
 impl Sky {
     /// A sky of `model` about the zenith `up` with horizontal irradiance `horizontal` and ground
     /// radiance `ground` (module docs: ρ_g·E_g/π). `None` when `up` is zero, a value is negative
-    /// or not finite, or a clear sky's sun is below the horizon.
+    /// or not finite, a clear or Perez sky's sun is below the horizon, or a Perez sky's ε or Δ is
+    /// not finite or gives a gradation that grows toward the horizon (b > 0, which `gendaylit`
+    /// refuses too).
     pub fn new(model: SkyModel, up: DVec3, horizontal: Bands, ground: Bands) -> Option<Self> {
         let up = up.try_normalize()?;
         let ok = |b: &Bands| b.iter().all(|v| v.is_finite() && *v >= 0.0);
         if !ok(&horizontal) || !ok(&ground) {
             return None;
         }
-        if let SkyModel::CieClear { sun } = &model {
+        if let Some(sun) = model.sun() {
             if sun.try_normalize()?.dot(up) <= 0.0 {
                 return None;
             }
         }
+        let mut perez = [0.0; 5];
         let model = match model {
             SkyModel::CieClear { sun } => SkyModel::CieClear {
                 sun: sun.normalize(),
             },
+            SkyModel::Perez {
+                sun,
+                epsilon,
+                delta,
+            } => {
+                if !(epsilon.is_finite() && delta.is_finite()) {
+                    return None;
+                }
+                let sun = sun.normalize();
+                let zenith = sun.dot(up).clamp(-1.0, 1.0).acos();
+                perez = super::perez::coefficients(epsilon, delta, zenith);
+                if perez[1] > 0.0 {
+                    return None;
+                }
+                let (epsilon, delta) = super::perez::clamp(epsilon, delta);
+                SkyModel::Perez {
+                    sun,
+                    epsilon,
+                    delta,
+                }
+            }
             m => m,
         };
         let mut sky = Self {
@@ -91,6 +140,7 @@ impl Sky {
             horizontal,
             powers: (mean(&horizontal), PI * mean(&ground)),
             portals: Portals::default(),
+            perez,
         };
         // E_h of the model at L_z = 1, then L_z from the given E_h
         let unit = sky.unit_horizontal();
@@ -98,12 +148,13 @@ impl Sky {
         Some(sky)
     }
 
-    /// The horizontal irradiance the sky gives at L_z = 1: π, 7π/9, or by quadrature (clear).
+    /// The horizontal irradiance the sky gives at L_z = 1: π, 7π/9, or by quadrature (clear,
+    /// Perez).
     fn unit_horizontal(&self) -> f64 {
         match self.model {
             SkyModel::Uniform => PI,
             SkyModel::CieOvercast => 7.0 * PI / 9.0,
-            SkyModel::CieClear { .. } => {
+            SkyModel::CieClear { .. } | SkyModel::Perez { .. } => {
                 crate::hemisphere_quadrature(self.up, QUAD, |w| self.shape(w) * w.dot(self.up))
             }
         }
@@ -122,6 +173,17 @@ impl Sky {
                 let gamma = w.dot(sun).clamp(-1.0, 1.0).acos();
                 let z0 = sun.dot(self.up).clamp(-1.0, 1.0).acos();
                 f(gamma) * phi(c) / (f(z0) * phi(1.0))
+            }
+            SkyModel::Perez { sun, .. } => {
+                let lv = |cos_theta: f64, cos_gamma: f64| {
+                    super::perez::relative_luminance(
+                        &self.perez,
+                        cos_theta,
+                        cos_gamma.clamp(-1.0, 1.0).acos(),
+                    )
+                };
+                let cos_z0 = sun.dot(self.up);
+                lv(c, w.dot(sun)) / lv(1.0, cos_z0)
             }
         }
     }
@@ -244,9 +306,12 @@ impl Light for Sky {
 
     fn describe(&self) -> String {
         let model = match self.model {
-            SkyModel::Uniform => "uniform",
-            SkyModel::CieOvercast => "CIE overcast",
-            SkyModel::CieClear { .. } => "CIE clear",
+            SkyModel::Uniform => "uniform".to_string(),
+            SkyModel::CieOvercast => "CIE overcast".to_string(),
+            SkyModel::CieClear { .. } => "CIE clear".to_string(),
+            SkyModel::Perez { epsilon, delta, .. } => {
+                format!("Perez (ε = {epsilon:.3}, Δ = {delta:.3})")
+            }
         };
         format!(
             "{model} sky, {} horizontal irradiance, ground radiance {}",
@@ -271,6 +336,21 @@ mod tests {
             SkyModel::Uniform,
             SkyModel::CieOvercast,
             SkyModel::CieClear { sun },
+            SkyModel::Perez {
+                sun,
+                epsilon: 6.3,
+                delta: 0.12,
+            },
+            SkyModel::Perez {
+                sun,
+                epsilon: 1.02,
+                delta: 0.2,
+            },
+            SkyModel::Perez {
+                sun,
+                epsilon: 3.0,
+                delta: 0.3,
+            },
         ] {
             let sky = Sky::new(model.clone(), up, [10_000.0; BANDS], [0.0; BANDS]).unwrap();
             let quad =
@@ -293,6 +373,86 @@ mod tests {
             est /= (m * m) as f64;
             assert!((est / 10_000.0 - 1.0).abs() < 2e-3, "{model:?}: {est}");
         }
+    }
+
+    /// The Perez sky's radiance relative to the zenith's, with the sun 30° from the zenith, against
+    /// values worked independently from the paper's eq. (1), Table 1 and the first bin's forms (a
+    /// short Python evaluation): a clear sky (ε = 6.3, Δ = 0.12: `gendaylit`'s CIE-clear-like example) is
+    /// brightest about the sun and brighter at the horizon under the sun than opposite it; an
+    /// overcast one (ε = 1.02, Δ = 0.2) falls from the zenith toward the horizon, loosely as the
+    /// CIE overcast sky does, and hardly depends on the sun's azimuth.
+    #[test]
+    fn perez_shape_matches_the_paper() {
+        let up = DVec3::Z;
+        let z0 = 30f64.to_radians();
+        let sun = DVec3::new(z0.sin(), 0.0, z0.cos());
+        // (zenith angle, azimuth from the sun's, degrees)
+        let dir = |theta: f64, az: f64| {
+            let (t, a) = (theta.to_radians(), az.to_radians());
+            DVec3::new(t.sin() * a.cos(), t.sin() * a.sin(), t.cos())
+        };
+        let points = [(20.0, 0.0), (85.0, 0.0), (85.0, 180.0), (60.0, 90.0)];
+        let cases = [
+            (6.3, 0.12, [3.362184, 2.163881, 1.706690, 0.657445]),
+            (1.02, 0.2, [1.054946, 0.586387, 0.511253, 0.775229]),
+        ];
+        for (epsilon, delta, want) in cases {
+            let model = SkyModel::Perez {
+                sun,
+                epsilon,
+                delta,
+            };
+            let sky = Sky::new(model, up, [1.0; BANDS], [0.0; BANDS]).unwrap();
+            let zenith = sky.escaped(up)[0];
+            for ((theta, az), want) in points.into_iter().zip(want) {
+                let r = sky.escaped(dir(theta, az))[0] / zenith;
+                assert!(
+                    (r / want - 1.0).abs() < 1e-5,
+                    "ε {epsilon} at {theta},{az}: {r}"
+                );
+            }
+        }
+        let overcast = Sky::new(
+            SkyModel::Perez {
+                sun,
+                epsilon: 1.02,
+                delta: 0.2,
+            },
+            up,
+            [1.0; BANDS],
+            [0.0; BANDS],
+        )
+        .unwrap();
+        let cie = Sky::new(SkyModel::CieOvercast, up, [1.0; BANDS], [0.0; BANDS]).unwrap();
+        for theta in [30.0, 60.0, 80.0] {
+            let rel = |s: &Sky| s.escaped(dir(theta, 90.0))[0] / s.escaped(up)[0];
+            let (p, c) = (rel(&overcast), rel(&cie));
+            assert!((p - c).abs() < 0.2, "θ {theta}: Perez {p}, CIE {c}");
+        }
+    }
+
+    /// A sun below the horizon, a non-finite ε and a gradation that grows toward the horizon
+    /// (b > 0: ε = 7, Δ = 0.6, the sun low) are refused.
+    #[test]
+    fn perez_refuses_what_gendaylit_refuses() {
+        let up = DVec3::Z;
+        let perez = |sun: DVec3, epsilon: f64, delta: f64| {
+            Sky::new(
+                SkyModel::Perez {
+                    sun,
+                    epsilon,
+                    delta,
+                },
+                up,
+                [1.0; BANDS],
+                [0.0; BANDS],
+            )
+        };
+        assert!(perez(-DVec3::Z, 6.0, 0.1).is_none());
+        assert!(perez(DVec3::Z, f64::NAN, 0.1).is_none());
+        let low = DVec3::new(1.0, 0.0, 0.05).normalize();
+        assert!(perez(low, 7.0, 0.6).is_none());
+        assert!(perez(low, 7.0, 0.1).is_some());
     }
 
     /// The overcast sky is three times brighter at the zenith than at the horizon; the ground

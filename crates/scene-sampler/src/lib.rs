@@ -43,6 +43,7 @@ pub mod distribution;
 pub mod error;
 pub mod flatland;
 mod gltf_cutouts;
+mod gltf_emission;
 mod gltf_lights;
 mod gltf_resources;
 pub mod kernel;

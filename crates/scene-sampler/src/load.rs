@@ -688,6 +688,7 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
     // (image, wrap modes) → index into `textures`
     let mut texture_of: Vec<((usize, [Wrap; 2]), u32)> = Vec::new();
     let mut cutouts = crate::gltf_cutouts::Cutouts::default();
+    let mut emissive = crate::gltf_emission::EmissiveTextures::default();
     let mut surface = 0u32;
     let mut camera: Option<Camera> = None;
     let mut lights = Vec::new();
@@ -815,25 +816,26 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
                 }
                 None => None,
             };
-            // ⟨alphaMode: cut-outs⟩
-            let alpha = cutouts.of_primitive(
-                &mat,
-                e.max() > 0.0,
-                |k| {
-                    (reader.read_tex_coords(k)).map(|c| {
-                        (c.into_f32())
-                            .map(|[u, v]| glam::DVec2::new(f64::from(u), f64::from(v)))
-                            .collect()
-                    })
-                },
-                &mut crate::gltf_cutouts::Images {
-                    source: &source,
-                    folder: &folder,
-                    buffers: &buffers,
-                    budget: &mut budget,
-                },
-                &mut warnings,
-            )?;
+            // ⟨alphaMode: cut-outs; emissiveTexture⟩
+            let read_uv = |k: u32| {
+                (reader.read_tex_coords(k)).map(|c| {
+                    (c.into_f32())
+                        .map(|[u, v]| glam::DVec2::new(f64::from(u), f64::from(v)))
+                        .collect::<Vec<_>>()
+                })
+            };
+            let mut images = crate::gltf_cutouts::Images {
+                source: &source,
+                folder: &folder,
+                buffers: &buffers,
+                budget: &mut budget,
+            };
+            let alpha =
+                cutouts.of_primitive(&mat, e.max() > 0.0, read_uv, &mut images, &mut warnings)?;
+            let emissive_map = match e.max() > 0.0 {
+                true => emissive.of_primitive(&mat, read_uv, &mut images)?,
+                false => None,
+            };
             let Some(pos) = reader.read_positions() else {
                 return Err(SceneError::Parse {
                     source_name: source.clone(),
@@ -886,6 +888,12 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
                     part,
                     ..Face::new(v, rho, e, obj, surface)
                 };
+                if let Some((tex, uv)) = &emissive_map {
+                    let at = |i: u32| uv.get(i as usize).copied();
+                    if let [Some(a), Some(b), Some(c)] = corners.map(at) {
+                        emissive.add(faces.len(), *tex, [a, b, c], e);
+                    }
+                }
                 match &alpha {
                     crate::gltf_cutouts::Alpha::Opaque => {}
                     crate::gltf_cutouts::Alpha::Hidden => {
@@ -933,6 +941,13 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
         });
     }
     average_albedo(&mut faces, &textures);
+    let emitting = emissive.apply(&mut faces);
+    if emitting > 0 {
+        warnings.push(format!(
+            "{source}: {emitting} face(s) with an emissiveTexture emit its mean over each face \
+             (constant per face: a pattern finer than the faces is averaged)"
+        ));
+    }
     if cutouts.hidden > 0 {
         warnings.push(format!(
             "{source}: dropped {} face(s) whose material's alpha is below its alphaCutoff              everywhere (fully cut out)",

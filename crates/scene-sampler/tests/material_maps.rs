@@ -1,7 +1,8 @@
-//! Cut-outs (`scene_sampler::cutout`): an OBJ grille (`map_d`, grey stripes) and a glTF grille
-//! (`alphaMode` MASK, the base colour texture's alpha) let rays through their transparent stripes
-//! and stop them on the solid ones; `d` below 0.5 drops a material's faces; BLEND is read as MASK
-//! with a warning; OPAQUE ignores alpha.
+//! Material maps beyond albedo. Cut-outs (`scene_sampler::cutout`): an OBJ grille (`map_d`, grey
+//! stripes) and a glTF grille (`alphaMode` MASK, the base colour texture's alpha) let rays through
+//! their transparent stripes and stop them on the solid ones; `d` below 0.5 drops a material's
+//! faces; BLEND is read as MASK with a warning; OPAQUE ignores alpha. glTF `emissiveTexture`: each
+//! face emits the texture's mean over its texture-coordinate triangle.
 
 use glam::DVec3;
 use scene_sampler::{SceneBvh, load};
@@ -122,6 +123,14 @@ fn base64(bytes: &[u8]) -> String {
 /// The grille as glTF: a floor and a grille primitive whose material has `alpha_mode`, the
 /// stripes in the alpha of an RGBA base colour texture.
 fn gltf_grille(d: &std::path::Path, alpha_mode: &str) -> PathBuf {
+    let grille = serde_json::json!({"name": "grille", "alphaMode": alpha_mode, "alphaCutoff": 0.5,
+                                    "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}});
+    gltf_two_quads(d, &format!("grille-{alpha_mode}"), grille)
+}
+
+/// A floor (y = 0, 4 × 4, u = v = 0) and a quad above it (y = 1, x, z ∈ [1, 3], u = (x − 1)/2)
+/// of material `upper`, texture 0 the RGBA stripes (grey, alpha [`STRIPES`]) clamped to the edge.
+fn gltf_two_quads(d: &std::path::Path, name: &str, upper: serde_json::Value) -> PathBuf {
     let pos: [[f32; 3]; 8] = [
         [0., 0., 0.],
         [0., 0., 4.],
@@ -142,7 +151,7 @@ fn gltf_grille(d: &std::path::Path, alpha_mode: &str) -> PathBuf {
     let mut buf: Vec<u8> = pos.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
     buf.extend(uv.iter().flatten().flat_map(|v| v.to_le_bytes()));
     buf.extend(idx.iter().flat_map(|v| v.to_le_bytes()));
-    let rgba: Vec<u8> = STRIPES.iter().flat_map(|&a| [200, 200, 200, a]).collect();
+    let rgba: Vec<u8> = STRIPES.iter().flat_map(|&a| [a, a, a, a]).collect();
     let mut png = Vec::new();
     image::RgbaImage::from_raw(8, 1, rgba)
         .unwrap()
@@ -172,11 +181,9 @@ fn gltf_grille(d: &std::path::Path, alpha_mode: &str) -> PathBuf {
         "meshes": [{"primitives": [
             {"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0},
             {"attributes": {"POSITION": 3, "TEXCOORD_0": 4}, "indices": 5, "material": 1}]}],
-        "materials": [
-            {"name": "floor"},
-            {"name": "grille", "alphaMode": alpha_mode, "alphaCutoff": 0.5,
-             "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
-        "textures": [{"source": 0}],
+        "materials": [{"name": "floor"}, upper],
+        "samplers": [{"wrapS": 33071, "wrapT": 33071}],
+        "textures": [{"source": 0, "sampler": 0}],
         "images": [{"uri": format!("data:image/png;base64,{}", base64(&png))}],
         "buffers": [{"byteLength": buf.len(),
                      "uri": format!("data:application/octet-stream;base64,{}", base64(&buf))}],
@@ -186,7 +193,7 @@ fn gltf_grille(d: &std::path::Path, alpha_mode: &str) -> PathBuf {
             {"buffer": 0, "byteOffset": 160, "byteLength": 24}],
         "accessors": accessors
     });
-    let path = d.join(format!("grille-{alpha_mode}.gltf"));
+    let path = d.join(format!("{name}.gltf"));
     std::fs::write(&path, serde_json::to_string(&json).unwrap()).unwrap();
     path
 }
@@ -208,4 +215,46 @@ fn a_gltf_mask_cuts_and_blend_is_read_as_mask_with_a_warning() {
         let blend = scene.warnings.iter().any(|w| w.contains("BLEND"));
         assert_eq!(blend, warned, "{mode}: {:?}", scene.warnings);
     }
+}
+
+/// An emissive texture (the stripes: texels 0 and 1 in linear, mean 1/2 over u ∈ [0, 1]) gives
+/// each face the texture's mean over its texture triangle: the upper quad's two triangles see the
+/// stripes weighted toward u = 0 and toward u = 1, so they differ, and their mean is the
+/// texture's, 1/2 × emissiveFactor × π × strength; the floor (no texture) emits nothing.
+#[test]
+fn an_emissive_texture_emits_its_mean_per_face() {
+    let d = dir("emissive");
+    let lamp = serde_json::json!({"name": "lamp", "emissiveFactor": [1.0, 0.5, 0.25],
+        "emissiveTexture": {"index": 0},
+        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}}});
+    let mut path = gltf_two_quads(&d, "lamp", lamp);
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    json["extensionsUsed"] = serde_json::json!(["KHR_materials_emissive_strength"]);
+    path.set_file_name("lamp2.gltf");
+    std::fs::write(&path, json.to_string()).unwrap();
+    let scene = load(&path).unwrap().into_3d().unwrap();
+    let lit: Vec<_> = scene.faces.iter().filter(|f| f.v[0].y == 1.0).collect();
+    assert_eq!(lit.len(), 2);
+    assert!(
+        scene
+            .faces
+            .iter()
+            .filter(|f| f.v[0].y == 0.0)
+            .all(|f| f.emission.is_zero())
+    );
+    for (k, factor) in [1.0, 0.5, 0.25].into_iter().enumerate() {
+        let full = std::f64::consts::PI * 4.0 * factor;
+        let (a, b) = (lit[0].emission.0[k] / full, lit[1].emission.0[k] / full);
+        assert!(((a + b) / 2.0 - 0.5).abs() < 5e-3, "band {k}: {a} {b}");
+        assert!(
+            (a - b).abs() > 0.02,
+            "band {k}: the triangles see different stripes: {a} {b}"
+        );
+    }
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("emissiveTexture")),
+        "{:?}",
+        scene.warnings
+    );
 }

@@ -507,6 +507,10 @@ pub struct InputLimits {
     /// The largest memory the scene's textures may take decoded (12 bytes per texel), in MiB.
     #[arg(long, value_name = "MIB", default_value_t = DEFAULT_MAX_TEXTURE_BYTES >> 20)]
     pub max_texture_mib: u64,
+    /// Read glTF doubleSided materials as one-sided: their faces get no back face (half the work
+    /// for models whose surfaces are closed solids; the backs then absorb light).
+    #[arg(long)]
+    pub single_sided: bool,
 }
 
 impl InputLimits {
@@ -516,6 +520,7 @@ impl InputLimits {
             allow_outside: self.allow_outside_files,
             max_file_bytes: self.max_file_mib.saturating_mul(1 << 20),
             max_texture_bytes: self.max_texture_mib.saturating_mul(1 << 20),
+            single_sided: self.single_sided,
         }
     }
 }

@@ -40,6 +40,9 @@ pub struct LoadOptions {
     /// texel (linear RGB in f32, as [`crate::Texture`] keeps them); an image's size is read from its
     /// header and checked before it is decoded. Default [`DEFAULT_MAX_TEXTURE_BYTES`].
     pub max_texture_bytes: u64,
+    /// Read glTF `doubleSided` materials as one-sided (their faces get no back face: half the
+    /// faces, for models whose surfaces are closed solids). Default `false`.
+    pub single_sided: bool,
 }
 
 impl Default for LoadOptions {
@@ -48,6 +51,7 @@ impl Default for LoadOptions {
             allow_outside: false,
             max_file_bytes: DEFAULT_MAX_FILE_BYTES,
             max_texture_bytes: DEFAULT_MAX_TEXTURE_BYTES,
+            single_sided: false,
         }
     }
 }

@@ -689,6 +689,8 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let mut texture_of: Vec<((usize, [Wrap; 2]), u32)> = Vec::new();
     let mut cutouts = crate::gltf_cutouts::Cutouts::default();
     let mut emissive = crate::gltf_emission::EmissiveTextures::default();
+    // per part: whether its material is doubleSided
+    let mut two_sided: Vec<bool> = Vec::new();
     let mut surface = 0u32;
     let mut camera: Option<Camera> = None;
     let mut lights = Vec::new();
@@ -739,6 +741,7 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
                 continue;
             }
             let part = parts.len() as u32;
+            two_sided.push(prim.material().double_sided());
             parts.push(Part {
                 object: obj,
                 node: Some(node.index() as u32),
@@ -959,6 +962,15 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
         .with_masks(cutouts.masks)?;
     scene.parts = parts;
     scene.gltf = Some(Box::new(provenance));
+    if !options.single_sided {
+        let backs = scene.add_back_faces(|f| two_sided.get(f.part as usize) == Some(&true));
+        if backs > 0 {
+            warnings.push(format!(
+                "{source}: {backs} face(s) of doubleSided materials got a back face (both sides \
+                 reflect and are solved); for closed solids --single-sided halves the work"
+            ));
+        }
+    }
     scene.add_lights(lights);
     if !skipped.is_empty() {
         warnings.push(format!(

@@ -95,6 +95,27 @@ impl Face {
         }
     }
 
+    /// The face seen from its back: the same triangle wound the other way (its normal reversed,
+    /// `v[1]` and `v[2]` swapped with their texture coordinates), the same material, on surface
+    /// `surface` — the back of a two-sided face (glTF `doubleSided`), which keeps its own radiosity.
+    pub fn flipped(&self, surface: u32) -> Face {
+        let swap = |uv: [glam::DVec2; 3]| [uv[0], uv[2], uv[1]];
+        Face {
+            v: [self.v[0], self.v[2], self.v[1]],
+            normal: -self.normal,
+            surface,
+            texture: self.texture.map(|t| FaceTexture {
+                uv: swap(t.uv),
+                ..t
+            }),
+            cutout: self.cutout.map(|c| FaceCutout {
+                uv: swap(c.uv),
+                ..c
+            }),
+            ..*self
+        }
+    }
+
     /// The barycentric weights `(b1, b2)` of `p` projected onto the face's plane
     /// ([`Face::point`] inverts it for points on the face).
     pub fn barycentric(&self, p: DVec3) -> (f64, f64) {
@@ -380,6 +401,36 @@ impl Scene {
         Ok(self)
     }
 
+    /// Gives every face for which `two_sided` holds a back face ([`Face::flipped`], appended after
+    /// the faces, each on a surface of its own): both sides then reflect, emit and keep their own
+    /// radiosity (glTF `doubleSided`). A face whose back the input already has is skipped. Returns
+    /// how many were added.
+    pub fn add_back_faces(&mut self, two_sided: impl Fn(&Face) -> bool) -> usize {
+        // a back the input already models (the same triangle wound the other way) is not added
+        let (lo, grid) = (self.bounds.0, 1e-9 * self.diagonal());
+        let have: std::collections::HashSet<[[i64; 3]; 3]> = self
+            .faces
+            .iter()
+            .map(|f| winding_key(f, lo, grid))
+            .collect();
+        let mut surface = self.faces.iter().map(|f| f.surface + 1).max().unwrap_or(0);
+        let backs: Vec<Face> = (self.faces.iter())
+            .filter(|f| two_sided(f))
+            .map(|f| f.flipped(0))
+            .filter(|b| !have.contains(&winding_key(b, lo, grid)))
+            .map(|b| {
+                surface += 1;
+                Face {
+                    surface: surface - 1,
+                    ..b
+                }
+            })
+            .collect();
+        let n = backs.len();
+        self.faces.extend(backs);
+        n
+    }
+
     /// Attaches the alpha masks the faces' [`Face::cutout`]s index (a loader's last step).
     ///
     /// # Errors
@@ -559,17 +610,7 @@ fn merge_duplicates(
         }
     }
     let grid = 1e-9 * (hi - lo).length();
-    let q = |p: DVec3| {
-        let c = (p - lo) / grid;
-        [c.x.round() as i64, c.y.round() as i64, c.z.round() as i64]
-    };
-    // the rotation of the vertex cycle that starts at its smallest vertex: equal for the same triangle with
-    // the same winding, whatever vertex it was written from
-    let key = |f: &Face| {
-        let k = f.v.map(q);
-        let s = (0..3).min_by_key(|&i| k[i]).unwrap_or(0);
-        [k[s], k[(s + 1) % 3], k[(s + 2) % 3]]
-    };
+    let key = |f: &Face| winding_key(f, lo, grid);
     let name = |o: u32| objects.get(o as usize).cloned().unwrap_or_default();
     let mut first: HashMap<[[i64; 3]; 3], usize> = HashMap::with_capacity(faces.len());
     let mut merged: Vec<String> = Vec::new();
@@ -616,6 +657,19 @@ fn merge_duplicates(
         ));
     }
     Ok(out)
+}
+
+/// A key equal for the same triangle with the same winding, whatever vertex it was written from:
+/// its vertices snapped to a grid of spacing `grid` from `lo`, the cycle rotated to start at the
+/// smallest.
+fn winding_key(f: &Face, lo: DVec3, grid: f64) -> [[i64; 3]; 3] {
+    let q = |p: DVec3| {
+        let c = (p - lo) / grid;
+        [c.x.round() as i64, c.y.round() as i64, c.z.round() as i64]
+    };
+    let k = f.v.map(q);
+    let s = (0..3).min_by_key(|&i| k[i]).unwrap_or(0);
+    [k[s], k[(s + 1) % 3], k[(s + 2) % 3]]
 }
 
 /// Whether two coincident faces are of one material: the same emission and albedo, textured faces by

@@ -258,3 +258,51 @@ fn an_emissive_texture_emits_its_mean_per_face() {
         scene.warnings
     );
 }
+
+/// A `doubleSided` material's faces get back faces (reversed winding, the same material and
+/// texture), so a ray from below lands on a face that faces it; `LoadOptions::single_sided` and
+/// one-sided materials leave the faces as they are; a back the file already models is not doubled.
+#[test]
+fn double_sided_faces_get_a_back() {
+    let d = dir("double");
+    let upper = serde_json::json!({"name": "sheet", "doubleSided": true,
+        "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}});
+    let path = gltf_two_quads(&d, "double", upper);
+    let scene = load(&path).unwrap().into_3d().unwrap();
+    assert_eq!(scene.faces.len(), 6, "floor 2, sheet 2 + 2 backs");
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("2 face(s) of doubleSided"))
+    );
+    let bvh = SceneBvh::new(&scene);
+    let up = bvh.closest_hit(DVec3::new(2.2, 0.5, 2.1), DVec3::Y, f64::INFINITY, u32::MAX);
+    let down = bvh.closest_hit(
+        DVec3::new(2.2, 1.5, 2.1),
+        -DVec3::Y,
+        f64::INFINITY,
+        u32::MAX,
+    );
+    let normal = |h: Option<scene_sampler::Hit>| scene.faces[h.unwrap().face as usize].normal;
+    assert_eq!(normal(up), -DVec3::Y, "from below: the back");
+    assert_eq!(normal(down), DVec3::Y, "from above: the front");
+    let back = scene.faces.iter().find(|f| f.normal == -DVec3::Y).unwrap();
+    assert!(back.texture.is_some(), "the back keeps the texture");
+    let one = scene_sampler::LoadOptions {
+        single_sided: true,
+        ..Default::default()
+    };
+    let single = scene_sampler::load_with(&path, &one)
+        .unwrap()
+        .into_3d()
+        .unwrap();
+    assert_eq!(single.faces.len(), 4);
+    // a file that models the back itself: nothing added
+    let mut again = scene.clone();
+    assert_eq!(
+        again.add_back_faces(|_| true),
+        2,
+        "only the floor lacks a back"
+    );
+}

@@ -416,3 +416,67 @@ fn a_perez_sky_lights_the_work_plane() {
     // the low sky
     assert!((1.1..1.6).contains(&r_overcast), "{r_overcast}");
 }
+
+/// The shipped scenes of the lights guide solve with their lighting files and light where light
+/// must go: the sun patch room's work plane gets E_n sin 30° = 40 000 lux (plus what the room
+/// reflects) where the beam through the window crosses it and reflected light alone elsewhere;
+/// the atrium's ground floor is brighter under the roof opening than in its corners; the grille
+/// room's glTF lights both halves, one through the grille.
+#[test]
+fn the_shipped_light_scenes_light_what_they_should() {
+    let run = |scene: &str, extra: &[&str], probes: &str, out: &str| {
+        let mut args = vec![
+            "solve",
+            scene,
+            "--probes",
+            probes,
+            "--probe-out",
+            out,
+            "--probe-quantity",
+            "irradiance",
+            "--quiet",
+        ];
+        args.extend_from_slice(extra);
+        let o = gcr(&args);
+        assert!(o.status.success(), "{scene}: {}", stderr(&o));
+        column(out)
+    };
+    // ⟨sun patch: points at 0.8 m in the beam are x ∈ {2.5, 3.5}, z ∈ {6.5, 7.5}⟩
+    let out = tmp("sun-patch.txt");
+    let lights = ["--lights", "scenes/sun-patch-room.lights.json"];
+    let e = run("scenes/sun-patch-room.obj", &lights, "scenes/sun-patch-room.pts", &out);
+    let points = std::fs::read_to_string("../../scenes/sun-patch-room.pts")
+        .or_else(|_| std::fs::read_to_string("scenes/sun-patch-room.pts"))
+        .unwrap();
+    let xz: Vec<(f64, f64)> = (points.lines())
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| {
+            let v: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            (v[0], v[2])
+        })
+        .collect();
+    assert_eq!(xz.len(), e.len());
+    for ((x, z), e) in xz.iter().zip(&e) {
+        let beam = (2.4..3.6).contains(x) && (5.92..7.65).contains(z);
+        if beam {
+            assert!((40_000.0..50_000.0).contains(e), "({x}, {z}) in the beam: {e}");
+        } else {
+            assert!(*e > 0.0 && *e < 8_000.0, "({x}, {z}) reflected light only: {e}");
+        }
+    }
+    // ⟨atrium: ground floor (the first 100 points, x-major) under the opening vs corners⟩
+    let out = tmp("atrium.txt");
+    let lights = ["--lights", "scenes/atrium.lights.json"];
+    let e = run("scenes/atrium.obj", &lights, "scenes/atrium.pts", &out);
+    assert_eq!(e.len(), 164);
+    let at = |i: usize, k: usize| e[i * 10 + k];
+    let (centre, corner) = (at(4, 4) + at(5, 5), at(0, 0) + at(9, 9));
+    assert!(centre > 2.0 * corner && corner > 0.0, "{centre} vs {corner}");
+    // ⟨grille room: a floor point on each side⟩
+    let (probes, out) = (tmp("grille.pts"), tmp("grille.txt"));
+    std::fs::write(&probes, "1.5 0.01 3 0 1 0\n4.5 0.01 3 0 1 0\n").unwrap();
+    let e = run("scenes/grille-lamp.gltf", &[], &probes, &out);
+    // the spot (800 cd, 2.89 m above) gives its side ≈ 96 lux direct; the lamp (300 cd, 2.39 m)
+    // ≈ 53 lux
+    assert!(e[1] > 96.0 && e[0] > 53.0, "{e:?}");
+}

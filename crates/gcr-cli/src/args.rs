@@ -218,7 +218,8 @@ pub struct SolveArgs {
     /// What the probes get: `radiosity` (B at surface points: each probe snaps onto the nearest
     /// face its normal faces, within --probe-tolerance) or `irradiance` (E = ∫ L cos dω for the
     /// hemisphere about the probe's normal, at the point as given: on a surface or in the air,
-    /// like Radiance's `rtrace -I`; needs the paths gather).
+    /// like Radiance's `rtrace -I`; needs the paths gather) or `daylight-factor` (that irradiance in
+    /// percent of the outdoor illuminance of `--sky cie-overcast:LUX`, with no sun).
     #[arg(long, default_value = "radiosity", requires = "probes")]
     pub probe_quantity: ProbeQuantity,
     /// Radiosity probes: the largest distance (scene units) from a probe to the surface it snaps
@@ -324,6 +325,18 @@ impl LightArgs {
                 )
             }
             flat => Ok(flat),
+        }
+    }
+
+    /// The outdoor horizontal illuminance of daylight factors: a CIE overcast sky's, when the
+    /// lighting is that sky and no sun (`None` otherwise, or when the lighting file is bad: its
+    /// error comes when the scene is lit).
+    pub fn outdoor_illuminance(&self) -> Option<f64> {
+        use scene_sampler::lights::lighting::SkyKind;
+        let l = self.lighting().ok()?;
+        match (&l.sky, &l.sun, &l.env) {
+            (Some(sky), None, None) if sky.model == SkyKind::CieOvercast => Some(sky.illuminance),
+            _ => None,
         }
     }
 
@@ -434,6 +447,7 @@ impl SolveArgs {
         ProbeSettings {
             quantity: self.probe_quantity,
             tolerance: self.probe_tolerance,
+            outdoor_illuminance: self.lights.outdoor_illuminance(),
         }
     }
 
@@ -463,7 +477,8 @@ pub struct ReferenceArgs {
     #[arg(long)]
     pub probe_out: PathBuf,
     /// `radiosity` (B at surface points, the probes snapped) or `irradiance` (E = ∫ L cos dω at
-    /// each point as given, for the hemisphere about its normal: `rtrace -I`; 3-D scenes).
+    /// each point as given, for the hemisphere about its normal: `rtrace -I`; 3-D scenes) or
+    /// `daylight-factor` (that irradiance in percent of `--sky cie-overcast:LUX`'s LUX).
     #[arg(long, default_value = "radiosity")]
     pub probe_quantity: ProbeQuantity,
     /// Radiosity probes: the largest distance (scene units) from a probe to the surface it snaps

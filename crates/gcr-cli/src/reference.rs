@@ -32,6 +32,7 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
     let settings = ProbeSettings {
         quantity: args.probe_quantity,
         tolerance: args.probe_tolerance,
+        outdoor_illuminance: args.lights.outdoor_illuminance(),
     };
     settings.validate()?;
     let loaded = args
@@ -39,7 +40,7 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
         .light(loaded, false)
         .with_context(|| format!("lighting `{}`", args.scene))?;
     let (estimates, grey) = match loaded {
-        AnyScene::ThreeD(s) if settings.quantity == ProbeQuantity::Irradiance => {
+        AnyScene::ThreeD(s) if settings.quantity.is_irradiance() => {
             let at: Vec<_> = (scene_sampler::read_probes(probes)?.iter())
                 .map(|p| (p.point, p.normal))
                 .collect();
@@ -58,7 +59,7 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
             let est = baselines::pointwise::reference_at(&s, &bvh, &points, &adaptive)?;
             (est, false)
         }
-        AnyScene::Flatland(_) if settings.quantity == ProbeQuantity::Irradiance => {
+        AnyScene::Flatland(_) if settings.quantity.is_irradiance() => {
             anyhow::bail!("the irradiance reference is for 3-D scenes (`gcr solve` has Flatland's)")
         }
         AnyScene::Flatland(s) => {
@@ -80,12 +81,17 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
             format!("{} {} {}", v[0], v[1], v[2])
         }
     };
+    // daylight factors in percent of the outdoor illuminance (checked positive by `validate`)
+    let scale = match (settings.quantity, settings.outdoor_illuminance) {
+        (ProbeQuantity::DaylightFactor, Some(e)) => 100.0 / e,
+        _ => 1.0,
+    };
     let (mut out, mut std) = (String::new(), String::new());
     for e in &estimates {
-        out.push_str(&format!("{}\n", bands(e.estimate.mean)));
+        out.push_str(&format!("{}\n", bands(e.estimate.mean.map(|v| v * scale))));
         std.push_str(&format!(
             "{} {} {}\n",
-            bands(e.estimate.std_error),
+            bands(e.estimate.std_error.map(|v| v * scale)),
             e.estimate.paths,
             e.rel_error
         ));

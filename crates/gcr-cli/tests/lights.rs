@@ -87,6 +87,31 @@ fn a_daylit_work_plane_gets_daylight_factors() {
         assert!(col.iter().all(|v| (20.0..5000.0).contains(v)), "{col:?}");
         assert!(col[4] > 2.0 * col[0], "{col:?}");
     }
+    // the same run as daylight factors: E / 10 000 lux in percent, point for point
+    let df_out = tmp("df.txt");
+    let df = |extra: &[&str]| {
+        let mut args = vec![
+            "solve",
+            "scenes/side-lit-room.obj",
+            "--sky",
+            "cie-overcast:10000",
+            "--probes",
+            "scenes/side-lit-room.pts",
+            "--probe-out",
+            &df_out,
+            "--probe-quantity",
+            "daylight-factor",
+        ];
+        args.extend_from_slice(extra);
+        gcr(&args)
+    };
+    let o = df(&[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for (d, e) in column(&df_out).iter().zip(&e) {
+        assert!((d - e / 100.0).abs() <= 1e-9 * e, "{d} vs {e}");
+    }
+    let o = df(&["--sun", "200,30,50000"]);
+    assert!(!o.status.success() && stderr(&o).contains("CIE overcast sky and no sun"));
 }
 
 #[test]
@@ -444,7 +469,12 @@ fn the_shipped_light_scenes_light_what_they_should() {
     // ⟨sun patch: points at 0.8 m in the beam are x ∈ {2.5, 3.5}, z ∈ {6.5, 7.5}⟩
     let out = tmp("sun-patch.txt");
     let lights = ["--lights", "scenes/sun-patch-room.lights.json"];
-    let e = run("scenes/sun-patch-room.obj", &lights, "scenes/sun-patch-room.pts", &out);
+    let e = run(
+        "scenes/sun-patch-room.obj",
+        &lights,
+        "scenes/sun-patch-room.pts",
+        &out,
+    );
     let points = std::fs::read_to_string("../../scenes/sun-patch-room.pts")
         .or_else(|_| std::fs::read_to_string("scenes/sun-patch-room.pts"))
         .unwrap();
@@ -459,9 +489,15 @@ fn the_shipped_light_scenes_light_what_they_should() {
     for ((x, z), e) in xz.iter().zip(&e) {
         let beam = (2.4..3.6).contains(x) && (5.92..7.65).contains(z);
         if beam {
-            assert!((40_000.0..50_000.0).contains(e), "({x}, {z}) in the beam: {e}");
+            assert!(
+                (40_000.0..50_000.0).contains(e),
+                "({x}, {z}) in the beam: {e}"
+            );
         } else {
-            assert!(*e > 0.0 && *e < 8_000.0, "({x}, {z}) reflected light only: {e}");
+            assert!(
+                *e > 0.0 && *e < 8_000.0,
+                "({x}, {z}) reflected light only: {e}"
+            );
         }
     }
     // ⟨atrium: ground floor (the first 100 points, x-major) under the opening vs corners⟩
@@ -471,7 +507,10 @@ fn the_shipped_light_scenes_light_what_they_should() {
     assert_eq!(e.len(), 164);
     let at = |i: usize, k: usize| e[i * 10 + k];
     let (centre, corner) = (at(4, 4) + at(5, 5), at(0, 0) + at(9, 9));
-    assert!(centre > 2.0 * corner && corner > 0.0, "{centre} vs {corner}");
+    assert!(
+        centre > 2.0 * corner && corner > 0.0,
+        "{centre} vs {corner}"
+    );
     // ⟨grille room: a floor point on each side⟩
     let (probes, out) = (tmp("grille.pts"), tmp("grille.txt"));
     std::fs::write(&probes, "1.5 0.01 3 0 1 0\n4.5 0.01 3 0 1 0\n").unwrap();

@@ -38,6 +38,12 @@ pub enum OutputError {
     /// A probe tolerance out of range, or given for irradiance probes.
     #[error("probe tolerance {0}")]
     ProbeTolerance(String),
+    /// Daylight factors without a CIE overcast sky alone to divide by.
+    #[error(
+        "daylight factors are defined under a CIE overcast sky and no sun: light the scene with \
+         --sky cie-overcast:LUX (its LUX is the outdoor illuminance) and no --sun or --env"
+    )]
+    DaylightWithoutOvercast,
     /// Probes without a probe output, or the other way round.
     #[error("probes and a probe output go together: give both or neither")]
     ProbesWithoutOutput,

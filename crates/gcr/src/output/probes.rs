@@ -28,15 +28,26 @@ pub enum ProbeQuantity {
     /// Irradiance E = ∫ L cos θ dω (W/m²) at any points, for the hemisphere about the probe's
     /// normal (`rtrace -I`); needs the paths gather.
     Irradiance,
+    /// The daylight factor DF = 100 · E / E_out in percent: the irradiance as
+    /// [`ProbeQuantity::Irradiance`] over the horizontal illuminance E_out of the CIE overcast sky
+    /// on an unobstructed plane ([`ProbeSettings::outdoor_illuminance`]).
+    DaylightFactor,
 }
 
 impl ProbeQuantity {
-    /// `radiosity` or `irradiance`.
+    /// `radiosity`, `irradiance` or `daylight-factor`.
     pub fn name(self) -> &'static str {
         match self {
             ProbeQuantity::Radiosity => "radiosity",
             ProbeQuantity::Irradiance => "irradiance",
+            ProbeQuantity::DaylightFactor => "daylight-factor",
         }
+    }
+
+    /// Whether the probes measure irradiance where they are (irradiance and daylight factors),
+    /// rather than radiosity on the surface they snap to.
+    pub fn is_irradiance(self) -> bool {
+        self != ProbeQuantity::Radiosity
     }
 }
 
@@ -46,8 +57,9 @@ impl std::str::FromStr for ProbeQuantity {
         match s {
             "radiosity" => Ok(Self::Radiosity),
             "irradiance" => Ok(Self::Irradiance),
+            "daylight-factor" => Ok(Self::DaylightFactor),
             _ => Err(format!(
-                "unknown probe quantity `{s}` (expected radiosity or irradiance)"
+                "unknown probe quantity `{s}` (expected radiosity, irradiance or daylight-factor)"
             )),
         }
     }
@@ -61,6 +73,9 @@ pub struct ProbeSettings {
     /// Radiosity probes: the largest distance from a facing surface (scene units); `None`:
     /// 10⁻⁴ of the scene's diagonal. Irradiance probes are not snapped.
     pub tolerance: Option<f64>,
+    /// Daylight factors: the horizontal illuminance of the CIE overcast sky on an unobstructed
+    /// plane (its `--sky cie-overcast:LUX`); `None` when the lighting is not such a sky alone.
+    pub outdoor_illuminance: Option<f64>,
 }
 
 impl ProbeSettings {
@@ -70,11 +85,15 @@ impl ProbeSettings {
             Some(t) if !(t.is_finite() && t > 0.0) => Err(OutputError::ProbeTolerance(format!(
                 "{t} (expected a positive distance in scene units)"
             ))),
-            Some(_) if self.quantity == ProbeQuantity::Irradiance => {
-                Err(OutputError::ProbeTolerance(
-                    "irradiance probes are used where they are, not snapped: drop the tolerance"
-                        .into(),
-                ))
+            Some(_) if self.quantity.is_irradiance() => Err(OutputError::ProbeTolerance(
+                "irradiance probes are used where they are, not snapped: drop the tolerance".into(),
+            )),
+            _ if self.quantity == ProbeQuantity::DaylightFactor
+                && !self
+                    .outdoor_illuminance
+                    .is_some_and(|e| e.is_finite() && e > 0.0) =>
+            {
+                Err(OutputError::DaylightWithoutOvercast)
             }
             _ => Ok(()),
         }
@@ -134,27 +153,33 @@ pub(super) fn read_probes(
     })
 }
 
-/// The probes' values ([`radiosity_at_points`] or [`irradiance_at_points`]), one line each:
-/// `r g b`, or one value for a grey Flatland scene.
+/// The probes' values ([`radiosity_at_points`] or [`irradiance_at_points`]; daylight factors in
+/// percent), one line each: `r g b`, or one value for a grey Flatland scene.
 pub fn probe_values(
     domain: &Domain,
     trained: &Trained,
     emitters: &Emitters,
     config: &SolveConfig,
-    (probes, quantity): (&[(DVec3, DVec3, u32)], ProbeQuantity),
+    (probes, settings): (&[(DVec3, DVec3, u32)], &ProbeSettings),
 ) -> Result<(String, GatherStats), OutputError> {
+    let (quantity, outdoor) = (settings.quantity, settings.outdoor_illuminance);
     let grey = domain.bands() == 1 && domain.dim() == 2;
     let gathered = match quantity {
         ProbeQuantity::Radiosity => radiosity_at_points(domain, trained, emitters, config, probes)?,
-        ProbeQuantity::Irradiance => {
+        ProbeQuantity::Irradiance | ProbeQuantity::DaylightFactor => {
             let at: Vec<(DVec3, DVec3)> = probes.iter().map(|&(y, n, _)| (y, n)).collect();
             irradiance_at_points(domain, trained, emitters, config, &at)?
         }
     };
+    // daylight factors in percent of the outdoor illuminance (checked positive by `validate`)
+    let scale = match (quantity, outdoor) {
+        (ProbeQuantity::DaylightFactor, Some(e)) => 100.0 / e,
+        _ => 1.0,
+    };
     let text = gathered
         .iter()
         .map(|g| {
-            let b = g.radiosity;
+            let b = g.radiosity.map(|v| v * scale);
             if grey {
                 format!("{}\n", b[0])
             } else {

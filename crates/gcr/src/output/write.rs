@@ -8,7 +8,7 @@
 use super::OutputError;
 use super::camera::{CameraChoice, ImageMode, ImageSettings};
 use super::flatland::{light_flow_image, scene_image};
-use super::probes::{ProbeQuantity, ProbeSettings, probe_values, read_probes};
+use super::probes::{ProbeSettings, probe_values, read_probes};
 use super::raster::{Coverage, PinholeCamera, render_image, render_radiance};
 use super::staged::{StagedFiles, check_target};
 use super::tonemap::{Exposure, luminance};
@@ -215,7 +215,7 @@ impl OutputPlan {
     /// Checks that `config` can compute the planned outputs (irradiance probes need the paths
     /// gather): call it before the solve.
     pub fn check_config(&self, config: &SolveConfig) -> Result<(), OutputError> {
-        let irradiance = self.probe_settings.quantity == ProbeQuantity::Irradiance;
+        let irradiance = self.probe_settings.quantity.is_irradiance();
         if irradiance && !self.probes.is_empty() && config.gather != GatherMode::Paths {
             return Err(GatherError::IrradianceNeedsPaths(config.gather.name()).into());
         }
@@ -270,7 +270,7 @@ pub fn write_outputs(
     let emitters = Emitters::new(domain);
     if let Some(path) = &paths.probe_out {
         let tg = Instant::now();
-        let probes = (plan.probes(), plan.probe_settings.quantity);
+        let probes = (plan.probes(), &plan.probe_settings);
         let _phase = crate::progress::phase("probes");
         let (text, stats) = probe_values(domain, trained, &emitters, config, probes)?;
         metrics.probe_quantity = plan.probe_settings.quantity.name().into();

@@ -387,6 +387,13 @@ fn write_3d(
             Some(img) => write_pixel_image(img, &exposure, path, staged)?,
             None => {
                 let mesh = mesh.as_ref().expect("mesh-mode images build the mesh");
+                if scene.faces.iter().any(|f| f.cutout.is_some()) {
+                    metrics.warnings.push(format!(
+                        "image `{}`: the scene has alpha cut-outs, which --image-mode mesh draws \
+                         solid (it rasterizes the output mesh); --image-mode pixel sees through them",
+                        path.display()
+                    ));
+                }
                 write_image(mesh, camera, settings, &exposure, path, staged)?
             }
         };

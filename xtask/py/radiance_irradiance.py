@@ -23,8 +23,8 @@ Options:
 FACES:   one triangle per line, as the benches write them for Mitsuba (write_mitsuba_faces in
          xtask/src/bench/field.rs): x y z ×3, ρ_r ρ_g ρ_b, emitted radiance r g b (Y up).
 POINTS:  one point per line, `x y z nx ny nz` (Y up).
-SETTING: `ab,ad,as,aa,lw[,ar]` — rtrace's -ab -ad -as -aa -lw [-ar] (aa 0: no ambient cache, pure
-         Monte Carlo; rtrace's other options at their defaults).
+SETTING: `ab,ad,as,aa,lw[,ar[,lr]]` — rtrace's -ab -ad -as -aa -lw [-ar (0: not given)] [-lr]
+         (aa 0: no ambient cache, pure Monte Carlo; rtrace's other options at their defaults).
 OUT:     for the k-th SETTING (from 0), OUT.<k> gets one line `E_r E_g E_b` per point, and the
          script prints `setting=<k> oconv=<s> rtrace=<s>` per SETTING to stdout.
 
@@ -194,7 +194,8 @@ def rays_text(points_path):
 
 def rtrace(octree, rays, setting, threads, env):
     ab, ad, as_, aa, lw = setting[:5]
-    ar = ["-ar", str(int(setting[5]))] if len(setting) > 5 else []
+    ar = ["-ar", str(int(setting[5]))] if len(setting) > 5 and setting[5] > 0 else []
+    ar += ["-lr", str(int(setting[6]))] if len(setting) > 6 else []
     cmd = [exe("rtrace"), "-I", "-h", "-ab", str(int(ab)), "-ad", str(int(ad)), "-as",
            str(int(as_)), "-aa", repr(aa), "-lw", repr(lw), *ar, "-n", str(threads), octree]
     t0 = time.perf_counter()

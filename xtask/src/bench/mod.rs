@@ -35,7 +35,7 @@ const GROUPS: &[Group] = &[
     ("images", images::run),
     ("irradiance", irradiance::run),
     ("lights", lights::run),
-    ("radiance", radiance::run),
+    ("rtrace", radiance::run),
 ];
 
 /// Runs every group whose name contains `only` (all when `None`).

@@ -1,28 +1,29 @@
-//! The `radiance` group (issue 31, "peers at the same points": Radiance's `gensky` + `rtrace -I` on
+//! The `rtrace` group (issue 31, "peers at the same points": Radiance's `gensky` + `rtrace -I` on
 //! a daylit room's work plane; the target: work-plane irradiance within 0.5 × `rtrace -I`'s error
-//! at equal time). The side-lit room (`scenes/side-lit-room.obj`, its window open) and its 20
-//! work-plane points (`scenes/side-lit-room.pts`) under
+//! at equal time). Run it with `--only rtrace` (`--only radiance` would match `irradiance` too).
+//! The side-lit room (`scenes/side-lit-room.obj`, its window open) and its 20 work-plane points
+//! (`scenes/side-lit-room.pts`) under
 //! * a CIE overcast sky of 10 000 lux with a black ground, and with ρ_g = 0.2;
 //! * a CIE clear sky of 12 000 lux with the sun at bearing 200°, 25° up, 60 000 lux normal
 //!   (0.53° across; Radiance's sun is 0.533°), ρ_g = 0.2;
 //!
 //! by
-//! * the `baselines` path tracer to a 0.2 % relative standard error per point (the reference);
-//! * `rtrace -I` (`xtask/py/radiance_irradiance.py`, the pyradiance wheel's binaries; skipped with a
-//!   note when missing) at a ladder of settings from fast to slow, with and without its ambient
+//! * the `baselines` path tracer to a 0.1 % relative standard error per point (the reference);
+//! * `rtrace -I` (`xtask/py/radiance_irradiance.py`, the pyradiance wheel's binaries; skipped with
+//!   a note when missing) at a ladder of settings from fast to slow, with and without its ambient
 //!   cache, timed (`-n 2`: two processes, as gcr's two rayon threads);
-//! * `gcr` — the default paths gather to 4, 2, 1 and 0.5 % — with the window as a sky portal,
-//!   as the guide runs it (and once without, at 1 %).
+//! * `gcr` — the default paths gather to 4, 2, 1, 0.5, 0.25 and 0.1 % — with the window as a sky
+//!   portal, as the guide runs it (and once without the portal, at the middle target).
 //!
 //! Before the ladder the conventions are checked: the skies' horizontal irradiance E_h on an open
 //! plane, ours by quadrature and Radiance's by `rtrace -I -ab 1 -ad 65536 -aa 0` at an upward point
 //! with nothing but the sky, for both of the script's sky functions (`cie`: gensky's arguments to
 //! `skybright.cal` without its blend of sky and ground about the horizon, which the ladder uses;
-//! `gensky`: the blend as gensky writes it), and the uniform sky (E_h = πL). Then the slowest
-//! `rtrace` setting against the reference, and the `gensky` sky function at that setting.
+//! `gensky`: the blend as gensky writes it), and the uniform sky (E_h = πL). With the ladder, the
+//! `gensky` sky function at its next-to-slowest setting.
 //!
 //! `RADIANCE_PYTHON` names the Python that has pyradiance (default `python3`). Writes
-//! `benchmarks-radiance.md`.
+//! `benchmarks-radiance.md`. Never run by `cargo test`.
 
 use super::field::write_mitsuba_faces;
 use super::irradiance::{Estimates, compare, gcr_irradiance, reference_irradiance};
@@ -127,7 +128,10 @@ fn cases() -> Vec<Case> {
     ]
 }
 
-/// rtrace's settings, fast to slow: (label, `ab,ad,as,aa,lw[,ar]`).
+/// rtrace's settings, fast to slow within each family (with the ambient cache; without, at
+/// rtrace's default `-lr -10`; without, at `-lr -30`): (label, `ab,ad,as,aa,lw[,ar[,lr]]`). At
+/// the default `-lr -10` (at most 10 reflections) rtrace stays ~0.5 % low in this room however
+/// many `-ab` and `-ad` it gets; `-lr -30` removes that.
 fn ladder(quick: bool) -> Vec<(&'static str, &'static str)> {
     if quick {
         return vec![("-ab 4 -ad 256 -aa 0 -lw 1e-3", "4,256,0,0,1e-3")];
@@ -145,7 +149,18 @@ fn ladder(quick: bool) -> Vec<(&'static str, &'static str)> {
         ("-ab 8 -ad 1024 -aa 0 -lw 1e-5", "8,1024,0,0,1e-5"),
         ("-ab 10 -ad 4096 -aa 0 -lw 1e-6", "10,4096,0,0,1e-6"),
         ("-ab 12 -ad 16384 -aa 0 -lw 1e-7", "12,16384,0,0,1e-7"),
-        ("-ab 12 -ad 65536 -aa 0 -lw 1e-8", "12,65536,0,0,1e-8"),
+        (
+            "-ab 20 -ad 4096 -aa 0 -lw 1e-6 -lr -30",
+            "20,4096,0,0,1e-6,0,-30",
+        ),
+        (
+            "-ab 20 -ad 16384 -aa 0 -lw 1e-7 -lr -30",
+            "20,16384,0,0,1e-7,0,-30",
+        ),
+        (
+            "-ab 20 -ad 65536 -aa 0 -lw 1e-8 -lr -30",
+            "20,65536,0,0,1e-8,0,-30",
+        ),
     ]
 }
 
@@ -244,26 +259,28 @@ fn mean_ratio(a: &Estimates, r: &Estimates) -> f64 {
         / n
 }
 
-/// gcr's error at `t` seconds, interpolated log-log on its (seconds, error) runs; beyond them
-/// extrapolated as error ∝ t^(−1/2) from the nearest run (flagged `true`).
-fn error_at(curve: &[(f64, f64)], t: f64) -> (f64, bool) {
+/// gcr's error at `t` seconds, interpolated log-log on its (seconds, error) runs. Before its
+/// fastest run extrapolated as error ∝ t^(−1/2) (flagged `*`); after its slowest, its slowest run's
+/// error (flagged `≤`: more time would not make it worse; no extrapolation below the reference's
+/// noise).
+fn error_at(curve: &[(f64, f64)], t: f64) -> (f64, &'static str) {
     let mut c = curve.to_vec();
     c.sort_by(|a, b| a.0.total_cmp(&b.0));
     let (first, last) = (c[0], c[c.len() - 1]);
     if t <= first.0 {
-        return (first.1 * (first.0 / t).sqrt(), true);
+        return (first.1 * (first.0 / t).sqrt(), "*");
     }
     if t >= last.0 {
-        return (last.1 * (last.0 / t).sqrt(), true);
+        return (last.1, "≤");
     }
     for w in c.windows(2) {
         let ((t0, e0), (t1, e1)) = (w[0], w[1]);
         if t >= t0 && t <= t1 {
             let f = (t / t0).ln() / (t1 / t0).ln();
-            return ((e0.ln() + f * (e1 / e0).ln()).exp(), false);
+            return ((e0.ln() + f * (e1 / e0).ln()).exp(), "");
         }
     }
-    (last.1, true)
+    (last.1, "≤")
 }
 
 fn scene_with(base: &Scene, lighting: &Lighting) -> Result<Scene> {
@@ -290,11 +307,11 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         .map(|(p, n)| format!("{} {} {} {} {} {}\n", p.x, p.y, p.z, n.x, n.y, n.z))
         .collect();
     std::fs::write(&pts, text)?;
-    let rel = if ctx.quick { 0.03 } else { 0.002 };
+    let rel = if ctx.quick { 0.03 } else { 0.001 };
     let targets: &[f64] = if ctx.quick {
         &[0.04]
     } else {
-        &[0.04, 0.02, 0.01, 0.005]
+        &[0.04, 0.02, 0.01, 0.005, 0.0025, 0.001]
     };
     let ladder = ladder(ctx.quick);
     let settings: Vec<&str> = ladder.iter().map(|l| l.1).collect();
@@ -398,11 +415,11 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         };
         let reference = reference_irradiance(&scene, &bvh, &points, &adaptive)?;
         let t_ref = t.elapsed().as_secs_f64();
+        let ref_noise = compare(&reference, &reference).1;
         writeln!(
             md,
-            "| {name} | reference (baselines, {:.1} %) | {t_ref:.1} | - | {:.4} | 1 | {} | - |",
+            "| {name} | reference (baselines, {:.1} %) | {t_ref:.1} | - | {ref_noise:.4} | 1 | {} | - |",
             100.0 * rel,
-            compare(&reference, &reference).1,
             df(&reference)
         )?;
         // ⟨gcr at its targets, with the window as a portal; once without⟩
@@ -428,13 +445,14 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         }
         let plain = scene_with(&base, &c.lighting)?;
         let t = Instant::now();
-        let ours = gcr_irradiance(&plain, &points, targets[targets.len() / 2])?;
+        let mid = targets.len() / 2;
+        let ours = gcr_irradiance(&plain, &points, targets[mid])?;
         let secs = t.elapsed().as_secs_f64();
         let (d, own, _) = compare(&ours, &reference);
         writeln!(
             gcr_rows,
             "| {name} | gcr (paths, {} %, no portal) | {secs:.2} | {d:.4} | {own:.4} | {:.4} | {} | - |",
-            100.0 * targets[targets.len() / 2],
+            100.0 * targets[mid],
             mean_ratio(&ours, &reference),
             df(&ours)
         )?;
@@ -443,22 +461,33 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         let mut slow = None;
         match rtrace(&dir, &faces, &pts, &c.args, &settings)? {
             Ok(r) => {
+                // (ratio, rtrace's setting) where rtrace's error is resolved (≥ 2 × the
+                // reference's noise)
                 let mut ratios = Vec::new();
                 for ((label, _), (secs, est)) in ladder.iter().zip(&r.runs) {
                     let (d, _, _) = compare(est, &reference);
-                    let (g, extrapolated) = error_at(&curve, *secs);
-                    ratios.push(g / d);
+                    let (g, flag) = error_at(&curve, *secs);
+                    if d >= 2.0 * ref_noise {
+                        ratios.push((g / d, *label));
+                    }
                     writeln!(
                         rtrace_rows,
                         "| {name} | rtrace `{label}` | {secs:.2} | {d:.4} | - | {:.4} | {} | {:.2}{} |",
                         mean_ratio(est, &reference),
                         df(est),
                         g / d,
-                        if extrapolated { "*" } else { "" }
+                        if d < 2.0 * ref_noise {
+                            format!("{flag} (ref.-limited)")
+                        } else {
+                            flag.to_string()
+                        }
                     )?;
                 }
-                let worst = ratios.iter().copied().fold(0.0, f64::max);
-                headline.push(format!("{name}: worst ratio {worst:.2}"));
+                let worst = ratios.iter().copied().max_by(|a, b| a.0.total_cmp(&b.0));
+                headline.push(match worst {
+                    Some((w, label)) => format!("{name}: {w:.2} (at `{label}`)"),
+                    None => format!("{name}: no rtrace setting resolved"),
+                });
                 slow = r.runs.last().map(|x| x.1.mean.clone());
                 let mut extra = c.args.clone();
                 extra.extend(["--sky-fn".to_string(), "gensky".to_string()]);
@@ -505,7 +534,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     let note = skipped.map_or(String::new(), |why| format!("\nRadiance skipped: {why}.\n"));
     let out = format!(
         "# Work-plane irradiance against Radiance's `rtrace -I` (issue 31)\n\n\
-         Generated by `RADIANCE_PYTHON=… cargo xtask bench --only radiance{quick}` (release; \
+         Generated by `RADIANCE_PYTHON=… cargo xtask bench --only rtrace{quick}` (release; \
          overwritten by it), {threads} rayon threads; `rtrace -n 2`. The side-lit room \
          (`scenes/side-lit-room.obj`: 4 × 3 × 5 m, walls and ceiling ρ = 0.7, floor 0.3, a 1.6 × 1.2 m \
          window open to the south) and its 20 work-plane points at 0.8 m facing up \
@@ -519,8 +548,10 @@ pub fn run(ctx: &Ctx) -> Result<()> {
          **rtrace**: `-I -h` with the options shown (others at their defaults), `aa 0` = no ambient \
          cache (plain Monte Carlo). Seconds are wall time on a 2-core machine shared with other \
          jobs. `its noise`: ‖σ‖/‖E_ref‖ (rtrace gives none). **Last column**: gcr's relative L2 error \
-         at rtrace's time (interpolated log-log between gcr's runs; * = outside them, extrapolated \
-         as error ∝ t^−½ from the nearest) divided by rtrace's error: the issue's target is ≤ 0.5. \
+         at rtrace's time (interpolated log-log between gcr's runs; * = before gcr's fastest run, \
+         extrapolated as error ∝ t^−½; ≤ = after its slowest, whose error is taken: an upper \
+         bound; `ref.-limited` = rtrace's error is below twice the reference's noise, so the ratio \
+         is not resolved) divided by rtrace's error: the issue's target is ≤ 0.5. \
          The DF column (overcast skies, **bold**): daylight factors 100·E/E_h.\n\n\
          ## Conventions (checked first)\n\n\
          Horizontal irradiance on an open plane of the sky alone: ours by a 512 × 512 quadrature of \
@@ -535,7 +566,20 @@ pub fn run(ctx: &Ctx) -> Result<()> {
          the same setting: the same random numbers, so their difference is the blend's). Last column: the zenith radiance \
          gensky's arguments give, over ours.\n\n{checks}\n\
          ## Time against error\n\n{md}{note}\n\
-         Headline (worst ratio over rtrace's ladder; ≤ 0.5 meets the target): {head}.\n\n\
+         **Findings** (static text, from the three runs made while building this bench, pyradiance \
+         1.3.1): (1) rows without `-lr` run at rtrace's default `-lr -10` (at most 10 \
+         reflections): with walls of ρ = 0.7 that loses ~0.5 % at any `-ab`/`-ad` (mean E/E_ref \
+         0.993–0.995 at `-ab 12 -ad 16384`; `-ab 20 -lw 1e-12` at the default `-lr` is no \
+         better), and `-lr -30` removes it (0.999–1.002); (2) the ambient cache (`-aa` > 0) with \
+         few bounces is biased low (`-ab 2`: 0.62–0.66, `-ab 5`: 0.92–0.93), and slower than \
+         plain Monte Carlo at equal error here; (3) gensky's own `skybr`, which blends sky and \
+         ground over ~20° about the horizon, gives this work plane (which sees the sky through \
+         the window at 1–16° up from the back) 0.4–0.7 % less than the CIE formulas at the same \
+         setting, and the open-plane E_h 0.2–0.6 % less; (4) with the `cie` sky function and `-lr \
+         -30`, rtrace's slowest setting agrees with the reference to 0.10–0.18 % (relative L2), \
+         i.e. within the two noises: our sky, ground glow, sun and units match Radiance's.\n\n\
+         Headline: the worst ratio over rtrace's settings whose error is resolved (at least twice the \
+         reference's noise; ≤ 0.5 meets the target): {head}.\n\n\
          ## Per point\n{per_point}",
         quick = if ctx.quick { " --quick" } else { "" },
         threads = rayon::current_num_threads(),

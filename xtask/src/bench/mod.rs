@@ -11,6 +11,7 @@ mod irradiance;
 mod isgcs;
 mod isgcs_peers;
 mod lights;
+mod radiance;
 mod scenes;
 
 use crate::Ctx;
@@ -34,6 +35,7 @@ const GROUPS: &[Group] = &[
     ("images", images::run),
     ("irradiance", irradiance::run),
     ("lights", lights::run),
+    ("rtrace", radiance::run),
 ];
 
 /// Runs every group whose name contains `only` (all when `None`).

@@ -91,7 +91,7 @@ impl Cutouts {
         let Some(info) = pbr.base_color_texture() else {
             return Ok(if hidden { Alpha::Hidden } else { Alpha::Opaque });
         };
-        let Some(uv) = read_uv(info.tex_coord()) else {
+        let Some(uv) = crate::gltf_resources::info_uv(&info, read_uv) else {
             return Ok(if hidden { Alpha::Hidden } else { Alpha::Opaque });
         };
         let Some(mask) = self.mask(&info.texture(), images)? else {

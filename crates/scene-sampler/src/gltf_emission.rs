@@ -31,7 +31,7 @@ impl EmissiveTextures {
         let Some(info) = mat.emissive_texture() else {
             return Ok(None);
         };
-        let Some(uv) = read_uv(info.tex_coord()) else {
+        let Some(uv) = crate::gltf_resources::info_uv(&info, read_uv) else {
             return Ok(None);
         };
         let tex = info.texture();

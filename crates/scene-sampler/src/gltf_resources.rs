@@ -10,6 +10,7 @@
 use crate::confine::{Folder, Refusal};
 use crate::texture::TextureBudget;
 use crate::{Result, SceneError, Texture, Wrap};
+use glam::DVec2;
 use std::path::Path;
 
 /// What a URI names.
@@ -232,9 +233,34 @@ pub(crate) fn read_image(
     budget.decode(name, &bytes, format)
 }
 
+/// The texture coordinates a texture reference `info` reads: its `TEXCOORD_n` set (`read_uv(n)`;
+/// `KHR_texture_transform`'s `texCoord` overrides n), through `KHR_texture_transform` when given:
+/// uv' = T(offset) · R(rotation) · S(scale) · uv, R = [[cos r, sin r], [−sin r, cos r]] (the
+/// extension's matrices). `None` when the set is missing.
+pub(crate) fn info_uv(
+    info: &gltf::texture::Info,
+    read_uv: impl Fn(u32) -> Option<Vec<DVec2>>,
+) -> Option<Vec<DVec2>> {
+    let Some(t) = info.texture_transform() else {
+        return read_uv(info.tex_coord());
+    };
+    let uv = read_uv(t.tex_coord().unwrap_or(info.tex_coord()))?;
+    let ([ox, oy], r, [sx, sy]) = (t.offset(), f64::from(t.rotation()), t.scale());
+    let (c, s) = (r.cos(), r.sin());
+    let (ox, oy, sx, sy) = (f64::from(ox), f64::from(oy), f64::from(sx), f64::from(sy));
+    Some(
+        uv.into_iter()
+            .map(|p| {
+                let (u, v) = (sx * p.x, sy * p.y);
+                DVec2::new(c * u + s * v + ox, -s * u + c * v + oy)
+            })
+            .collect(),
+    )
+}
+
 /// A decoded glTF image as an albedo texture, as the gltf crate's importer gave it to the loader:
-/// 8-bit channels are sRGB (glTF 2.0 §3.9.2: baseColorTexture is sRGB-encoded), 16-bit ones reduced
-/// to 8 (the high byte); alpha is dropped, grey (and grey + alpha) expanded to RGB.
+/// 8-bit channels are sRGB (glTF 2.0 §3.9.2: baseColorTexture is sRGB-encoded), 16-bit ones rounded
+/// to 8 (as OBJ textures are); alpha is dropped, grey (and grey + alpha) expanded to RGB.
 fn gltf_texture(name: &str, img: image::DynamicImage, wrap: [Wrap; 2]) -> Result<Texture> {
     use image::DynamicImage as D;
     let (w, h) = (img.width(), img.height());
@@ -243,20 +269,9 @@ fn gltf_texture(name: &str, img: image::DynamicImage, wrap: [Wrap; 2]) -> Result
         D::ImageRgba8(b) => b.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect(),
         D::ImageLuma8(b) => b.iter().flat_map(|&g| [g, g, g]).collect(),
         D::ImageLumaA8(b) => b.chunks_exact(2).flat_map(|p| [p[0]; 3]).collect(),
+        // 16-bit channels rounded to 8 by the image crate, as the OBJ loader's textures are
         D::ImageRgb16(_) | D::ImageRgba16(_) | D::ImageLuma16(_) | D::ImageLumaA16(_) => {
-            let channels = usize::from(img.color().channel_count());
-            let hi: Vec<u8> = (img.as_bytes().chunks_exact(2))
-                .map(|b| (u16::from_ne_bytes([b[0], b[1]]) >> 8) as u8)
-                .collect();
-            (hi.chunks_exact(channels))
-                .flat_map(|p| {
-                    if channels >= 3 {
-                        [p[0], p[1], p[2]]
-                    } else {
-                        [p[0]; 3]
-                    }
-                })
-                .collect()
+            img.to_rgb8().into_raw()
         }
         other => {
             return Err(SceneError::Texture {
@@ -274,6 +289,32 @@ fn gltf_texture(name: &str, img: image::DynamicImage, wrap: [Wrap; 2]) -> Result
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A 16-bit PNG gives the glTF loader the texels it gives the OBJ loader (both round to 8
+    /// bits; glTF truncated before: 0xFF00 read as 255 there, 254 through OBJ).
+    #[test]
+    fn sixteen_bit_textures_read_alike_through_gltf_and_obj() {
+        let img = image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(
+            2,
+            1,
+            vec![0xFF00, 0x1280, 0xFFFF, 0, 0x7F7F, 0x0101],
+        )
+        .unwrap();
+        let mut png = Vec::new();
+        image::DynamicImage::ImageRgb16(img)
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        let obj = Texture::from_encoded("t", &png, [Wrap::Repeat; 2]).unwrap();
+        let decoded = image::load_from_memory(&png).unwrap();
+        let gltf = gltf_texture("t", decoded, [Wrap::Repeat; 2]).unwrap();
+        assert_eq!(obj.texels(), gltf.texels());
+        let want = crate::srgb_to_linear(254.0 / 255.0) as f32;
+        assert!(
+            (gltf.texels()[0][0] - want).abs() < 1e-6,
+            "{:?}",
+            gltf.texels()[0]
+        );
+    }
 
     #[test]
     fn base64_decodes_standard_text_with_or_without_padding() {

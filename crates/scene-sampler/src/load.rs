@@ -401,6 +401,16 @@ fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
             .material_id
             .and_then(|i| texture_of.get(i).copied().flatten());
         let with_uv = mesh.texcoord_indices.len() == mesh.indices.len();
+        // a `vt nan` would read texel 0 (ρ = 0) in silence
+        if with_uv && mesh.texcoords.iter().any(|t| !t.is_finite()) {
+            return Err(SceneError::Parse {
+                source_name: source.clone(),
+                message: format!(
+                    "object `{}`: a `vt` coordinate is not a finite number",
+                    m.name
+                ),
+            });
+        }
         if texture.is_some() && !with_uv && !untextured.contains(&m.name) {
             untextured.push(m.name.clone());
         }
@@ -769,6 +779,13 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
                 }
             };
             let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+            let read_uv = |k: u32| {
+                (reader.read_tex_coords(k)).map(|c| {
+                    (c.into_f32())
+                        .map(|[u, v]| glam::DVec2::new(f64::from(u), f64::from(v)))
+                        .collect::<Vec<_>>()
+                })
+            };
             // ⟨baseColorTexture × baseColorFactor, on its TEXCOORD set⟩
             let texture = match pbr.base_color_texture() {
                 Some(info) => {
@@ -799,12 +816,7 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
                             textures.len() as u32 - 1
                         }
                     };
-                    let uv: Option<Vec<glam::DVec2>> =
-                        reader.read_tex_coords(info.tex_coord()).map(|c| {
-                            c.into_f32()
-                                .map(|[u, v]| glam::DVec2::new(f64::from(u), f64::from(v)))
-                                .collect()
-                        });
+                    let uv = crate::gltf_resources::info_uv(&info, read_uv);
                     match uv {
                         Some(uv) => Some((index, uv)),
                         None => {
@@ -820,13 +832,6 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
                 None => None,
             };
             // ⟨alphaMode: cut-outs; emissiveTexture⟩
-            let read_uv = |k: u32| {
-                (reader.read_tex_coords(k)).map(|c| {
-                    (c.into_f32())
-                        .map(|[u, v]| glam::DVec2::new(f64::from(u), f64::from(v)))
-                        .collect::<Vec<_>>()
-                })
-            };
             let mut images = crate::gltf_cutouts::Images {
                 source: &source,
                 folder: &folder,

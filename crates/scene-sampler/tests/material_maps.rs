@@ -96,6 +96,13 @@ fn an_obj_grille_lets_rays_through_its_transparent_stripes() {
         };
         assert_eq!(bvh.escapes(&from, DVec3::Y), open, "escapes at x = {x}");
     }
+    // a `vt nan` is refused, naming the object (it read ρ = 0 in silence)
+    std::fs::write(d.join("nan.obj"), GRILLE_OBJ.replace("vt 1 1", "vt nan 1")).unwrap();
+    let e = load(d.join("nan.obj")).unwrap_err().to_string();
+    assert!(
+        e.contains("`grille`") && e.contains("not a finite number"),
+        "{e}"
+    );
     // `d` out of range is refused, naming the line
     std::fs::write(d.join("grille.mtl"), "newmtl floor\nd 1.5\n").unwrap();
     let e = load(d.join("grille.obj")).unwrap_err().to_string();
@@ -305,4 +312,25 @@ fn double_sided_faces_get_a_back() {
         2,
         "only the floor lacks a back"
     );
+}
+
+/// `KHR_texture_transform` moves the texture coordinates a texture reads: an offset of a quarter
+/// turns the grille's open stripes solid and its solid ones open (u' = u + 1/4, clamped).
+#[test]
+fn a_texture_transform_moves_the_stripes() {
+    let d = dir("transform");
+    let grille = serde_json::json!({"name": "grille", "alphaMode": "MASK",
+        "pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
+            "extensions": {"KHR_texture_transform": {"offset": [0.25, 0.0]}}}}});
+    let path = gltf_two_quads(&d, "transform", grille);
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    json["extensionsUsed"] = serde_json::json!(["KHR_texture_transform"]);
+    std::fs::write(&path, json.to_string()).unwrap();
+    let scene = load(&path).unwrap().into_3d().unwrap();
+    let bvh = SceneBvh::new(&scene);
+    let floor = |f: Option<u32>| f.is_some_and(|f| scene.faces[f as usize].v[0].y == 0.0);
+    for (x, open) in [(1.2, false), (1.7, true), (2.2, false), (2.7, false)] {
+        assert_eq!(floor(hit_below(&bvh, x)), open, "x = {x}");
+    }
 }

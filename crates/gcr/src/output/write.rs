@@ -335,18 +335,9 @@ fn write_3d(
     metrics.seconds.gather += tg.elapsed().as_secs_f64();
     // ⟨Each image's camera (the automatic one from the mesh's brightness, before any exposure
     // is known: its own)⟩
-    let exposure_of_mesh = |mesh: &ShadedMesh| {
-        let lit = mesh
-            .triangles
-            .iter()
-            .zip(&mesh.face_of_triangle)
-            .filter(|(_, f)| scene.faces[**f as usize].emission.is_zero())
-            .map(|(t, _)| mesh.radiosity[t[0] as usize]);
-        Exposure::auto(lit)
-    };
     let mesh_exposure = mesh.as_ref().map(|m| match settings.exposure {
         Some(scale) => Exposure { scale },
-        None => exposure_of_mesh(m),
+        None => exposure_of_mesh(m, scene),
     });
     let jobs = image_cameras(
         domain,
@@ -387,13 +378,7 @@ fn write_3d(
             Some(img) => write_pixel_image(img, &exposure, path, staged)?,
             None => {
                 let mesh = mesh.as_ref().expect("mesh-mode images build the mesh");
-                if scene.faces.iter().any(|f| f.cutout.is_some()) {
-                    metrics.warnings.push(format!(
-                        "image `{}`: the scene has alpha cut-outs, which --image-mode mesh draws \
-                         solid (it rasterizes the output mesh); --image-mode pixel sees through them",
-                        path.display()
-                    ));
-                }
+                metrics.warnings.extend(solid_cutouts(scene, path));
                 write_image(mesh, camera, settings, &exposure, path, staged)?
             }
         };
@@ -413,6 +398,26 @@ fn write_3d(
     }
     metrics.seconds.output += to.elapsed().as_secs_f64();
     Ok(())
+}
+
+/// The automatic exposure of a mesh's outputs: from the radiosity of its faces that do not emit.
+fn exposure_of_mesh(mesh: &ShadedMesh, scene: &scene_sampler::Scene) -> Exposure {
+    let lit = (mesh.triangles.iter())
+        .zip(&mesh.face_of_triangle)
+        .filter(|(_, f)| scene.faces[**f as usize].emission.is_zero())
+        .map(|(t, _)| mesh.radiosity[t[0] as usize]);
+    Exposure::auto(lit)
+}
+
+/// The warning of a mesh-mode image of a scene with alpha cut-outs, which it draws solid.
+fn solid_cutouts(scene: &scene_sampler::Scene, path: &Path) -> Option<String> {
+    scene.faces.iter().any(|f| f.cutout.is_some()).then(|| {
+        format!(
+            "image `{}`: the scene has alpha cut-outs, which --image-mode mesh draws solid (it \
+             rasterizes the output mesh); --image-mode pixel sees through them",
+            path.display()
+        )
+    })
 }
 
 /// Records what the output gather measured (the last output set wins: the mesh after the

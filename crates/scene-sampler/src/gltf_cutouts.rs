@@ -111,12 +111,7 @@ impl Cutouts {
     /// The mask of a texture's image (its alpha channel), decoded once; `None` when the image has
     /// no alpha channel.
     fn mask(&mut self, tex: &gltf::Texture, images: &mut Images) -> Result<Option<u32>> {
-        use gltf::texture::WrappingMode as W;
-        let wrap = [tex.sampler().wrap_s(), tex.sampler().wrap_t()].map(|w| match w {
-            W::ClampToEdge => Wrap::ClampToEdge,
-            W::MirroredRepeat => Wrap::MirroredRepeat,
-            W::Repeat => Wrap::Repeat,
-        });
+        let wrap = crate::gltf_resources::wrap_of(tex);
         let image = tex.source();
         let key = (image.index(), wrap);
         if let Some(&(_, i)) = self.mask_of.iter().find(|(k, _)| *k == key) {

@@ -27,7 +27,6 @@ impl EmissiveTextures {
         read_uv: impl Fn(u32) -> Option<Vec<DVec2>>,
         images: &mut Images,
     ) -> Result<Option<(u32, Vec<DVec2>)>> {
-        use gltf::texture::WrappingMode as W;
         let Some(info) = mat.emissive_texture() else {
             return Ok(None);
         };
@@ -35,11 +34,7 @@ impl EmissiveTextures {
             return Ok(None);
         };
         let tex = info.texture();
-        let wrap = [tex.sampler().wrap_s(), tex.sampler().wrap_t()].map(|w| match w {
-            W::ClampToEdge => Wrap::ClampToEdge,
-            W::MirroredRepeat => Wrap::MirroredRepeat,
-            W::Repeat => Wrap::Repeat,
-        });
+        let wrap = crate::gltf_resources::wrap_of(&tex);
         let image = tex.source();
         let key = (image.index(), wrap);
         if let Some(&(_, i)) = self.texture_of.iter().find(|(k, _)| *k == key) {

@@ -233,6 +233,16 @@ pub(crate) fn read_image(
     budget.decode(name, &bytes, format)
 }
 
+/// A glTF texture's sampler wrap modes (u, v).
+pub(crate) fn wrap_of(tex: &gltf::Texture) -> [Wrap; 2] {
+    use gltf::texture::WrappingMode as W;
+    [tex.sampler().wrap_s(), tex.sampler().wrap_t()].map(|w| match w {
+        W::ClampToEdge => Wrap::ClampToEdge,
+        W::MirroredRepeat => Wrap::MirroredRepeat,
+        W::Repeat => Wrap::Repeat,
+    })
+}
+
 /// The texture coordinates a texture reference `info` reads: its `TEXCOORD_n` set (`read_uv(n)`;
 /// `KHR_texture_transform`'s `texCoord` overrides n), through `KHR_texture_transform` when given:
 /// uv' = T(offset) · R(rotation) · S(scale) · uv, R = [[cos r, sin r], [−sin r, cos r]] (the

@@ -790,11 +790,7 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
             let texture = match pbr.base_color_texture() {
                 Some(info) => {
                     let tex = info.texture();
-                    let wrap = [tex.sampler().wrap_s(), tex.sampler().wrap_t()].map(|w| match w {
-                        gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
-                        gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
-                        gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
-                    });
+                    let wrap = crate::gltf_resources::wrap_of(&tex);
                     let image = tex.source().index();
                     let index = match texture_of.iter().find(|(k, _)| *k == (image, wrap)) {
                         Some(&(_, i)) => i,

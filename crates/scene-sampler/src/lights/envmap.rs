@@ -168,11 +168,7 @@ impl EnvMap {
     /// The density of `dir` at the receiver: the map's, mixed with the portals' where they are in
     /// view.
     fn pdf(&self, at: &Receiver, dir: DVec3) -> f64 {
-        let map = self.map_pdf(dir);
-        match self.portals.share(at.p) {
-            b if b > 0.0 => b * self.portals.pdf(at.p, dir) + (1.0 - b) * map,
-            _ => map,
-        }
+        self.portals.mix_pdf(at.p, dir, self.map_pdf(dir))
     }
 
     /// A direction drawn from the map by `u ∈ [0, 1)²` (module docs).
@@ -206,14 +202,7 @@ fn texel_solid_angle(j: usize, width: usize, height: usize) -> f64 {
 
 impl Light for EnvMap {
     fn sample(&self, at: &Receiver, u: [f64; 2]) -> Option<LightSample> {
-        // through a portal with probability b, by u[0] remapped within its share
-        let b = self.portals.share(at.p);
-        let w = if u[0] < b {
-            self.portals.sample(at.p, [u[0] / b, u[1]])?
-        } else {
-            let u0 = ((u[0] - b) / (1.0 - b)).min(1.0 - f64::EPSILON);
-            self.sample_map([u0, u[1]])
-        };
+        let w = self.portals.mix_sample(at.p, u, |u| self.sample_map(u))?;
         let (cy, pdf) = (at.n.dot(w), self.pdf(at, w));
         (cy > 0.0 && pdf > 0.0).then(|| LightSample {
             target: ShadowTarget::Direction(w),
@@ -238,13 +227,7 @@ impl Light for EnvMap {
     fn power(&self, radius: f64) -> f64 {
         // the flux through a disc, both sides: ∫ L̄ |cos θ| dω over the sphere ≈ (total/π)/2, as
         // the sky's E_h + π·L_g
-        let disc = PI * radius * radius;
-        let area = if self.portals.is_empty() {
-            disc
-        } else {
-            self.portals.area().min(disc)
-        };
-        area * self.total / (2.0 * PI)
+        self.portals.collecting_area(radius) * self.total / (2.0 * PI)
     }
 
     fn is_grey(&self) -> bool {

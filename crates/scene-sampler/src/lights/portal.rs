@@ -127,6 +127,45 @@ impl Portals {
         if self.in_view(p) { 0.75 } else { 0.0 }
     }
 
+    /// The density of `dir` at `p` of an infinite light that draws [`Portals::share`] of its rays
+    /// through the portals and the rest by its own density `own` (of the same direction).
+    pub fn mix_pdf(&self, p: DVec3, dir: DVec3, own: f64) -> f64 {
+        match self.share(p) {
+            b if b > 0.0 => b * self.pdf(p, dir) + (1.0 - b) * own,
+            _ => own,
+        }
+    }
+
+    /// A direction of the mixture of [`Portals::mix_pdf`] from `u ∈ [0, 1)²`: through a portal
+    /// when u[0] falls in the portals' share (remapped within it), else by `own` with u[0]
+    /// remapped to [0, 1).
+    pub fn mix_sample(
+        &self,
+        p: DVec3,
+        u: [f64; 2],
+        own: impl FnOnce([f64; 2]) -> DVec3,
+    ) -> Option<DVec3> {
+        let b = self.share(p);
+        if u[0] < b {
+            self.sample(p, [u[0] / b, u[1]])
+        } else {
+            let u0 = ((u[0] - b) / (1.0 - b)).min(1.0 - f64::EPSILON);
+            Some(own([u0, u[1]]))
+        }
+    }
+
+    /// The area an infinite light's power is counted over ([`super::Light::power`]): the disc of
+    /// the scene's bounding radius `radius`, or with portals the flux that can come through them
+    /// (at most their area, at most the disc).
+    pub fn collecting_area(&self, radius: f64) -> f64 {
+        let disc = std::f64::consts::PI * radius * radius;
+        if self.is_empty() {
+            disc
+        } else {
+            self.area().min(disc)
+        }
+    }
+
     /// The portals' selection weights from `p` and their sum.
     fn weights(&self, p: DVec3) -> (Vec<f64>, f64) {
         let w: Vec<f64> = self.0.iter().map(|q| q.weight(p)).collect();

@@ -236,13 +236,8 @@ impl Sky {
     /// The sampling density of `dir` at the receiver: the hemispheres', mixed with the portals'
     /// when there are portals that the receiver has in view.
     fn pdf(&self, at: &Receiver, dir: DVec3) -> f64 {
-        let hemi = self.hemisphere_pdf(at.n, dir);
-        let b = self.portals.share(at.p);
-        if b > 0.0 {
-            b * self.portals.pdf(at.p, dir) + (1.0 - b) * hemi
-        } else {
-            hemi
-        }
+        self.portals
+            .mix_pdf(at.p, dir, self.hemisphere_pdf(at.n, dir))
     }
 }
 
@@ -252,21 +247,16 @@ fn mean(b: &Bands) -> f64 {
 
 impl Light for Sky {
     fn sample(&self, at: &Receiver, u: [f64; 2]) -> Option<LightSample> {
-        // through a portal with probability b, by u[0] remapped within its share
-        let b = self.portals.share(at.p);
-        let w = if u[0] < b {
-            self.portals.sample(at.p, [u[0] / b, u[1]])?
-        } else {
-            // the hemisphere by the rest of u[0], remapped to [0, 1) within it
-            let u0 = (u[0] - b) / (1.0 - b);
+        // through a portal, or a hemisphere chosen by u[0] remapped to [0, 1) within the rest
+        let w = self.portals.mix_sample(at.p, u, |[u0, u1]| {
             let p_up = self.p_up(at.n);
             let (axis, v) = if u0 < p_up {
                 (self.up, u0 / p_up)
             } else {
                 (-self.up, (u0 - p_up) / (1.0 - p_up))
             };
-            cosine_hemisphere(axis, [v.min(1.0 - f64::EPSILON), u[1]])
-        };
+            cosine_hemisphere(axis, [v.min(1.0 - f64::EPSILON), u1])
+        })?;
         let (cy, pdf) = (at.n.dot(w), self.pdf(at, w));
         (cy > 0.0 && pdf > 0.0).then(|| LightSample {
             target: ShadowTarget::Direction(w),
@@ -291,13 +281,7 @@ impl Light for Sky {
     fn power(&self, radius: f64) -> f64 {
         // with portals, the flux that can come through them (at most E_h per unit area, each
         // side), not through the scene's whole bounding disc
-        let disc = PI * radius * radius;
-        let area = if self.portals.is_empty() {
-            disc
-        } else {
-            self.portals.area().min(disc)
-        };
-        area * (mean(&self.horizontal) + PI * mean(&self.ground))
+        self.portals.collecting_area(radius) * (mean(&self.horizontal) + PI * mean(&self.ground))
     }
 
     fn is_grey(&self) -> bool {

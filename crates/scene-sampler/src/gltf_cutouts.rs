@@ -2,9 +2,9 @@
 //! BLEND read as MASK at 0.5 with a warning, OPAQUE ignoring alpha (glTF 2.0 §3.9.4).
 
 use crate::Result;
-use crate::confine::Folder;
 use crate::cutout::AlphaMask;
-use crate::texture::{TextureBudget, Wrap};
+use crate::gltf_resources::Images;
+use crate::texture::Wrap;
 use glam::DVec2;
 
 /// How a primitive's material cuts its faces.
@@ -23,14 +23,6 @@ pub(crate) enum Alpha {
         /// Cut-off / alpha factor.
         threshold: f64,
     },
-}
-
-/// Where a primitive's images come from (the loader's state that [`Cutouts::of_primitive`] reads).
-pub(crate) struct Images<'a> {
-    pub source: &'a str,
-    pub folder: &'a Folder,
-    pub buffers: &'a [Vec<u8>],
-    pub budget: &'a mut TextureBudget,
 }
 
 /// The alpha masks of a glTF document, decoded once per (image, wrap modes).
@@ -121,14 +113,7 @@ impl Cutouts {
             || format!("{}: image {} (alpha)", images.source, image.index()),
             |n| format!("{}: image `{n}` (alpha)", images.source),
         );
-        let img = crate::gltf_resources::read_image(
-            &image,
-            &name,
-            images.source,
-            images.folder,
-            images.buffers,
-            images.budget,
-        )?;
+        let img = crate::gltf_resources::read_image(&image, &name, images)?;
         let index = match AlphaMask::of_image(&name, &img, wrap, false) {
             Some(m) => {
                 self.masks.push(m);

@@ -4,7 +4,7 @@
 //! pattern finer than the faces is averaged (a warning says so once per file); the total power
 //! is right.
 
-use crate::gltf_cutouts::Images;
+use crate::gltf_resources::Images;
 use crate::{Face, FaceTexture, Result, Spectrum, Texture, Wrap};
 use glam::DVec2;
 
@@ -44,14 +44,8 @@ impl EmissiveTextures {
             || format!("{}: image {} (emissive)", images.source, image.index()),
             |n| format!("{}: image `{n}` (emissive)", images.source),
         );
-        self.textures.push(crate::gltf_resources::decode_image(
-            &image,
-            &name,
-            wrap,
-            images.source,
-            images.folder,
-            images.buffers,
-            images.budget,
+        (self.textures).push(crate::gltf_resources::decode_image(
+            &image, &name, wrap, images,
         )?);
         let i = self.textures.len() as u32 - 1;
         self.texture_of.push((key, i));

@@ -163,32 +163,42 @@ pub(crate) fn read_buffers(
     Ok(out)
 }
 
-/// Reads, checks against `budget` and decodes the image a material's baseColorTexture uses, as an
-/// albedo texture named `name`. Its format is the data URI's or the image's media type (PNG or
-/// JPEG), else the URI's extension, else (this build) unsupported — as the gltf crate's importer.
+/// Where a document's images come from: the file (for messages), its folder, its buffers, and the
+/// texture memory still allowed.
+pub(crate) struct Images<'a> {
+    pub source: &'a str,
+    pub folder: &'a Folder,
+    pub buffers: &'a [Vec<u8>],
+    pub budget: &'a mut TextureBudget,
+}
+
+/// Reads, checks against the budget and decodes an image a material uses (base colour or
+/// emissive), as a colour texture named `name`. Its format is the data URI's or the image's media
+/// type (PNG or JPEG), else the URI's extension, else (this build) unsupported — as the gltf
+/// crate's importer.
 pub(crate) fn decode_image(
     image: &gltf::Image,
     name: &str,
     wrap: [Wrap; 2],
-    source: &str,
-    folder: &Folder,
-    buffers: &[Vec<u8>],
-    budget: &mut TextureBudget,
+    images: &mut Images,
 ) -> Result<Texture> {
-    let img = read_image(image, name, source, folder, buffers, budget)?;
+    let img = read_image(image, name, images)?;
     gltf_texture(name, img, wrap)
 }
 
-/// Reads, checks against `budget` and decodes a glTF image ([`decode_image`]'s first steps): the
-/// image as decoded, for an albedo texture or an alpha mask ([`crate::cutout`]).
+/// Reads, checks against the budget and decodes a glTF image ([`decode_image`]'s first steps): the
+/// image as decoded, for a colour texture or an alpha mask ([`crate::cutout`]).
 pub(crate) fn read_image(
     image: &gltf::Image,
     name: &str,
-    source: &str,
-    folder: &Folder,
-    buffers: &[Vec<u8>],
-    budget: &mut TextureBudget,
+    images: &mut Images,
 ) -> Result<image::DynamicImage> {
+    let Images {
+        source,
+        folder,
+        buffers,
+        ..
+    } = *images;
     let from_media = |m: Option<&str>| match m {
         Some("image/png") => Some(image::ImageFormat::Png),
         Some("image/jpeg") => Some(image::ImageFormat::Jpeg),
@@ -230,7 +240,7 @@ pub(crate) fn read_image(
         name: name.into(),
         message: "unsupported image encoding (PNG or JPEG, by its mimeType or extension)".into(),
     })?;
-    budget.decode(name, &bytes, format)
+    images.budget.decode(name, &bytes, format)
 }
 
 /// A glTF texture's sampler wrap modes (u, v).

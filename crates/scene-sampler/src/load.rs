@@ -786,6 +786,12 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
                         .collect::<Vec<_>>()
                 })
             };
+            let mut images = crate::gltf_resources::Images {
+                source: &source,
+                folder: &folder,
+                buffers: &buffers,
+                budget: &mut budget,
+            };
             // ⟨baseColorTexture × baseColorFactor, on its TEXCOORD set⟩
             let texture = match pbr.base_color_texture() {
                 Some(info) => {
@@ -803,10 +809,7 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
                                 &tex.source(),
                                 &name,
                                 wrap,
-                                &source,
-                                &folder,
-                                &buffers,
-                                &mut budget,
+                                &mut images,
                             )?);
                             texture_of.push(((image, wrap), textures.len() as u32 - 1));
                             textures.len() as u32 - 1
@@ -828,12 +831,6 @@ fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
                 None => None,
             };
             // ⟨alphaMode: cut-outs; emissiveTexture⟩
-            let mut images = crate::gltf_cutouts::Images {
-                source: &source,
-                folder: &folder,
-                buffers: &buffers,
-                budget: &mut budget,
-            };
             let alpha =
                 cutouts.of_primitive(&mat, e.max() > 0.0, read_uv, &mut images, &mut warnings)?;
             let emissive_map = match e.max() > 0.0 {

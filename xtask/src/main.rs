@@ -1,13 +1,15 @@
-//! `cargo xtask figures` regenerates the dissertation's figures into `docs/figures/`;
-//! `cargo xtask bench` runs the time-against-error benchmarks and writes `docs/benchmarks.md`.
+//! `cargo xtask figures` regenerates the dissertation's figures into `docs/results/figures/`;
+//! `cargo xtask bench` runs the time-against-error benchmarks and writes `docs/results/benchmarks*.md`.
 
 mod bench;
+mod ctx;
 mod figures;
 #[allow(dead_code)] // used by the figure and benchmark groups as they land
 mod plot;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
+use ctx::Ctx;
 use std::path::PathBuf;
 
 #[derive(Parser)]
@@ -19,7 +21,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Regenerate the dissertation's figures (PNG) into docs/figures/.
+    /// Regenerate the dissertation's figures (PNG) into docs/results/figures/.
     Figures {
         /// Small sizes: a smoke run that finishes in seconds (CI runs this).
         #[arg(long)]
@@ -27,12 +29,12 @@ enum Command {
         /// Only the figure groups whose name contains this text (e.g. `isgcs`, `gauss`).
         #[arg(long)]
         only: Option<String>,
-        /// Output folder (default docs/figures; with --quick target/figures-quick, so that a smoke
+        /// Output folder (default docs/results/figures; with --quick target/figures-quick, so that a smoke
         /// run never overwrites the committed figures).
         #[arg(long)]
         out: Option<PathBuf>,
     },
-    /// Benchmarks: time against error, scaling curves; writes docs/benchmarks*.md.
+    /// Benchmarks: time against error, scaling curves; writes docs/results/benchmarks*.md.
     Bench {
         /// Small sizes: a smoke run.
         #[arg(long)]
@@ -40,7 +42,7 @@ enum Command {
         /// Only the benchmark groups whose name contains this text.
         #[arg(long)]
         only: Option<String>,
-        /// Output folder (default docs; with --quick target/bench-quick, so that a smoke run never
+        /// Output folder (default docs/results; with --quick target/bench-quick, so that a smoke run never
         /// overwrites the committed reports).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -54,14 +56,6 @@ enum Command {
     },
 }
 
-/// What every figure or benchmark group receives.
-pub struct Ctx {
-    /// Smoke-run sizes.
-    pub quick: bool,
-    /// Output folder.
-    pub out: PathBuf,
-}
-
 /// Where a run writes without `--out`: the committed folder, or a scratch one for a smoke run.
 fn default_out(quick: bool, full: &str, smoke: &str) -> PathBuf {
     PathBuf::from(if quick { smoke } else { full })
@@ -71,13 +65,15 @@ fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Figures { quick, only, out } => {
-            let out =
-                out.unwrap_or_else(|| default_out(quick, "docs/figures", "target/figures-quick"));
+            let out = out.unwrap_or_else(|| {
+                default_out(quick, "docs/results/figures", "target/figures-quick")
+            });
             std::fs::create_dir_all(&out)?;
             figures::run(&Ctx { quick, out }, only.as_deref())
         }
         Command::Bench { quick, only, out } => {
-            let out = out.unwrap_or_else(|| default_out(quick, "docs", "target/bench-quick"));
+            let out =
+                out.unwrap_or_else(|| default_out(quick, "docs/results", "target/bench-quick"));
             std::fs::create_dir_all(&out)?;
             bench::run(&Ctx { quick, out }, only.as_deref())
         }

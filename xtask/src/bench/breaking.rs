@@ -6,7 +6,7 @@
 //! `benchmarks-breaking.md`.
 
 use super::gcr::{reference, relative_l2, scene_and_probes};
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::Result;
 use gcr::{BaseDomain, Breaking, Domain, Emitters, GatherMode, SolveConfig, radiosity_at_points};
 use scene_sampler::{KernelSampler, SceneBvh};

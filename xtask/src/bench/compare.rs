@@ -20,7 +20,7 @@
 //! 1 % and 0.1 % unshot power; its budget is the number of shots (form factor columns).
 
 use super::gcr::{Curve, Point, scene_and_probes};
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::Result;
 use baselines::classical::{ClassicalOptions, FormFactorOptions, Mesh};
 use baselines::flatland::{ExactOptions, ExactSolver};

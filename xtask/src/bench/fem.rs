@@ -5,7 +5,7 @@
 //! the support cut-off: quadratic while the supports overlap most of the network, as they do in
 //! 6-D with eq. 2.10's widths). Writes `benchmarks-fem.md`.
 
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::Result;
 use gcr::stages::{KernelProjection, SceneSurface, sender_integrals};
 use gcr::{Domain, SolveConfig};

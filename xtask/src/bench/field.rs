@@ -23,7 +23,7 @@
 //! `FIELD_CORRECTED=0.25` the fraction of the `paths` gather's rays that get a path-traced correction.
 
 use super::gcr::{Curve, plot_curves};
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::{Context, Result, bail};
 use baselines::Adaptive;
 use baselines::hierarchical::{TriHr, TriHrConfig, budget};

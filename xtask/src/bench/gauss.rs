@@ -4,7 +4,7 @@
 //! of eq. 3.42 against the factorized form on growing sizes (ratio and crossover), all in one
 //! run. Writes `benchmarks-gauss.md` into the output folder.
 
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::Result;
 use gauss_integrals::gram::{Domain, Gaussian, GramConfig, flat_inner_product, gram};
 use gauss_integrals::transfer::{

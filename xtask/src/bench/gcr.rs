@@ -3,7 +3,7 @@
 //! same scenes against one high-accuracy reference, in one run. Writes `benchmarks-gcr.md` and one
 //! log-log plot per scene (`benchmarks-gcr-<scene>.png`).
 
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::Result;
 use gcr::{Domain, Emitters, GatherMode, SolveConfig, radiosity_at_points};
 use scene_sampler::{KernelSampler, Scene, SceneBvh, SurfacePoint};

@@ -23,7 +23,7 @@
 
 use super::field::{mitsuba_runs, read_values, run_mitsuba, write_mitsuba_faces};
 use super::gcr::{Curve, plot_curves};
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::{Context, Result, bail};
 use gcr::output::pixel::render_pixels;
 use gcr::output::raster::PinholeCamera;

@@ -16,7 +16,7 @@
 //! Σ d² / Σ (σ² + σ_ref²) (≈ 1 when two estimates differ by their noise alone).
 
 use super::field::{mitsuba_runs, run_mitsuba, write_mitsuba_faces};
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::{Result, bail};
 use baselines::Adaptive;
 use gcr::{Domain, Emitters, GatherMode, PathSettings, SolveConfig, Trained};

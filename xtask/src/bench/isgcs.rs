@@ -3,7 +3,7 @@
 //! cells) on one core, and the cost per training step against the number of cells (sec. 2.6
 //! claims it is constant). Writes `benchmarks-isgcs.md` and `figures/isgcs-step-cost.png`.
 
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::Result;
 use isgcs::test_functions::{franke, smooth6};
 use isgcs::{Isgcs, Params};

@@ -10,7 +10,7 @@
 //! `ISGCS_PEERS_PYTHON_CACHE=FILE` keeps the Python results in FILE and reruns only the cases
 //! it lacks (`python_peers`).
 
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::Result;
 use isgcs::rbf::KMeansRbf;
 use isgcs::regressor::{Regressor, RegressorParams};

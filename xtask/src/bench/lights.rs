@@ -12,7 +12,7 @@
 //! (`crates/gcr/tests/lights.rs` checks ours against its closed form).
 
 use super::irradiance::{compare, gcr_irradiance, mitsuba_lit, reference_irradiance};
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::Result;
 use baselines::Adaptive;
 use glam::DVec3;

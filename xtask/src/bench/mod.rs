@@ -14,7 +14,7 @@ mod lights;
 mod radiance;
 mod scenes;
 
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::Result;
 
 pub use scenes::mem_probe;

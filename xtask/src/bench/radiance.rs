@@ -27,7 +27,7 @@
 
 use super::field::write_mitsuba_faces;
 use super::irradiance::{Estimates, compare, gcr_irradiance, reference_irradiance};
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::{Context, Result, bail};
 use baselines::Adaptive;
 use glam::DVec3;

@@ -4,7 +4,7 @@
 //! its BVH, measured per size in a child process ([`mem_probe`]). Writes `benchmarks-scenes.md` and the
 //! plots `figures/scaling-rays.png` and `figures/scaling-memory.png`.
 
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::{Context, Result};
 use std::fmt::Write;
 

@@ -18,7 +18,7 @@
 //! `comparison-kernels-<scene>.png` (exact | GCR | HR | |GCR − exact| | |HR − exact| per budget) and
 //! `comparison-kernel-error.md` (the table).
 
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::Result;
 use baselines::flatland::{ExactOptions, ExactSolver};
 use baselines::hierarchical::{FlatHr, FlatHrConfig, HrKernel, budget, solve_for_links};

@@ -5,7 +5,7 @@
 //! marked by two vertical bars. Writes `floor-<scene>.png` and `floor.md` (counts per strip, and
 //! how many of each fall under the blocker's extent, against its share of the floor's length).
 
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::{Context, Result};
 use baselines::hierarchical::{FlatHrConfig, budget, solve_for_links};
 use gcr::{Domain, SolveConfig};

@@ -5,7 +5,7 @@
 //! - `gauss-fig3.12.png`: the four error estimates E_FI, E_FT (against roughness tan α) and
 //!   E_DI, E_DT (against depth δ) of sec. 3.9.4 (eq. 3.62–3.73, fig. 3.12).
 
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::Result;
 use gauss_integrals::criteria::{e_di, e_dt, e_fi, e_ft};
 use gauss_integrals::gram::{Domain, Gaussian, GramConfig, gram};

@@ -18,7 +18,7 @@
 //!   two-blocker geometry, both gathered on one fine uniform mesh.
 
 use super::topology;
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::{Context, Result};
 use gcr::output::raster::{Image, PinholeCamera, render_image};
 use gcr::output::tonemap::Exposure;

@@ -5,7 +5,7 @@
 //! cell budget): grey dots are a subsample of the training data, black lines the edges of the
 //! network's simplicial complex; 3-D data are drawn in an oblique parallel projection.
 
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::Result;
 use isgcs::{Isgcs, Params};
 use plotters::prelude::*;

@@ -17,7 +17,7 @@
 //! comparison). Outputs `comparison-kernel-3d.md` and `comparison-kernel-3d-<scene>.png`.
 
 use super::comparisons::{Run, error_plot, flow_error};
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::Result;
 use baselines::hierarchical::{TriHr, TriHrConfig, solve_tri_for_links};
 use gcr::{Domain, Ray, SolveConfig};

@@ -9,7 +9,7 @@ mod kernel3d;
 mod scenes;
 mod topology;
 
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::Result;
 
 /// A named figure group.

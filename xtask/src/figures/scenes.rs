@@ -2,7 +2,7 @@
 //! `SceneBvh::closest_hit`), the Flatland scenes' geometry (`scene-flatland-*.png`, figs. 4.1a and 4.6a),
 //! and the Flatland kernel goal functions over `(s, t)` (figs. 4.1b and 4.6b).
 
-use crate::Ctx;
+use crate::ctx::Ctx;
 use anyhow::Result;
 use scene_sampler::{
     AnyScene, BUILTIN_NAMES, FlatKernelSampler, FlatlandScene, Scene, SceneBvh, builtin,

@@ -2,15 +2,15 @@
 //! learns K·s by the delta rule (eq. 2.8); each FEM step projects the kernel collection onto the
 //! Gaussian base and every sample's strength is updated from it.
 
-use super::Run;
 use super::networks::freeze_kernel;
+use super::run::Run;
 use super::training::Trainer;
 use crate::fem::sender_integrals;
 use crate::kernel_cells::KernelCells;
 use crate::network::GrowingNetwork;
 
 /// A FEM step: freeze the kernel, its sender integrals c_o, step the base, update the strengths.
-pub(super) fn fem_step(kernel: &impl GrowingNetwork, shading: &impl GrowingNetwork, run: &mut Run) {
+pub(super) fn step(kernel: &impl GrowingNetwork, shading: &impl GrowingNetwork, run: &mut Run) {
     let frozen = freeze_kernel(kernel, run.domain.dim(), run.domain.bands());
     let sender = sender_integrals(&frozen, &run.surface, run.fem_settings.support_tolerance);
     run.base_step(frozen, sender, shading);
@@ -28,8 +28,8 @@ pub(super) fn finish(
 ) -> (KernelCells, Vec<f64>) {
     let (dim, bands) = (run.domain.dim(), run.domain.bands());
     for _ in 0..run.config.final_fem_steps.max(1) {
-        fem_step(kernel, shading, run);
-        trainer.sweep(kernel, run);
+        step(kernel, shading, run);
+        trainer.sweep(kernel, &run.samples, &mut run.rng);
     }
     let frozen = freeze_kernel(kernel, dim, bands);
     let sender = sender_integrals(&frozen, &run.surface, run.fem_settings.support_tolerance);

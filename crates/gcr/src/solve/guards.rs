@@ -6,9 +6,9 @@
 //! above 1; these guards see it and [`super::propagate`] acts on them. The measurements behind
 //! each threshold are in `docs/gcr-algorithm.md` ("Stability guards").
 
-use super::SolveError;
-use super::samples::Sample;
+use super::error::SolveError;
 use crate::element::{BANDS, Bands};
+use crate::sample::Sample;
 
 /// Relative pivot thresholds a diverging projection is redone with, in turn, the gentlest
 /// first (on wall-floor at 400 cells only 0.5 and 0.9 converged; on cornell-box at 1850–2000

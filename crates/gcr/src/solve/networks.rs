@@ -2,7 +2,7 @@
 //! of them (MATH.md §3: a kernel cell as its sender and receiver halves; sec. 3.2: the shading
 //! network as a Gaussian base with learned normals).
 
-use super::SolveError;
+use super::error::SolveError;
 use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::element::BANDS;

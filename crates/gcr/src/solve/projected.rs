@@ -2,16 +2,16 @@
 //! their weights are a Galerkin projection of K·s on shot rays ([`crate::projection`]), and the
 //! light is propagated by bouncing through the kernel collection ([`super::propagate`]).
 
-use super::Run;
-use super::SolveError;
+use super::error::SolveError;
 use super::propagate::{FINAL_BOUNCES, Propagated, TRAINING_BOUNCES, propagate};
+use super::run::Run;
 use crate::config::StrengthFrom;
 use crate::kernel_cells::KernelCells;
 use crate::network::GrowingNetwork;
 
 /// A FEM step during training: a few bounces through the projected kernel, then the base step
 /// (empty unless something reads the base).
-pub(super) fn fem_step(
+pub(super) fn step(
     kernel: &impl GrowingNetwork,
     shading: &impl GrowingNetwork,
     run: &mut Run,

@@ -2,13 +2,14 @@
 //! network's Gaussians ([`crate::projection`]), then iterate s ← E + B_refl(s) with the kernel
 //! collection (fig. 4.13c), one light bounce per iteration, under the guards of [`super::guards`].
 
+use super::error::SolveError;
 use super::guards::{
     BounceWatch, DIRECT_LIMIT, STABILIZING_REJECTIONS, UNSTABLE_FACTOR, balance_broken,
     bound_excess, check_stable, ran_away,
 };
 use super::networks::freeze_kernel;
-use super::samples::{Sample, kernel_strength};
-use super::{Run, SolveError};
+use super::run::Run;
+use super::samples::kernel_strength;
 use crate::cell_lanes::Collection;
 use crate::element::{BANDS, Bands};
 use crate::fem::{receiver_integrals, sender_integrals};
@@ -18,6 +19,7 @@ use crate::projection::{
     BounceOperator, KernelProjection, bounce_operator, closed_reflected_power,
     kernel_gram_excluding, kernel_reflected_power, kernel_support, sampled_reflected_power,
 };
+use crate::sample::Sample;
 use glam::DVec3;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;

@@ -2,15 +2,15 @@
 //! drawn area-uniformly (fig. B.2; the delta rule), shot from the sender density
 //! ([`crate::shooting`]; the projection), or resampled in critical regions (sec. 2.5).
 
-use super::Current;
-use super::Run;
+use super::error::SolveError;
+use super::run::{Current, Run};
 use crate::cell_lanes::Collection;
 use crate::config::{OutputFit, SolveConfig, StrengthFrom};
 use crate::domain::Ray;
 use crate::element::{BANDS, Bands};
 use crate::fem::FemSolution;
 use crate::network::GrowingNetwork;
-pub use crate::sample::Sample;
+use crate::sample::Sample;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -88,9 +88,9 @@ impl Run<'_> {
 
     /// Errs when no sample connects two surfaces; warns (in the metrics) when no emitter's light
     /// reaches a surface (every B would be E): a scene lit by lights facing away from it.
-    pub(super) fn check_flow(&mut self) -> Result<(), super::SolveError> {
+    pub(super) fn check_flow(&mut self) -> Result<(), SolveError> {
         if self.samples.is_empty() {
-            return Err(super::SolveError::NoRays { shots: self.shots });
+            return Err(SolveError::NoRays { shots: self.shots });
         }
         let lit = self
             .samples

@@ -2,20 +2,21 @@
 //! the target of [`NetworkTarget`], the shading network on the receivers y with their normals
 //! (sec. 3.2; MATH.md §6: the ray *end* points).
 
-use super::Run;
-use super::samples::Sample;
 use crate::config::{NetworkTarget, SolveConfig};
 use crate::domain::Domain;
 use crate::network::GrowingNetwork;
+use crate::sample::Sample;
 use rand::Rng;
+use rand_chacha::ChaCha8Rng;
 use std::time::Instant;
 
 /// Training steps per batch: the phases are timed per batch, not per step.
 const BATCH: usize = 256;
 
-/// Scratch buffers and phase timers of the training steps.
-#[derive(Default)]
-pub(super) struct Trainer {
+/// Scratch buffers and phase timers of the training steps on one domain and configuration.
+pub(super) struct Trainer<'a> {
+    domain: &'a Domain<'a>,
+    config: &'a SolveConfig,
     input: Vec<f64>,
     target: Vec<f64>,
     picked: Vec<usize>,
@@ -27,33 +28,47 @@ pub(super) struct Trainer {
     pub shading_seconds: f64,
 }
 
-impl Trainer {
+impl<'a> Trainer<'a> {
+    /// A trainer with no step run yet.
+    pub(super) fn new(domain: &'a Domain<'a>, config: &'a SolveConfig) -> Self {
+        Self {
+            domain,
+            config,
+            input: Vec::new(),
+            target: Vec::new(),
+            picked: Vec::new(),
+            steps: 0,
+            kernel_seconds: 0.0,
+            shading_seconds: 0.0,
+        }
+    }
+
     /// One batch: the kernel network on [`BATCH`] random samples, then (when the base is read)
-    /// the shading network on the same samples' receivers. The shading network stops growing at
-    /// its budget.
+    /// the shading network on the same samples' receivers. The samples are drawn by `rng`. The
+    /// shading network stops growing at its budget.
     pub(super) fn batch(
         &mut self,
         kernel: &mut impl GrowingNetwork,
         shading: &mut impl GrowingNetwork,
-        run: &mut Run,
-        base_used: bool,
+        samples: &[Sample],
+        rng: &mut ChaCha8Rng,
     ) {
         let tk = Instant::now();
         self.picked.clear();
         for _ in 0..BATCH {
-            let i = run.rng.random_range(0..run.samples.len());
-            self.kernel_step(kernel, &run.samples[i], run.domain, run.config);
+            let i = rng.random_range(0..samples.len());
+            self.kernel_step(kernel, &samples[i]);
             self.picked.push(i);
         }
         self.kernel_seconds += tk.elapsed().as_secs_f64();
         let ts = Instant::now();
-        if shading.cell_count() >= run.config.shading_cells {
+        if shading.cell_count() >= self.config.shading_cells {
             shading.set_growing(false);
         }
-        if base_used {
-            let dim = run.domain.dim();
+        if self.config.needs_base() {
+            let dim = self.domain.dim();
             for &i in &self.picked {
-                let ray = &run.samples[i].ray;
+                let ray = &samples[i].ray;
                 self.input.clear();
                 self.input.extend_from_slice(&ray.y.to_array()[..dim]);
                 self.target.clear();
@@ -67,21 +82,21 @@ impl Trainer {
 
     /// A sweep of `samples.len()` kernel steps on random samples without growing: the delta rule
     /// re-learns its targets after a final FEM step changed the strengths.
-    pub(super) fn sweep(&mut self, kernel: &mut impl GrowingNetwork, run: &mut Run) {
-        for _ in 0..run.samples.len() {
-            let i = run.rng.random_range(0..run.samples.len());
-            self.kernel_step(kernel, &run.samples[i], run.domain, run.config);
+    pub(super) fn sweep(
+        &mut self,
+        kernel: &mut impl GrowingNetwork,
+        samples: &[Sample],
+        rng: &mut ChaCha8Rng,
+    ) {
+        for _ in 0..samples.len() {
+            let i = rng.random_range(0..samples.len());
+            self.kernel_step(kernel, &samples[i]);
         }
     }
 
     /// One kernel training step on a sample: input (x, y), target [`kernel_target`].
-    fn kernel_step(
-        &mut self,
-        kernel: &mut impl GrowingNetwork,
-        smp: &Sample,
-        domain: &Domain,
-        config: &SolveConfig,
-    ) {
+    fn kernel_step(&mut self, kernel: &mut impl GrowingNetwork, smp: &Sample) {
+        let (domain, config) = (self.domain, self.config);
         let dim = domain.dim();
         self.input.clear();
         self.input.extend_from_slice(&smp.ray.x.to_array()[..dim]);

@@ -6,38 +6,18 @@ use gcr::output::{
     CameraChoice, ImageMode, ImageSettings, OutputPaths, ProbeQuantity, ProbeSettings, View,
 };
 use gcr::{
-    GatherMode, GatherSamples, NetworkTarget, OutputFit, PathSettings, SolveConfig, SurfaceClusters,
+    GatherMode, GatherSamples, NetworkTarget, OutputFit, PathSettings, Quality, SolveConfig,
+    SurfaceClusters,
 };
 use scene_sampler::AnyScene;
 use scene_sampler::LoadOptions;
 use scene_sampler::confine::{DEFAULT_MAX_FILE_BYTES, DEFAULT_MAX_TEXTURE_BYTES};
 use std::path::PathBuf;
 
-/// The paths gather's first round with a target error: enough points for a first estimate of
-/// the error, few enough that an easy target is not overshot.
-const PILOT_RAYS: usize = 16;
-
-/// `--quality`: a target error for the paths gather.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Quality {
-    /// 5 %: a first look.
-    Draft,
-    /// 2 %: the default.
-    Good,
-    /// 1 %: for comparisons against a reference.
-    Final,
-}
-
-impl Quality {
-    /// The estimated relative error the paths gather stops at.
-    pub fn target_error(self) -> f64 {
-        match self {
-            Quality::Draft => 0.05,
-            Quality::Good => 0.02,
-            Quality::Final => 0.01,
-        }
-    }
-}
+/// The heading of the options for research on the method (the networks, the dissertation's
+/// gathers, the estimator's knobs): shown by `--help`, not by `-h`.
+const RESEARCH: &str =
+    "Research options (the networks, the dissertation's gathers; --help shows them)";
 
 /// `gcr`'s arguments.
 #[derive(Parser)]
@@ -70,15 +50,15 @@ pub struct SolveArgs {
     /// Scene file or built-in name.
     pub scene: String,
     /// Kernel network cell budget ("links").
-    #[arg(long, default_value_t = SolveConfig::default().kernel_cells)]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value_t = SolveConfig::default().kernel_cells)]
     pub cells: usize,
     /// Shading network cell budget.
-    #[arg(long)]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long)]
     pub shading_cells: Option<usize>,
     /// Time budget of the solve in seconds: training stops early enough for the final FEM step to
     /// finish within it; the gather at the outputs (probes, mesh, image) comes after, its time
     /// reported in the metrics (`seconds.gather`).
-    #[arg(long)]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long)]
     pub time_budget: Option<f64>,
     /// Seed.
     #[arg(long, default_value_t = 1)]
@@ -87,12 +67,12 @@ pub struct SolveArgs {
     /// networks' error at the first `--corrections` rays, unbiased, run until `--quality` or
     /// `--target-error` is met, with the estimated error in the metrics and the closing line),
     /// or the dissertation's base, kernel and rays (approximate, no error estimate).
-    #[arg(long, default_value = "paths")]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value = "paths")]
     pub gather: GatherMode,
-    /// `--gather paths`: the estimated relative error (standard error, relative L2 over the
-    /// output points) to stop at: draft 5 %, good 2 %, final 1 % [default: good, unless
-    /// --gather-rays fixes the rays].
-    #[arg(long, conflicts_with = "target_error")]
+    /// The estimated relative error (standard error, relative L2 over the output points) to stop
+    /// at: draft 5 %, good 2 %, final 1 % [default: good, unless --gather-rays fixes the rays].
+    #[arg(long, conflicts_with = "target_error",
+          value_parser = parse_quality)]
     pub quality: Option<Quality>,
     /// `--gather paths`: stop when the estimated relative error of the output is at most this
     /// (a fraction, e.g. 0.02 for 2 %); rounds of rays are added until it is, up to 65536 per
@@ -101,133 +81,144 @@ pub struct SolveArgs {
     pub target_error: Option<f64>,
     /// Kernel output layer: `projection` (Galerkin projection of K·s on shot rays) or
     /// `delta-rule` (the dissertation's eq. 2.8).
-    #[arg(long, default_value = "projection")]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value = "projection")]
     pub output_fit: OutputFit,
     /// What the kernel network learns (with the projection it only places the cells):
     /// `clamped-kernel` (K·s with G's 1/r² clamped at 5 % of the scene's diagonal),
     /// `kernel-value` (the dissertation's K·s, which crowds cells into the edges where K is
     /// singular) or `sample-weight` (each shot ray's importance weight ρ·s/p_x).
-    #[arg(long, default_value = "clamped-kernel")]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value = "clamped-kernel")]
     pub network_target: NetworkTarget,
     /// Shadow rays and cosine rays per point (each). The ray gather: 64 by default (more lower
     /// its own noise: two-blockers, 200 points: 6.2 % at 64, 4.4 % at 256, 3.9 % at 4096). The
     /// paths gather: alone, a fixed count (no target); with --quality or --target-error, the
     /// first round's (default 16).
-    #[arg(long)]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long)]
     pub gather_rays: Option<usize>,
     /// `--gather paths`: cosine rays per point whose hit gets a path-traced correction of the
     /// networks' value (default: all of them, so that the networks' value cancels and the gather is
     /// a path tracer with Sobol points at its first vertex; fewer read the networks, which measured
     /// less accurate per second on cornell-box).
-    #[arg(long)]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long)]
     pub corrections: Option<usize>,
     /// `--gather paths` to a target error: at most this many neighbouring output points (close for
     /// the points' density, facing alike) share each other's cosine rays and paths, each weighted
     /// for every member by the multi-sample balance heuristic (unbiased; docs/estimator-plan.md).
     /// 1: every point alone.
-    #[arg(long, default_value_t = PathSettings::default().neighbours as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value_t = PathSettings::default().neighbours as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub share_paths: u32,
     /// Train the shading network and build its base even when the gather does not read it
     /// (by default they are skipped: same result, less time).
-    #[arg(long)]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long)]
     pub keep_base: bool,
     /// Train the networks even when nothing reads them (the default paths gather skips them and
     /// the metrics say `stopped_by: "unused"`: the same values at probes and pixels, less time;
     /// an output mesh then starts from a uniform resolution instead of the shading network's).
-    #[arg(long)]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long)]
     pub keep_networks: bool,
     /// Facing masks on the projected kernel's Gaussians: each lives only on surfaces facing
     /// like the samples it was fitted to, so light does not blur across edges (sharper kernel
     /// gather on cluttered scenes, mass lost along edges of smooth fields).
-    #[arg(long)]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long)]
     pub kernel_facing: bool,
     /// Surfaces with at least this many elements get a cluster tree for the FEM integrals
     /// (nodes stand in for their elements where a Gaussian cannot resolve them).
-    #[arg(long, default_value_t = SurfaceClusters::default().min_elements)]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value_t = SurfaceClusters::default().min_elements)]
     pub cluster_min_elements: usize,
     /// Cluster criterion θ: a node replaces its elements when a·R² ≤ θ (0: exact).
-    #[arg(long, default_value_t = SurfaceClusters::default().theta)]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value_t = SurfaceClusters::default().theta)]
     pub cluster_theta: f64,
     /// Image: tone-mapped .png, .jpg/.jpeg, or linear radiance L = B/π as .exr (RGB float; 3-D
     /// scenes). From the --camera-* camera, else the scene's (a built-in's, a glTF camera
     /// node), else the automatic one (docs/images.md).
-    #[arg(long)]
+    #[arg(help_heading = "Images", long)]
     pub image: Option<PathBuf>,
     /// Camera position X,Y,Z (with --camera-target). The convention is Mitsuba 3's
     /// `perspective` sensor with `to_world = look_at(eye, target, up)`, `fov_axis = y`.
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, requires = "camera_target",
+    #[arg(help_heading = "Images", long, value_name = "X,Y,Z", value_parser = parse_vec3, requires = "camera_target",
           allow_hyphen_values = true)]
     pub camera_eye: Option<[f64; 3]>,
     /// The point the camera looks at, X,Y,Z (with --camera-eye).
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, requires = "camera_eye",
+    #[arg(help_heading = "Images", long, value_name = "X,Y,Z", value_parser = parse_vec3, requires = "camera_eye",
           allow_hyphen_values = true)]
     pub camera_target: Option<[f64; 3]>,
     /// The camera's up direction X,Y,Z (need not be orthogonal to the view direction).
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, requires = "camera_eye",
+    #[arg(help_heading = "Images", long, value_name = "X,Y,Z", value_parser = parse_vec3, requires = "camera_eye",
           allow_hyphen_values = true, default_value = "0,1,0")]
     pub camera_up: [f64; 3],
     /// Vertical field of view in degrees, in (0, 180) [default: 40 with --camera-eye; else the
     /// scene camera's, or the automatic camera's: 40 outside, 60 inside a closed scene].
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Images",
+        long,
+        value_name = "DEG",
+        allow_hyphen_values = true
+    )]
     pub fov: Option<f64>,
     /// Place the camera automatically even when the scene has one (from inside closed scenes,
     /// framing open ones tightly).
-    #[arg(long, conflicts_with = "camera_eye")]
+    #[arg(help_heading = "Images", long, conflicts_with = "camera_eye")]
     pub auto_camera: bool,
     /// Image size in pixels, WIDTHxHEIGHT (each 1 to 16384).
-    #[arg(long, value_name = "WxH", value_parser = parse_resolution, default_value = "512x512")]
+    #[arg(help_heading = "Images", long, value_name = "WxH", value_parser = parse_resolution, default_value = "512x512")]
     pub resolution: (u32, u32),
     /// How 3-D images get B: `mesh` rasterizes the output mesh (B at its vertices,
     /// interpolated: fast, the bake's accuracy), `pixel` estimates each pixel with the output
     /// gather (the default paths gather: a path tracer over the pixel's footprint, to the target
     /// error of the pixels; no mesh needed).
-    #[arg(long, default_value = "mesh")]
+    #[arg(help_heading = "Images", long, default_value = "mesh")]
     pub image_mode: ImageMode,
     /// `--image-mode pixel` with a gather that reads the networks: sub-samples per pixel (box
     /// filter; 1 is the pixel centre), 1 to 4096. The default paths gather gives every ray its
     /// own point in the pixel instead.
-    #[arg(long, default_value_t = 1)]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value_t = 1)]
     pub pixel_samples: u32,
     /// Exposure of the tone-mapped outputs (PNG/JPEG, glTF and PLY colours): display value =
     /// clamp(L · exposure), L = B/π [default: automatic, the 95th percentile of the lit
     /// surfaces' luminance maps to 0.8]. The value used is printed and in the metrics.
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(help_heading = "Images", long, allow_hyphen_values = true)]
     pub exposure: Option<f64>,
     /// One more image of the same solve: `EYE;TARGET[;UP[;FOV]]=PATH`, vectors as X,Y,Z (up
     /// default 0,1,0, FOV default 40), PATH .png, .jpg or .exr; repeatable.
     #[arg(long, value_name = "EYE;TARGET[;UP[;FOV]]=PATH", value_parser = parse_view,
           allow_hyphen_values = true)]
+    #[arg(help_heading = "Images")]
     pub view: Vec<View>,
     /// Flatland only: PNG of the light flow over the kernel domain (s of the sender to the
     /// right, t of the receiver upwards; fig. 4.1b): the sampled K·s on the left, the kernel
     /// network's Ψ on the right, dark = large; the training rays marked red on the right.
-    #[arg(long)]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long)]
     pub kernel_image: Option<PathBuf>,
     /// Binary glTF mesh with vertex colours (.glb).
-    #[arg(long)]
+    #[arg(help_heading = "Outputs", long)]
     pub mesh: Option<PathBuf>,
     /// PLY mesh with radiosity per vertex (.ply).
-    #[arg(long)]
+    #[arg(help_heading = "Outputs", long)]
     pub ply: Option<PathBuf>,
     /// Probe points (`x y z nx ny nz` per line; Flatland `x y nx ny`).
-    #[arg(long, requires = "probe_out")]
+    #[arg(help_heading = "Probes and work planes", long, requires = "probe_out")]
     pub probes: Option<PathBuf>,
     /// Where to write the probes' values (`r g b` per line, in the probe file's order).
-    #[arg(long, requires = "probes")]
+    #[arg(help_heading = "Probes and work planes", long, requires = "probes")]
     pub probe_out: Option<PathBuf>,
     /// What the probes get: `radiosity` (B at surface points: each probe snaps onto the nearest
     /// face its normal faces, within --probe-tolerance) or `irradiance` (E = ∫ L cos dω for the
     /// hemisphere about the probe's normal, at the point as given: on a surface or in the air,
     /// like Radiance's `rtrace -I`; needs the paths gather) or `daylight-factor` (that irradiance in
     /// percent of the outdoor illuminance of `--sky cie-overcast:LUX`, with no sun).
-    #[arg(long, default_value = "radiosity", requires = "probes")]
+    #[arg(
+        help_heading = "Probes and work planes",
+        long,
+        default_value = "radiosity",
+        requires = "probes"
+    )]
     pub probe_quantity: ProbeQuantity,
     /// Radiosity probes: the largest distance (scene units) from a probe to the surface it snaps
     /// onto (default 1e-4 of the scene's diagonal).
-    #[arg(long, requires = "probes")]
+    #[arg(help_heading = "Probes and work planes", long, requires = "probes")]
     pub probe_tolerance: Option<f64>,
     /// JSON metrics.
-    #[arg(long)]
+    #[arg(help_heading = "Outputs", long)]
     pub metrics: Option<PathBuf>,
     /// No progress output.
     #[arg(long)]
@@ -370,20 +361,21 @@ impl LightArgs {
 }
 
 impl SolveArgs {
-    /// The solver settings (not yet validated: `SolveConfig::validate`).
+    /// The solver settings (not yet validated: `SolveConfig::validate`): the library's
+    /// [`SolveConfig::preset`] at `--quality`, with the options given.
     pub fn config(&self) -> SolveConfig {
-        // The paths gather runs to a target unless --gather-rays alone fixes its rays.
+        let preset = SolveConfig::preset(self.quality.unwrap_or_default());
+        // The paths gather runs to a target unless --gather-rays alone fixes its rays (or another
+        // gather is asked for).
         let target_error = self
             .target_error
             .or(match (self.quality, self.gather_rays) {
                 (Some(q), _) => Some(q.target_error()),
-                (None, None) if self.gather == GatherMode::Paths => {
-                    Some(Quality::Good.target_error())
-                }
+                (None, None) if self.gather == GatherMode::Paths => preset.paths.target_error,
                 (None, _) => None,
             });
         let rays = self.gather_rays.unwrap_or(if target_error.is_some() {
-            PILOT_RAYS
+            preset.gather_samples.direct
         } else {
             GatherSamples::default().direct
         });
@@ -400,12 +392,10 @@ impl SolveArgs {
                 indirect: rays,
             },
             paths: PathSettings {
-                corrections: self
-                    .corrections
-                    .unwrap_or(PathSettings::default().corrections),
+                corrections: self.corrections.unwrap_or(preset.paths.corrections),
                 target_error,
                 neighbours: self.share_paths as usize,
-                ..PathSettings::default()
+                ..preset.paths
             },
             skip_unused_base: !self.keep_base,
             kernel_facing: self.kernel_facing,
@@ -413,7 +403,7 @@ impl SolveArgs {
                 min_elements: self.cluster_min_elements,
                 theta: self.cluster_theta,
             },
-            ..SolveConfig::default()
+            ..preset
         }
     }
 
@@ -510,6 +500,7 @@ pub struct ReferenceArgs {
 /// default the files it names inside its own folder only, regular files of at most 2 GiB each, and
 /// at most 1 GiB of decoded textures.
 #[derive(Args, Clone, Copy, Debug)]
+#[command(next_help_heading = "Untrusted scenes")]
 pub struct InputLimits {
     /// Let the scene read files it names outside its own folder (`../`, absolute paths, `file://`
     /// URIs, symbolic links leading out): only for scenes you trust.
@@ -538,6 +529,11 @@ impl InputLimits {
             single_sided: self.single_sided,
         }
     }
+}
+
+/// `--quality`: draft, good or final.
+fn parse_quality(s: &str) -> Result<Quality, String> {
+    s.parse().map_err(|e: gcr::ConfigError| e.to_string())
 }
 
 /// `X,Y,Z` as three numbers (NaN and infinities parse; the camera check rejects them).

@@ -581,3 +581,40 @@ fn untrusted_scenes_stay_in_their_folder_unless_allowed() {
         assert!(start.elapsed().as_secs() < 10, "{:?}", start.elapsed());
     }
 }
+
+/// `-h` shows what a user needs; the research options (the networks, the dissertation's gathers)
+/// are under their own heading in `--help` only. The program's default settings are the
+/// library's preset (what `gcr solve` runs is named in `gcr`, not only in the argument parser).
+#[test]
+fn short_help_hides_the_research_options_and_defaults_are_the_librarys_preset() {
+    use clap::Parser;
+    let short = String::from_utf8(gcr(&["solve", "-h"]).stdout).unwrap();
+    let long = String::from_utf8(gcr(&["solve", "--help"]).stdout).unwrap();
+    for user in ["--quality", "--image", "--probes", "--sun", "--mesh"] {
+        assert!(short.contains(user), "-h lacks {user}");
+    }
+    for research in [
+        "--cells",
+        "--output-fit",
+        "--kernel-facing",
+        "--cluster-theta",
+    ] {
+        assert!(!short.contains(research), "-h shows {research}");
+        assert!(long.contains(research), "--help lacks {research}");
+    }
+    assert!(long.contains("Research options"));
+    let cli = gcr_cli::args::Cli::parse_from(["gcr", "solve", "cornell-box"]);
+    let gcr_cli::args::Command::Solve(args) = cli.command else {
+        panic!("not a solve")
+    };
+    let (got, want) = (args.config(), gcr::SolveConfig::preset(gcr::Quality::Good));
+    assert_eq!(got.gather, want.gather);
+    assert_eq!(got.gather_samples, want.gather_samples);
+    assert_eq!(got.paths, want.paths);
+    assert_eq!(got.kernel_cells, want.kernel_cells);
+    let draft = gcr_cli::args::Cli::parse_from(["gcr", "solve", "x", "--quality", "draft"]);
+    let gcr_cli::args::Command::Solve(args) = draft.command else {
+        panic!("not a solve")
+    };
+    assert_eq!(args.config().paths.target_error, Some(0.05));
+}

@@ -1,4 +1,6 @@
-//! Settings of a solve, with the dissertation's defaults (fig. 4.17, sec. 4.4.1) and validation.
+//! Settings of a solve and their validation: [`SolveConfig::preset`] is what `gcr solve` runs
+//! (the paths gather to a target error); [`SolveConfig::default`] the dissertation's settings
+//! (fig. 4.17, sec. 4.4.1).
 
 use thiserror::Error;
 
@@ -45,6 +47,50 @@ impl std::str::FromStr for GatherMode {
         }
     }
 }
+
+/// How close the default gather runs to the answer (`gcr solve --quality`): a target for its
+/// estimated relative error ([`SolveConfig::preset`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Quality {
+    /// 5 %: a first look.
+    Draft,
+    /// 2 %: the program's default.
+    #[default]
+    Good,
+    /// 1 %: for comparisons against a reference.
+    Final,
+}
+
+impl Quality {
+    /// The estimated relative error (standard error, relative L2 over the output points) the
+    /// paths gather stops at.
+    pub fn target_error(self) -> f64 {
+        match self {
+            Quality::Draft => 0.05,
+            Quality::Good => 0.02,
+            Quality::Final => 0.01,
+        }
+    }
+}
+
+impl std::str::FromStr for Quality {
+    type Err = ConfigError;
+    fn from_str(s: &str) -> Result<Self, ConfigError> {
+        match s {
+            "draft" => Ok(Quality::Draft),
+            "good" => Ok(Quality::Good),
+            "final" => Ok(Quality::Final),
+            other => Err(ConfigError::Invalid(format!(
+                "unknown quality `{other}` (expected draft, good or final)"
+            ))),
+        }
+    }
+}
+
+/// The paths gather's first round with a target error, in rays per point (each of shadow and
+/// cosine rays): enough points for a first estimate of the error, few enough that an easy target
+/// is not overshot.
+pub const PILOT_RAYS: usize = 16;
 
 /// Where a sample's new emitting strength s = E + B_refl comes from after a FEM step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -285,6 +331,26 @@ impl Default for SolveConfig {
 }
 
 impl SolveConfig {
+    /// What `gcr solve` runs unless told otherwise: the paths gather (an unbiased path tracer,
+    /// every ray corrected, so no network is read or trained), neighbouring points sharing paths,
+    /// in rounds from a pilot of [`PILOT_RAYS`] rays until the estimated error meets `quality`'s
+    /// target. The rest is [`SolveConfig::default`], which is the dissertation's setting (the ray
+    /// gather reading the networks, fig. 4.17).
+    pub fn preset(quality: Quality) -> Self {
+        Self {
+            gather: GatherMode::Paths,
+            gather_samples: GatherSamples {
+                direct: PILOT_RAYS,
+                indirect: PILOT_RAYS,
+            },
+            paths: PathSettings {
+                target_error: Some(quality.target_error()),
+                ..PathSettings::default()
+            },
+            ..Self::default()
+        }
+    }
+
     /// Whether the output gather reads the networks: every gather but `paths` with every ray
     /// corrected (its default), whose networks' value cancels. Output meshes read the networks
     /// anyway (their resolution is the shading network's).
@@ -490,7 +556,7 @@ pub enum Transfer {
 }
 
 /// Sample counts of the gather.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct GatherSamples {
     /// Shadow rays to the emitters per point.
     pub direct: usize,
@@ -526,7 +592,7 @@ pub struct PathSettings {
     pub max_rays: usize,
     /// With a target error and every ray corrected: at most this many neighbouring output points
     /// share each other's cosine rays and paths (`--share-paths`; 1 = every point alone; the
-    /// estimator and the grouping in `neighbours.rs`).
+    /// estimator and the grouping in `estimator/neighbours.rs`).
     pub neighbours: usize,
 }
 

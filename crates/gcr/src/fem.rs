@@ -642,6 +642,7 @@ fn half_integrals(
 /// network (fig. 4.13c), with `sender` from [`sender_integrals`], at a surface point y with unit
 /// normal `n` (only cells whose receiver half faces like `n` contribute; a zero `n` takes all).
 /// For many points, prepare the cells once: [`crate::cell_lanes::Collection`] (which this calls).
+#[cfg_attr(not(feature = "stages"), allow(dead_code))] // read through `gcr::stages`
 pub fn reflected_from_kernel(kernel: &KernelCells, sender: &[f64], y: DVec3, n: DVec3) -> Bands {
     crate::cell_lanes::Collection::new(kernel, sender).at(y, n)
 }

@@ -33,16 +33,14 @@ mod config;
 mod domain;
 mod element;
 mod emitters;
+mod estimator;
 mod fem;
 mod gather;
 mod kernel_cells;
 mod mesh;
 mod metrics;
-mod neighbours;
 mod network;
 pub mod output;
-mod paths;
-mod pipeline;
 mod progress;
 mod projection;
 mod refine;
@@ -56,19 +54,20 @@ mod weld;
 
 pub use config::{
     BaseDomain, Breaking, ConfigError, GatherMode, GatherSamples, NetworkTarget, OutputFit,
-    PathSettings, SolveConfig, StrengthFrom, SurfaceClusters, Transfer,
+    PILOT_RAYS, PathSettings, Quality, SolveConfig, StrengthFrom, SurfaceClusters, Transfer,
 };
 pub use domain::{Domain, Ray};
 pub use element::{BANDS, Bands};
 pub use emitters::Emitters;
+pub use estimator::{
+    GatherError, GatherStats, irradiance_at_points, point_seed, radiosity_at_points,
+    relative_std_error,
+};
 pub use gather::Gathered;
 pub use mesh::ShadedMesh;
 pub use metrics::{ImageRecord, Metrics, PhaseTimes, peak_memory_bytes};
 pub use network::GrowingNetwork;
-pub use pipeline::{
-    GatherError, GatherStats, irradiance_at_points, output_mesh, point_seed, radiosity_at_points,
-    relative_std_error, vertex_gather_point,
-};
+pub use output::{output_mesh, vertex_gather_point};
 pub use progress::{GatherProgress, observe_gathers};
 pub use retriangulate::RetriangulateLimits;
 pub use sample::Sample;
@@ -76,7 +75,8 @@ pub use solve::{Progress, SolveError, Trained, make_networks, solve, train};
 
 /// The solver's stages one at a time, for benchmarks and experiments (`cargo xtask bench`, the
 /// examples): the FEM step and its integrals, the frozen networks, the shading geometry and the
-/// ray gather. A solve does not need them.
+/// ray gather. A solve does not need them: behind the `stages` feature.
+#[cfg(feature = "stages")]
 pub mod stages {
     pub use crate::cluster::ClusterTree;
     pub use crate::element::Element;

@@ -86,6 +86,7 @@ fn candidates(centres: &[DVec3], widths: &[f64], scene: &SceneSurface, tol: f64)
 
 /// The Gram matrix `G_oo' = ∫∫_{S×S} g_o g_o'` of the kernel cells (module docs). Entries whose
 /// Gaussian product is below `tol` everywhere are exactly 0.
+#[cfg_attr(not(feature = "stages"), allow(dead_code))] // read through `gcr::stages`
 pub fn kernel_gram(kernel: &KernelCells, scene: &SceneSurface, tol: f64) -> DMatrix<f64> {
     kernel_gram_excluding(kernel, scene, tol, &[])
 }
@@ -510,12 +511,14 @@ pub struct KernelProjection {
     ortho: integrals::Orthonormal,
     excluded: Vec<bool>,
     tol: f64,
+    #[cfg_attr(not(feature = "stages"), allow(dead_code))] // read through `gcr::stages`
     report: ProjectionReport,
 }
 
 impl KernelProjection {
     /// Builds and factors the Gram matrix of `kernel` on `scene` (support cut-off `tol`, relative
     /// pivot `rejection`).
+    #[cfg_attr(not(feature = "stages"), allow(dead_code))] // read through `gcr::stages`
     pub fn new(kernel: &KernelCells, scene: &SceneSurface, tol: f64, rejection: f64) -> Self {
         Self::excluding(kernel, scene, tol, rejection, &[])
     }
@@ -523,6 +526,7 @@ impl KernelProjection {
     /// [`KernelProjection::new`] with the cells flagged in `excluded` (indexed like the cells;
     /// missing entries count as `false`) left out of the projection: their weights are 0 and
     /// they count as rejected.
+    #[cfg_attr(not(feature = "stages"), allow(dead_code))] // read through `gcr::stages`
     pub fn excluding(
         kernel: &KernelCells,
         scene: &SceneSurface,
@@ -556,6 +560,7 @@ impl KernelProjection {
     }
 
     /// Rejections and Gram size.
+    #[cfg_attr(not(feature = "stages"), allow(dead_code))] // read through `gcr::stages`
     pub fn report(&self) -> ProjectionReport {
         self.report
     }

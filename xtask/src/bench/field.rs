@@ -764,7 +764,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
          Times: from the built-in scene (its construction and BVH, measured once and added to every solver) to the N values. \
          `gcr default`: what `gcr solve` does for points by default — the paths gather (every ray corrected, so no network \
          is trained) run to the target errors 10, 5, 2, 1 % from a 16-ray pilot, paths shared between up to 16 neighbouring \
-         points (`crates/gcr/src/neighbours.rs`); budget = rays per point it took. `gcr alone`: the same with every point \
+         points (`crates/gcr/src/estimator/neighbours.rs`); budget = rays per point it took. `gcr alone`: the same with every point \
          alone (`--share-paths 1`). \
          Other GCR curves: budget = kernel cells (shading cells = half), one solve per cell count (its time in every curve), curve \
          per gather ray count (direct = indirect = rays): `gcr rays R` the ray gather, `gcr paths R` the consistent \

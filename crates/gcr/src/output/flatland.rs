@@ -5,8 +5,8 @@
 use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::emitters::Emitters;
+use crate::estimator::{GatherError, radiosity_at_points};
 use crate::output::tonemap::Exposure;
-use crate::pipeline::{GatherError, radiosity_at_points};
 use crate::solve::Trained;
 use glam::{DVec2, DVec3};
 use scene_sampler::FlatlandScene;

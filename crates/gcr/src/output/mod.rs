@@ -4,12 +4,12 @@
 
 use std::path::PathBuf;
 
-mod adaptive;
 pub mod autocam;
 pub mod camera;
 pub mod flatland;
 pub mod glb;
 pub mod hdr;
+mod mesh;
 pub mod pixel;
 pub mod ply;
 pub mod probes;
@@ -19,6 +19,7 @@ pub mod tonemap;
 pub mod write;
 
 pub use camera::{CameraChoice, CameraError, ImageMode, ImageSettings, View};
+pub use mesh::{UNIFORM_MESH_TRIANGLES, output_mesh, vertex_gather_point};
 pub use probes::{ProbeQuantity, ProbeSettings};
 pub use write::{OutputPaths, OutputPlan, write_outputs};
 
@@ -121,7 +122,7 @@ pub enum OutputError {
     Metrics(serde_json::Error),
     /// The radiosity could not be gathered from the solution.
     #[error(transparent)]
-    Gather(#[from] crate::pipeline::GatherError),
+    Gather(#[from] crate::estimator::GatherError),
 }
 
 /// `png|jpg|exr` as `.png, .jpg or .exr`.

@@ -26,9 +26,9 @@ use crate::config::GatherMode;
 use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::emitters::Emitters;
+use crate::estimator::paths::{FirstHit, PathGather};
+use crate::estimator::{GatherError, GatherStats, radiosity_at_points};
 use crate::gather::Gathered;
-use crate::paths::{FirstHit, PathGather};
-use crate::pipeline::{GatherError, GatherStats, radiosity_at_points};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -242,9 +242,13 @@ fn render_footprints(
     };
     let rays = (config.gather_samples.direct).max(config.gather_samples.indirect);
     let gathered: Vec<Gathered> = match config.paths.target_error {
-        Some(target) => {
-            super::adaptive::allocated_rounds(n, &estimate, rays, target, config.paths.max_rays)
-        }
+        Some(target) => crate::estimator::pixel_rounds::allocated_rounds(
+            n,
+            &estimate,
+            rays,
+            target,
+            config.paths.max_rays,
+        ),
         None => (0..n)
             .into_par_iter()
             .map(|p| estimate(p, 0, rays).gathered())
@@ -259,10 +263,10 @@ fn render_footprints(
         lit,
         coverage: coverage_of(&centres, |p, _| positive(&gathered[p])),
         stats: GatherStats {
-            // what the rounds ran to: the per-pixel relative error (output::adaptive)
-            relative_std_error: super::adaptive::pixel_error(
+            // what the rounds ran to: the per-pixel relative error (estimator::pixel_rounds)
+            relative_std_error: crate::estimator::pixel_rounds::pixel_error(
                 &gathered,
-                super::adaptive::relative_floor(&gathered),
+                crate::estimator::pixel_rounds::relative_floor(&gathered),
             ),
             ..GatherStats::of(&gathered)
         },
@@ -272,7 +276,7 @@ fn render_footprints(
 /// A pixel's seed from the solve's seed and its integer coordinates (`point_seed` quantizes to 2⁻²⁴
 /// of the "diagonal": with 2²⁴ it keeps the coordinates), so no two pixels share a scrambling.
 fn pixel_seed(seed: u64, px: f64, py: f64) -> u64 {
-    crate::pipeline::point_seed(
+    crate::estimator::point_seed(
         seed,
         DVec3::new(px, py, 0.0),
         (DVec3::ZERO, (1u64 << 24) as f64),

@@ -12,7 +12,7 @@ use super::OutputError;
 use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::emitters::Emitters;
-use crate::pipeline::{GatherStats, irradiance_at_points, radiosity_at_points};
+use crate::estimator::{GatherStats, irradiance_at_points, radiosity_at_points};
 use crate::solve::Trained;
 use glam::DVec3;
 use rayon::prelude::*;

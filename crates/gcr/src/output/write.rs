@@ -8,6 +8,7 @@
 use super::OutputError;
 use super::camera::{CameraChoice, ImageMode, ImageSettings};
 use super::flatland::{light_flow_image, scene_image};
+use super::mesh::output_mesh;
 use super::probes::{ProbeSettings, probe_values, read_probes};
 use super::raster::{Coverage, PinholeCamera, render_image, render_radiance};
 use super::staged::{StagedFiles, check_target};
@@ -15,9 +16,9 @@ use super::tonemap::{Exposure, luminance};
 use crate::config::{GatherMode, SolveConfig};
 use crate::domain::Domain;
 use crate::emitters::Emitters;
+use crate::estimator::{GatherError, GatherStats};
 use crate::mesh::ShadedMesh;
 use crate::metrics::{ImageRecord, Metrics, peak_memory_bytes};
-use crate::pipeline::{GatherError, GatherStats, output_mesh};
 use crate::retriangulate::RetriangulateLimits;
 use crate::solve::Trained;
 use glam::DVec3;
@@ -90,7 +91,7 @@ impl OutputPlan {
     /// Whether an output reads the networks whatever the gather: only the kernel image, which
     /// draws the kernel network. The output mesh (images, views, glTF, PLY) is re-triangulated to
     /// the shading network's resolution when there is one and to a uniform one otherwise
-    /// (`pipeline::LocalEdge`), then refined by B; probes and metrics read none.
+    /// (`output::mesh::LocalEdge`), then refined by B; probes and metrics read none.
     pub fn needs_networks(&self) -> bool {
         self.paths.kernel_image.is_some()
     }

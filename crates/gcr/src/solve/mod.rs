@@ -29,7 +29,9 @@ mod trained;
 mod training;
 
 pub use error::SolveError;
-pub use networks::{freeze_kernel, freeze_shading, make_networks};
+pub use networks::make_networks;
+#[cfg(feature = "stages")]
+pub use networks::{freeze_kernel, freeze_shading};
 pub use run::Progress;
 pub use trained::Trained;
 

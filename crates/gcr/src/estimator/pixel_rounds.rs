@@ -16,7 +16,7 @@
 //! 1. a pilot round gives every pixel the same rays (the configured first round); if it meets
 //!    the target, it is the image; if the allocation would not halve the rays (Neyman's gain
 //!    over the pixels that vary above ½: an image without edges), the rounds go on uniformly
-//!    from the pilot ([`crate::pipeline::rounds_to_target`]). Half, not less: the gain is
+//!    from the pilot ([`super::rounds::rounds_to_target`]). Half, not less: the gain is
 //!    Neyman's for independent rays, but the Sobol points of a smooth pixel converge faster than
 //!    1/rays, so a mild gain does not survive (wall-floor: expected 0.64, measured none — the
 //!    allocated image took 1.2× the uniform rounds' time for the same error), while a strong one
@@ -38,10 +38,10 @@
 //! their own values (the pixel's value stays unbiased; the level depends on the whole image's
 //! estimated error, as every round to a target does).
 
+use super::paths::{PointEstimate, REPLICATES};
+use super::rounds::{rounds_to_target, singletons};
 use crate::config::GatherSamples;
 use crate::gather::Gathered;
-use crate::paths::{PointEstimate, REPLICATES};
-use crate::pipeline::{rounds_to_target, singletons};
 use rayon::prelude::*;
 
 /// Share of the rays spread evenly over the pixels (step 2).
@@ -58,7 +58,7 @@ pub(super) type Estimate<'a> = dyn Fn(usize, usize, usize) -> PointEstimate + Sy
 /// `n` pixels gathered to the relative error `target` with the rays allocated by each pixel's
 /// standard deviation (module docs); `pilot` rays per pixel in the first round, at most
 /// `max_rays` per pixel.
-pub(super) fn allocated_rounds(
+pub(crate) fn allocated_rounds(
     n: usize,
     estimate: &Estimate,
     pilot: usize,
@@ -192,7 +192,7 @@ fn pilot_round(
 /// The floor ε of the per-pixel relative error: (10 % of the mean B over the pixels and bands
 /// that vary)², so that a black pixel does not ask for endless rays. Scale-free: the relative MSE
 /// image users compute, mean((x − r)²/(r² + 0.01)), floors at 0.1 of an image of mean about 1.
-pub(super) fn relative_floor(gathered: &[Gathered]) -> f64 {
+pub(crate) fn relative_floor(gathered: &[Gathered]) -> f64 {
     let varying = gathered
         .iter()
         .filter(|g| g.std_error.iter().any(|s| *s != 0.0));
@@ -208,7 +208,7 @@ pub(super) fn relative_floor(gathered: &[Gathered]) -> f64 {
 
 /// The per-pixel relative error of an image: the root mean over pixels and bands of
 /// σ²/(B² + ε) (`floor` = ε, [`relative_floor`]); None when no pixel has a standard error.
-pub(super) fn pixel_error(gathered: &[Gathered], floor: f64) -> Option<f64> {
+pub(crate) fn pixel_error(gathered: &[Gathered], floor: f64) -> Option<f64> {
     if measured(gathered) == 0 {
         return None;
     }
@@ -223,7 +223,7 @@ pub(super) fn pixel_error(gathered: &[Gathered], floor: f64) -> Option<f64> {
 
 /// [`pixel_error`]'s 90 % upper bound: × √(dof/χ²₀.₁(dof)), dof the pixels with a standard error.
 fn pixel_error_bound(gathered: &[Gathered], floor: f64) -> Option<f64> {
-    pixel_error(gathered, floor).map(|e| e * crate::pipeline::chi2_scale(measured(gathered)))
+    pixel_error(gathered, floor).map(|e| e * super::rounds::chi2_scale(measured(gathered)))
 }
 
 /// Neyman's gain over the pixels that vary (σ > 0): the mean of σ, squared, over the mean of

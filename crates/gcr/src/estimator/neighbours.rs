@@ -38,11 +38,11 @@
 //! order). Irradiance probes in the air share as surface points do; Flatland and points that do not
 //! reflect are gathered alone.
 
+use super::paths::{PathGather, PointEstimate, REPLICATES, SobolRay, Vertex};
 use crate::config::GatherSamples;
 use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
 use crate::gather::{Mis, emitter_geometry, geometry_3d, light_ray};
-use crate::paths::{PathGather, PointEstimate, REPLICATES, SobolRay, Vertex};
 use glam::DVec3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

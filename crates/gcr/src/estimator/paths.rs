@@ -146,7 +146,7 @@ pub struct PointEstimate {
     pub(crate) reflects: bool,
     /// Mean over the rays of the square of one ray's estimate (a footprint's,
     /// [`PathGather::estimate_footprint`]; 0 for the other estimators): with the mean, the
-    /// variance of one ray, which allocates a pixel's rays (`output::adaptive`).
+    /// variance of one ray, which allocates a pixel's rays (`estimator::pixel_rounds`).
     pub(crate) ray_square: Bands,
 }
 

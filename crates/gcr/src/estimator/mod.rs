@@ -1,0 +1,25 @@
+//! The default estimator: B and irradiance at points by the **paths gather**, an unbiased path
+//! tracer run in rounds to a target error, with the rays of neighbouring points shared.
+//!
+//! What `gcr solve` runs by default ([`crate::SolveConfig::preset`]), step by step:
+//!
+//! | step | file | what |
+//! |---|---|---|
+//! | the front door | `points.rs` ([`radiosity_at_points`], [`irradiance_at_points`]) | one seed per point from its position ([`point_seed`]); the configured gather |
+//! | one point's estimate | `paths.rs` (`PathGather`) | next-event estimation through the lights ([`scene_sampler::lights`]) and cosine rays by MIS, paths continued with Russian roulette, Owen-scrambled Sobol points in two replicates (the standard error) |
+//! | neighbours share paths | `neighbours.rs` | groups of nearby, alike-facing points; every member weighs every member's rays by the multi-sample balance heuristic (unbiased) |
+//! | rounds to the target | `rounds.rs` (`rounds_to_target`) | a pilot round, then rounds up to the next power of two of Sobol points that covers the missing rays, until the 90 % bound of the estimated relative error ([`relative_std_error`]) meets the target or the ray cap |
+//! | pixels | `pixel_rounds.rs` | a pixel image's rays allocated by each pixel's relative σ (Neyman), stopping on the per-pixel relative error |
+//!
+//! The design and its measurements: `docs/design/estimator.md`. The dissertation's gathers (base,
+//! kernel, rays: they read the networks and are not corrected) are in [`crate::gather`] and are
+//! reached through the same front door.
+
+pub(crate) mod neighbours;
+pub(crate) mod paths;
+pub(crate) mod pixel_rounds;
+mod points;
+pub(crate) mod rounds;
+
+pub use points::{GatherError, irradiance_at_points, point_seed, radiosity_at_points};
+pub use rounds::{GatherStats, relative_std_error};

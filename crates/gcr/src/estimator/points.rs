@@ -1,0 +1,197 @@
+//! The front door of every gather: B at surface points and irradiance at any points, one seeding
+//! convention ([`point_seed`]), dispatching to the paths gather ([`super::paths`], in rounds to a
+//! target: [`super::rounds`]) or the dissertation's gathers ([`crate::gather`], the networks).
+
+use super::paths::PathGather;
+use super::rounds::{grouped_rounds, paths_to_target};
+use crate::config::{GatherMode, SolveConfig};
+use crate::domain::Domain;
+use crate::element::{BANDS, Bands};
+use crate::emitters::Emitters;
+use crate::gather::{Gathered, gather};
+use crate::solve::Trained;
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// Why radiosity could not be gathered from a solution.
+#[derive(Debug, thiserror::Error)]
+pub enum GatherError {
+    /// [`GatherMode::Base`] on a solution solved without a base.
+    #[error(
+        "the base gather needs a solution with a base: solve with a config whose needs_base() is \
+         true (gather = base, or skip_unused_base = false)"
+    )]
+    NoBase,
+    /// Irradiance asked of a gather other than [`GatherMode::Paths`].
+    #[error(
+        "irradiance needs the paths gather (the default); the {0} gather estimates radiosity at \
+         surface points only"
+    )]
+    IrradianceNeedsPaths(&'static str),
+}
+
+/// Radiosity at many surface points `(point, normal, face)` in parallel by the configured gather.
+/// Every entry point gathers through here, with one seeding convention: a point's ray gather is
+/// seeded from the solve's seed and the point's coordinates ([`point_seed`]), so its value does
+/// not depend on its index, its neighbours or the thread count.
+pub fn radiosity_at_points(
+    domain: &Domain,
+    trained: &Trained,
+    emitters: &Emitters,
+    config: &SolveConfig,
+    points: &[(DVec3, DVec3, u32)],
+) -> Result<Vec<Gathered>, GatherError> {
+    check_base(trained, config)?;
+    let frame = domain.frame();
+    let paths = path_gather(domain, trained, emitters, config);
+    if let (GatherMode::Paths, Some(target)) = (config.gather, config.paths.target_error) {
+        let seeds: Vec<u64> = points
+            .iter()
+            .map(|&(y, _, _)| point_seed(config.seed, y, frame))
+            .collect();
+        return Ok(paths_to_target(
+            domain, &paths, points, &seeds, target, config,
+        ));
+    }
+    Ok(points
+        .par_iter()
+        .map_init(Vec::new, |scratch, &(y, n, face)| {
+            let seed = point_seed(config.seed, y, frame);
+            radiosity_at(
+                (domain, trained, emitters, &paths),
+                config,
+                (y, n, face),
+                seed,
+                scratch,
+            )
+        })
+        .collect())
+}
+
+/// Irradiance E(y, n) = ∫ L cos θ dω at any points `(point, unit normal)` — on a surface or in the
+/// air, as Radiance's `rtrace -I` — by the paths gather ([`PathGather::estimate_irradiance`]),
+/// to the configured target error when there is one. The values are in
+/// [`Gathered::radiosity`]: the radiosity a white (ρ = 1), non-emitting receiver there would have.
+/// Seeded like [`radiosity_at_points`] (from the point's coordinates, salted: an irradiance probe
+/// on a surface does not share its radiosity probe's rays).
+pub fn irradiance_at_points(
+    domain: &Domain,
+    trained: &Trained,
+    emitters: &Emitters,
+    config: &SolveConfig,
+    points: &[(DVec3, DVec3)],
+) -> Result<Vec<Gathered>, GatherError> {
+    if config.gather != GatherMode::Paths {
+        return Err(GatherError::IrradianceNeedsPaths(config.gather.name()));
+    }
+    let frame = domain.frame();
+    let paths = path_gather(domain, trained, emitters, config);
+    let seeds: Vec<u64> = points
+        .iter()
+        .map(|&(y, _)| point_seed(config.seed ^ IRRADIANCE_SALT, y, frame))
+        .collect();
+    Ok(match config.paths.target_error {
+        Some(target) => {
+            // receivers in the air (on no face), white, not emitting: they share paths as
+            // surface points do
+            let receivers: Vec<_> = points
+                .iter()
+                .map(|&(y, n)| (y, n, scene_sampler::NO_FACE))
+                .collect();
+            let white = |_| ([1.0; BANDS], [0.0; BANDS]);
+            grouped_rounds(domain, &paths, &receivers, white, &seeds, target, config)
+        }
+        None => (0..points.len())
+            .into_par_iter()
+            .map(|i| {
+                (paths.estimate_irradiance(points[i], seeds[i], 0, config.gather_samples))
+                    .gathered()
+            })
+            .collect(),
+    })
+}
+
+/// The paths gather of a solution, its networks' reflected radiosity as C.
+fn path_gather<'a>(
+    domain: &'a Domain<'a>,
+    trained: &'a Trained,
+    emitters: &'a Emitters,
+    config: &SolveConfig,
+) -> PathGather<'a, impl Fn(DVec3, DVec3) -> Bands + Sync + 'a> {
+    PathGather::new(
+        domain,
+        emitters,
+        |x, n| trained.reflected_kernel(x, n),
+        config.gather_samples,
+        config.paths,
+    )
+}
+
+/// Mixed into the solve's seed for irradiance probes ([`irradiance_at_points`]).
+const IRRADIANCE_SALT: u64 = 0x6972_7261_6469_616E;
+
+/// A skipped base (`skip_unused_base` with a non-base gather) has no cells; reading it would
+/// silently report B = E.
+fn check_base(trained: &Trained, config: &SolveConfig) -> Result<(), GatherError> {
+    if config.gather == GatherMode::Base && trained.fem.base.geo.is_empty() {
+        return Err(GatherError::NoBase);
+    }
+    Ok(())
+}
+
+/// The ray gather's seed at point `y`: the solve's seed mixed with y's coordinates in the
+/// scene's frame ([`Domain::frame`]) quantized to 2⁻²⁴ of the diagonal (SplitMix64 finalizer
+/// per coordinate). A point's seed depends neither on its index among the points asked for nor
+/// on the scene's position or scale.
+pub fn point_seed(seed: u64, y: DVec3, (origin, diagonal): (DVec3, f64)) -> u64 {
+    let mix = |mut z: u64| {
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    };
+    let q = (y - origin) / diagonal.max(f64::MIN_POSITIVE) * (1u64 << 24) as f64;
+    [q.x, q.y, q.z]
+        .iter()
+        .fold(mix(seed ^ 0x9E37_79B9_7F4A_7C15), |h, c| {
+            mix(h ^ (c.round() as i64) as u64)
+        })
+}
+
+/// Radiosity at surface point (y, n, face) by the configured gather ([`check_base`] first).
+fn radiosity_at(
+    (domain, trained, emitters, paths): (
+        &Domain,
+        &Trained,
+        &Emitters,
+        &PathGather<impl Fn(DVec3, DVec3) -> Bands>,
+    ),
+    config: &SolveConfig,
+    (y, n, face): (DVec3, DVec3, u32),
+    seed: u64,
+    scratch: &mut Vec<u32>,
+) -> Gathered {
+    let e = domain.emission(face);
+    let reflected = |b: Bands| {
+        let mut out = Gathered::default();
+        for k in 0..BANDS {
+            out.from_networks[k] = b[k].max(0.0);
+            out.radiosity[k] = e[k] + out.from_networks[k];
+        }
+        out
+    };
+    match config.gather {
+        GatherMode::Base => reflected(trained.fem.reflected_from_base(y, n, scratch)),
+        GatherMode::Kernel => reflected(trained.reflected_kernel(y, n)),
+        GatherMode::Rays => gather(
+            domain,
+            emitters,
+            y,
+            n,
+            face,
+            config.gather_samples,
+            seed,
+            &|x, nx, _| trained.reflected_kernel(x, nx),
+        ),
+        GatherMode::Paths => paths.gather((y, n, face), seed),
+    }
+}

@@ -1,7 +1,7 @@
 //! The command line (clap derive): `gcr scenes`, `gcr solve`, `gcr reference`.
 
 use clap::{Args, Parser, Subcommand};
-use gcr::output::raster::PinholeCamera;
+use gcr::output::PinholeCamera;
 use gcr::output::{
     CameraChoice, ImageMode, ImageSettings, OutputPaths, ProbeQuantity, ProbeSettings, View,
 };
@@ -415,7 +415,7 @@ impl SolveArgs {
                 eye: eye.into(),
                 target: target.into(),
                 up: self.camera_up.into(),
-                fov_y_degrees: self.fov.unwrap_or(gcr::output::camera::DEFAULT_FOV),
+                fov_y_degrees: self.fov.unwrap_or(gcr::output::DEFAULT_FOV),
             }),
             _ if self.auto_camera => CameraChoice::Automatic { fov: self.fov },
             _ => CameraChoice::Scene { fov: self.fov },
@@ -584,7 +584,7 @@ fn parse_view(s: &str) -> Result<View, String> {
             .trim()
             .parse::<f64>()
             .map_err(|_| format!("`{s}`: field of view `{f}` is not a number"))?,
-        None => gcr::output::camera::DEFAULT_FOV,
+        None => gcr::output::DEFAULT_FOV,
     };
     Ok(View {
         camera: PinholeCamera {

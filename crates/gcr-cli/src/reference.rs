@@ -3,8 +3,8 @@
 
 use crate::args::ReferenceArgs;
 use anyhow::{Context, Result};
-use gcr::output::staged::{StagedFiles, check_target};
 use gcr::output::{ProbeQuantity, ProbeSettings};
+use gcr::output::{StagedFiles, check_target};
 use scene_sampler::probe::default_tolerance;
 use scene_sampler::{AnyScene, SceneBvh};
 use std::time::Instant;

@@ -6,8 +6,8 @@
 //! cargo run --release -p gcr --example solve -- [cells] [out.glb]
 //! ```
 
-use gcr::output::glb::write_glb;
-use gcr::output::tonemap::Exposure;
+use gcr::output::Exposure;
+use gcr::output::write_glb;
 use gcr::{Domain, Emitters, RetriangulateLimits, SolveConfig, output_mesh, radiosity_at_points};
 use scene_sampler::{KernelSampler, SceneBvh};
 

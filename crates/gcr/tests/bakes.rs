@@ -7,8 +7,8 @@
 //! surface; normals; `_RADIOSITY` = the gathered B and `COLOR_0` its tone map. The Khronos
 //! validator runs on the bakes when it is installed (skipped with a note otherwise).
 
-use gcr::output::glb::to_glb;
-use gcr::output::tonemap::Exposure;
+use gcr::output::Exposure;
+use gcr::output::to_glb;
 use gcr::{
     Domain, Emitters, GatherMode, RetriangulateLimits, SolveConfig, output_mesh,
     radiosity_at_points,

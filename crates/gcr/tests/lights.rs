@@ -5,8 +5,8 @@
 //! environment — a light written in this test file, through the public interface only — through
 //! radiosity probes, irradiance probes and per-pixel images.
 
-use gcr::output::pixel::render_pixels;
-use gcr::output::raster::PinholeCamera;
+use gcr::output::PinholeCamera;
+use gcr::output::render_pixels;
 use gcr::{Domain, Emitters, GatherMode, Gathered, PathSettings, SolveConfig, Trained};
 use glam::DVec3;
 use scene_sampler::{

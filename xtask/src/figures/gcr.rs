@@ -20,8 +20,8 @@
 use super::topology;
 use crate::ctx::Ctx;
 use anyhow::{Context, Result};
-use gcr::output::raster::{Image, PinholeCamera, render_image};
-use gcr::output::tonemap::Exposure;
+use gcr::output::Exposure;
+use gcr::output::{Image, PinholeCamera, render_image};
 use gcr::stages::retriangulate;
 use gcr::{
     Domain, Emitters, GatherMode, RetriangulateLimits, ShadedMesh, SolveConfig, output_mesh,

@@ -1,6 +1,6 @@
 //! What the solver built, drawn from the scene's camera (figs. 4.12a–c, 4.15d–e): the receiver
 //! points of the kernel training samples, the shading network, and the re-triangulated output
-//! mesh. Each is an overlay ([`gcr::output::raster::Image::draw_points`] / `draw_lines`, with
+//! mesh. Each is an overlay ([`gcr::output::Image::draw_points`] / `draw_lines`, with
 //! hidden-point removal against the depth buffer) on a flat-shaded view of the scene's faces.
 //!
 //! * `gcr-<scene>-samples.png` (fig. 4.12a): the end points y_i of every sample ray the kernel
@@ -14,8 +14,8 @@
 //!   faces split to the shading network's local edge length (sec. 4.3.1).
 
 use anyhow::{Context, Result};
-use gcr::output::raster::{Image, PinholeCamera, render_image};
-use gcr::output::tonemap::Exposure;
+use gcr::output::Exposure;
+use gcr::output::{Image, PinholeCamera, render_image};
 use gcr::{ShadedMesh, Trained};
 use glam::DVec3;
 use scene_sampler::Scene;

@@ -80,7 +80,8 @@ pub fn draw_segments(
 
 /// Samples `f(s, t)` on a `size × size` grid over [0,1]² (s to the right, t upwards) and maps it to
 /// grey: white for the minimum (0), black for `max` (or the largest value when `max` is `None`).
-pub fn kernel_image(size: u32, max: Option<f64>, f: impl Fn(f64, f64) -> f64 + Sync) -> Vec<u8> {
+#[cfg(test)]
+fn kernel_image(size: u32, max: Option<f64>, f: impl Fn(f64, f64) -> f64 + Sync) -> Vec<u8> {
     use rayon::prelude::*;
     let n = size as usize;
     let values: Vec<f64> = (0..n * n)

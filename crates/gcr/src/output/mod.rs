@@ -4,23 +4,29 @@
 
 use std::path::PathBuf;
 
-pub mod autocam;
-pub mod camera;
-pub mod flatland;
-pub mod glb;
-pub mod hdr;
+mod autocam;
+mod camera;
+mod flatland;
+mod glb;
+mod hdr;
 mod mesh;
-pub mod pixel;
-pub mod ply;
-pub mod probes;
-pub mod raster;
-pub mod staged;
-pub mod tonemap;
-pub mod write;
+mod pixel;
+mod ply;
+mod probes;
+mod raster;
+mod staged;
+mod tonemap;
+mod write;
 
+pub use camera::DEFAULT_FOV;
 pub use camera::{CameraChoice, CameraError, ImageMode, ImageSettings, View};
+pub use glb::{to_glb, write_glb};
 pub use mesh::{UNIFORM_MESH_TRIANGLES, output_mesh, vertex_gather_point};
+pub use pixel::{PixelImage, render_pixels};
 pub use probes::{ProbeQuantity, ProbeSettings};
+pub use raster::{Image, PinholeCamera, render_image};
+pub use staged::{StagedFiles, check_target};
+pub use tonemap::Exposure;
 pub use write::{OutputPaths, OutputPlan, write_outputs};
 
 /// Why outputs cannot be written (checked before the solve by [`OutputPlan::new`], or met

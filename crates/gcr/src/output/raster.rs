@@ -26,7 +26,7 @@ pub struct PinholeCamera {
     pub fov_y_degrees: f64,
 }
 
-/// The camera's orthonormal frame and focal factor, shared by the rasterizer and [`project`].
+/// The camera's orthonormal frame and focal factor, shared by the rasterizer and the projection of points.
 struct Frame {
     eye: DVec3,
     right: DVec3,
@@ -71,7 +71,8 @@ impl Frame {
 /// Projects the world point `p` into a `width × height` image of `camera`: pixel coordinates
 /// (x to the right, y downwards, the pixel (i, j) covering [i, i+1) × [j, j+1)) and the depth
 /// along the view direction. `None` when `p` is not in front of the camera.
-pub fn project(camera: &PinholeCamera, width: u32, height: u32, p: DVec3) -> Option<DVec3> {
+#[cfg(test)]
+pub(crate) fn project(camera: &PinholeCamera, width: u32, height: u32, p: DVec3) -> Option<DVec3> {
     let frame = Frame::new(camera);
     let c = frame.to_camera(p);
     (c.z > 0.0).then(|| frame.to_screen(c, f64::from(width), f64::from(height)))
@@ -245,7 +246,8 @@ pub struct RadianceImage {
 
 /// Renders `mesh` to an 8-bit sRGB RGB image of `width × height`, row-major, top row first.
 /// Each pixel averages `ss × ss` sub-samples (anti-aliasing). The background is black.
-pub fn render(
+#[cfg(test)]
+pub(crate) fn render(
     mesh: &ShadedMesh,
     camera: &PinholeCamera,
     exposure: &Exposure,
@@ -256,7 +258,9 @@ pub fn render(
     render_image(mesh, camera, exposure, width, height, ss).pixels
 }
 
-/// [`render`], keeping the depth buffer (at the output resolution) for overlays.
+/// Renders `mesh` to an 8-bit sRGB image of `width × height` (row-major, top row first; each pixel
+/// averages `ss × ss` sub-samples, the background black), keeping the depth buffer (at the output
+/// resolution) for overlays.
 pub fn render_image(
     mesh: &ShadedMesh,
     camera: &PinholeCamera,

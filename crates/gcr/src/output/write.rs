@@ -27,8 +27,6 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// Side of the 3-D camera image in pixels by default (square; `ImageSettings::width`, `height`).
-pub const IMAGE_SIZE: u32 = 512;
 /// The extensions an image output accepts (the format follows the extension): tone-mapped PNG
 /// and JPEG, linear OpenEXR (3-D only).
 pub const IMAGE_EXTENSIONS: &str = "png|jpg|jpeg|exr";

@@ -1,6 +1,6 @@
 //! End-to-end accuracy of `gcr` against exact and independent references: the furnace (exact
 //! B = E/(1 − ρ)) and the Cornell box (the path-traced pointwise reference of `baselines`).
-//! Budgets are small so that the tests run in seconds; `docs/gcr-algorithm.md` has the errors at
+//! Budgets are small so that the tests run in seconds; `docs/design/gcr-algorithm.md` has the errors at
 //! larger budgets.
 
 use gcr::{Domain, Emitters, GatherMode, OutputFit, SolveConfig, radiosity_at_points};

@@ -4,7 +4,7 @@
 Usage: python3 xtask/py/area_probes.py SCENE N OUT [SEED]
 Writes N lines `x y z nx ny nz` (the probe format of FORMATS.md): points drawn uniformly by area
 over the triangles whose material has no Ke, each with its face's normal. Used for the shared-paths
-measurements in docs/estimator-plan.md (`gcr solve SCENE --probes OUT ...`).
+measurements in docs/design/estimator.md (`gcr solve SCENE --probes OUT ...`).
 """
 import math
 import random

@@ -1,4 +1,4 @@
-"""A textured stand-in for a large model, for timing the load (docs/textures.md): a 194 x 194 grid of
+"""A textured stand-in for a large model, for timing the load (docs/guide/textures.md): a 194 x 194 grid of
 quads (75 272 triangles) over a 1024^2 PNG, a third of the vertices' texture coordinates scaled so
 their triangles tile the texture twice, the rest spanning about 20 texels; one emitting triangle.
 

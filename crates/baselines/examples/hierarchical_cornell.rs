@@ -1,6 +1,6 @@
 //! 3-D hierarchical radiosity against the pointwise path tracer (MATH.md §8) at the probes of cornell-box:
 //! relative L2 error of B over the probes and the three bands at several link budgets, both for HR's
-//! constant leaf value and for a final gather from HR's solution, for `docs/hierarchical.md`.
+//! constant leaf value and for a final gather from HR's solution, for `docs/design/hierarchical.md`.
 //!
 //! `cargo run --release -p baselines --example hierarchical_cornell [probes-file] [paths-per-probe]`
 //! (defaults: `scenes/cornell-box.probes.txt`, 500000 paths).

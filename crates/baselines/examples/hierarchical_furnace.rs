@@ -1,5 +1,5 @@
 //! 3-D HR in the furnace (closed unit cube, E = 0.7, ρ = 0.6, exact B = E/(1 − ρ) = 1.75): the error of the
-//! leaves' B as the BF threshold ε falls, for `docs/hierarchical.md`.
+//! leaves' B as the BF threshold ε falls, for `docs/design/hierarchical.md`.
 //!
 //! `cargo run --release -p baselines --example hierarchical_furnace`
 

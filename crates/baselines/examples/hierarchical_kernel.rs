@@ -1,6 +1,6 @@
 //! HR kernel error at 16 / 100 / 500 links on the two Flatland scenes of sec. 4.1 (figs. 4.1a, 4.6a), with every
 //! normalization of [`baselines::hierarchical::KernelError`], both partial-visibility rules, and the grid
-//! dependence of the corner's numbers — the tables of `docs/hierarchical.md`.
+//! dependence of the corner's numbers — the tables of `docs/design/hierarchical.md`.
 //!
 //! `cargo run --release -p baselines --example hierarchical_kernel`
 

@@ -1,6 +1,6 @@
 //! B at the probes of a probe file by the NEE path tracer, fixed paths per probe: one line
 //! `B_r B_g B_b se_r se_g se_b` per probe (for checking other renderers against it, e.g. Mitsuba 3 in
-//! docs/benchmarks-field.md).
+//! docs/results/benchmarks-field.md).
 //!
 //! `cargo run --release -p baselines --example probe_reference -- cornell-box scenes/cornell-box.probes.txt 200000`
 

@@ -1,4 +1,4 @@
-//! Old-against-new driver for the exact integrals (docs/gauss-integrals.md, "Speed"). Build it
+//! Old-against-new driver for the exact integrals (docs/design/gauss-integrals.md, "Speed"). Build it
 //! at two commits, copy the binaries aside and run them one after the other:
 //! - `gram_profile tri`: `triangle_fast` / `triangle` ns per call (the bench's 6 cases, median of 31);
 //! - `gram_profile gram N` / `decision N`: Gram (+ orthonormalization) of 1000 Gaussians on 2000

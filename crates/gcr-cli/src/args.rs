@@ -103,7 +103,7 @@ pub struct SolveArgs {
     pub corrections: Option<usize>,
     /// `--gather paths` to a target error: at most this many neighbouring output points (close for
     /// the points' density, facing alike) share each other's cosine rays and paths, each weighted
-    /// for every member by the multi-sample balance heuristic (unbiased; docs/estimator-plan.md).
+    /// for every member by the multi-sample balance heuristic (unbiased; docs/design/estimator.md).
     /// 1: every point alone.
     #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value_t = PathSettings::default().neighbours as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub share_paths: u32,
@@ -130,7 +130,7 @@ pub struct SolveArgs {
     pub cluster_theta: f64,
     /// Image: tone-mapped .png, .jpg/.jpeg, or linear radiance L = B/π as .exr (RGB float; 3-D
     /// scenes). From the --camera-* camera, else the scene's (a built-in's, a glTF camera
-    /// node), else the automatic one (docs/images.md).
+    /// node), else the automatic one (docs/guide/images.md).
     #[arg(help_heading = "Images", long)]
     pub image: Option<PathBuf>,
     /// Camera position X,Y,Z (with --camera-target). The convention is Mitsuba 3's
@@ -496,7 +496,7 @@ pub struct ReferenceArgs {
     pub lights: LightArgs,
 }
 
-/// What a scene file may make `gcr` read (docs/bad-input.md, "Running on untrusted scenes"): by
+/// What a scene file may make `gcr` read (docs/guide/bad-input.md, "Running on untrusted scenes"): by
 /// default the files it names inside its own folder only, regular files of at most 2 GiB each, and
 /// at most 1 GiB of decoded textures.
 #[derive(Args, Clone, Copy, Debug)]

@@ -1,5 +1,5 @@
 //! Reads a bake (`gcr solve --mesh out.glb`) back as probes, for measuring its accuracy against
-//! `gcr reference` (docs/bakes.md):
+//! `gcr reference` (docs/guide/bakes.md):
 //!
 //! ```sh
 //! # every vertex of the bake, in world coordinates (moved 10⁻⁴ of the way into a triangle of its

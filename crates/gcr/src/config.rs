@@ -99,7 +99,7 @@ pub enum StrengthFrom {
     Base,
     /// The kernel collection B_refl(x) = Σ v_o c_o exp(−|x − w_o^y|²/d_o²). Default: the base is
     /// the projection of this same function onto fewer, surface-bound Gaussians, so it can only
-    /// add error (docs/gcr-algorithm.md).
+    /// add error (docs/design/gcr-algorithm.md).
     #[default]
     Kernel,
 }
@@ -112,7 +112,7 @@ pub enum OutputFit {
     DeltaRule,
     /// Shot rays ([`crate::shooting`]) and, at every FEM step, the output weights replaced by the
     /// L2 projection of K·s onto the cells' Gaussians ([`crate::projection`]). Default: measured
-    /// far more accurate (docs/gcr-algorithm.md).
+    /// far more accurate (docs/design/gcr-algorithm.md).
     #[default]
     Projection,
 }
@@ -120,7 +120,7 @@ pub enum OutputFit {
 /// What the kernel network is trained on. With the projected output layer
 /// ([`OutputFit::Projection`]) the network only places the cells (centres and widths): its own
 /// output weights are replaced at every projection, so the target decides where the cells go.
-/// Measured on cornell-box, ray gather at 1024 rays, 200 points (docs/gcr-algorithm.md).
+/// Measured on cornell-box, ray gather at 1024 rays, 200 points (docs/design/gcr-algorithm.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum NetworkTarget {
     /// The dissertation's target K(x,y)·s(x) (eq. 2.8). G = cos θ_x cos θ_y/(π r²) is unbounded
@@ -267,7 +267,7 @@ pub struct SolveConfig {
     /// average: their moment is one sample's noise over a tiny Gram diagonal, and when that
     /// sample's sender lies in both halves of the cell (at the edge, x ≈ y) it feeds its own
     /// strength back with a gain far above 1. Measured on cornell-box, seeds 1–5 at 1400 cells
-    /// (docs/gcr-algorithm.md): 0 (every cell projected) lets seed 5 run away and costs seed 2
+    /// (docs/design/gcr-algorithm.md): 0 (every cell projected) lets seed 5 run away and costs seed 2
     /// twice the error; 1, 2 and 4 are stable for all five seeds. 0 turns it off.
     pub projection_min_support: f64,
     /// Rescale the projected kernel's weights per band so that it reflects exactly the power the
@@ -282,7 +282,7 @@ pub struct SolveConfig {
     /// Facing masks on the projected kernel's Gaussians ([`crate::kernel_cells::KernelCells::assign_facing`]):
     /// each half lives only on surfaces that face like the samples it was fitted to (within the
     /// breaking angle), so that light does not blur across the edges where surfaces meet. Off by
-    /// default: measured (docs/gcr-algorithm.md) it cuts the kernel collection's error on
+    /// default: measured (docs/design/gcr-algorithm.md) it cuts the kernel collection's error on
     /// `cornell-box` and `two-blockers` by a quarter to a half, but a masked Gaussian stops at
     /// the edge, so a field that is smooth across edges loses mass there (the furnace's kernel
     /// gather goes from 6.5 % to 17 % at 100 cells) and the ray gather gains little.
@@ -579,7 +579,7 @@ pub struct PathSettings {
     /// Cosine rays per point whose hit gets the path-traced correction L̂ − C (the first ones of
     /// the gather's `indirect` rays; with a target error, of each round's). Default: all of them (`usize::MAX`), which makes the
     /// networks' C cancel, so that it is not evaluated: on cornell-box every fraction that reads the
-    /// networks measured less accurate per second (docs/estimator-plan.md).
+    /// networks measured less accurate per second (docs/design/estimator.md).
     pub corrections: usize,
     /// Path vertices (the corrected hit is 1) before Russian roulette starts.
     pub roulette_depth: usize,

@@ -83,7 +83,7 @@ pub struct Metrics {
     /// error), None for the others (their error is mostly the networks' bias, which they cannot
     /// see). From the mesh when one is written, else from the probes. Each point's σ has one degree
     /// of freedom (two Sobol replicates): over thousands of points it predicts the error to a few
-    /// per cent (docs/estimator-plan.md), over a handful it is rough (cornell-box's 18 reflecting
+    /// per cent (docs/design/estimator.md), over a handful it is rough (cornell-box's 18 reflecting
     /// probes: 2.3 % estimated, 3.6 % measured).
     pub relative_std_error: Option<f64>,
     /// The error the paths gather was asked to stop at (`--target-error`, `--quality`), None

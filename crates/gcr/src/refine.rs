@@ -4,7 +4,7 @@
 //! viewer interpolates B linearly between its vertices. Where B changes faster than that — a shadow
 //! edge, a penumbra — the interpolation is wrong even when every vertex value is right: on
 //! cornell-box the bake was 42.6 % off across the short block's shadow where probes at the same
-//! points were 4.4 % off (docs/bakes.md). So after B is gathered at the vertices, triangles whose
+//! points were 4.4 % off (docs/guide/bakes.md). So after B is gathered at the vertices, triangles whose
 //! vertex values differ by more than [`RefineLimits::spread`] of their mean are split 1 → 4 at their
 //! edge midpoints, B is gathered at the new vertices, and this repeats for
 //! [`RefineLimits::levels`] levels. Neighbours keep the mesh conforming: a triangle with two or
@@ -34,7 +34,7 @@ impl RefineLimits {
     /// The defaults for a scene of diagonal `diagonal`: 4 levels, 20 % spread, 6× the vertices,
     /// edges down to 1/1000 of the diagonal. From a coarse uniform start (no networks) these
     /// resolve cornell-box's shadows better than 3 levels and 4× from the networks' finer start,
-    /// in less time (docs/bakes.md).
+    /// in less time (docs/guide/bakes.md).
     pub fn for_diagonal(diagonal: f64) -> Self {
         Self {
             levels: 4,

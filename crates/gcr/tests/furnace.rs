@@ -105,7 +105,7 @@ fn report(
 /// ρ = (0.5, 0.8, 0.95), E = 1: B = (2, 5, 20). The final propagation's direct solve lands on
 /// the fixed point in one step (before: the blue band at 18.8, −6 %). Measured (seed 1, 200
 /// cells, ray gather): mean (2.002, 4.999, 19.97), relative L2 (0.016, 0.042, 0.067); seeds 2–4
-/// give blue means 19.58, 19.86, 20.24 (docs/gcr-algorithm.md).
+/// give blue means 19.58, 19.86, 20.24 (docs/design/gcr-algorithm.md).
 #[test]
 fn an_rgb_furnace_converges_per_band() {
     let scene = scene_sampler::builtin::furnace(Spectrum([1.0; 3]), Spectrum([0.5, 0.8, 0.95]));

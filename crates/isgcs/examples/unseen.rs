@@ -4,7 +4,7 @@
 //! circuit, piston), Genz's product peak, a sharp peak, a high-frequency sine, a ball
 //! indicator, Gaussian, clustered and manifold inputs, two outputs, a constant input column,
 //! repeated rows, an input offset, Gaussian and Student-t noise; `--edge 1` runs the misuse
-//! and tiny-data cases instead. Results and the changes they led to: `docs/isgcs.md`.
+//! and tiny-data cases instead. Results and the changes they led to: `docs/design/isgcs.md`.
 //!
 //! `cargo run --release -p isgcs --example unseen -- [--cells 300] [--rows 10*cells] [--seed 1]
 //! [--only NAME] [--exact NAME] [--mult μ] [--ridge ρ] [--norbf 1] [--dump DIR] [--edge 1]`

@@ -9,7 +9,7 @@
 //!
 //! * [`Params::thesis`] (= `Params::default()`) holds the dissertation's defaults;
 //!   [`Params::accurate`] with [`Isgcs::fit_outputs`] (least-squares output layer) is far more
-//!   accurate on smooth functions (docs/isgcs.md: Franke's function at 500 cells, rms 0.2214 vs
+//!   accurate on smooth functions (docs/design/isgcs.md: Franke's function at 500 cells, rms 0.2214 vs
 //!   0.0007 relative to the function's standard deviation).
 //! * [`Isgcs::fit`] runs the training loop on a [`GoalFunction`] with a [`Termination`] and an
 //!   observer; [`Isgcs::train`] is one step for callers with their own loop.

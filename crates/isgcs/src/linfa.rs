@@ -43,7 +43,7 @@
 //!    seeded) until the cell budget is reached, or earlier by the optional step budget or
 //!    target error (the RMS error of a block of λ steps, see [`Termination`]).
 //! 2. **Settling**: insertion off, [`Isgcs::train`] for `settle` × the growth steps more (⅓ by
-//!    default, as in the `franke` example and docs/isgcs.md's measurements).
+//!    default, as in the `franke` example and docs/design/isgcs.md's measurements).
 //! 3. **Least squares** (unless `None`): [`Isgcs::fit_outputs`] on every row of the
 //!    dataset, with the fixed relative ridge given.
 //!

@@ -63,7 +63,7 @@ impl Params {
         Self::default()
     }
 
-    /// A preset tuned for approximation accuracy on smooth functions (measured in docs/isgcs.md):
+    /// A preset tuned for approximation accuracy on smooth functions (measured in docs/design/isgcs.md):
     /// normalized activations and Gaussians twice as wide as eq. 2.10. Use it together with
     /// [`crate::Isgcs::fit_outputs`], the least-squares polish of the output layer after
     /// growth; the delta rule alone converges slowly on the overlapping Gaussians. λ stays at

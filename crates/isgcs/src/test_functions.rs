@@ -82,7 +82,7 @@ fn franke2(x: &[f64]) -> f64 {
     franke(x[0], x[1])
 }
 
-/// The benchmark suite of docs/isgcs.md: published test functions (Franke, Friedman #1–#3,
+/// The benchmark suite of docs/design/isgcs.md: published test functions (Franke, Friedman #1–#3,
 /// Ishigami, Genz oscillatory), a discontinuous 2-D function, the smooth 6-D function, and
 /// noisy variants (noise about a quarter to a half of the function's standard deviation).
 pub fn suite() -> Vec<Problem> {

@@ -108,7 +108,7 @@ pub fn is_builtin(name: &str) -> bool {
     BUILTIN_NAMES.contains(&name) || generated_name(name).is_some()
 }
 
-/// Builds a built-in scene by name (see [`BUILTIN_NAMES`] and `docs/scene-sampler.md` for their geometry).
+/// Builds a built-in scene by name (see [`BUILTIN_NAMES`] and `docs/design/scene-sampler.md` for their geometry).
 ///
 /// Besides the fixed names, two generated scenes of about `N` triangles: `random-boxes-<N>` (e.g.
 /// `random-boxes-1000000`), the Cornell box filled with small random boxes ([`random_boxes`] with

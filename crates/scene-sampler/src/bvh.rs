@@ -35,7 +35,7 @@ use rayon::prelude::*;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum BuildQuality {
     /// obvhs `medium_build`: builds 4–6× faster than `High`; for occlusion rays between surface points it
-    /// traced as fast as `High` in our benchmark (docs/scene-sampler.md).
+    /// traced as fast as `High` in our benchmark (docs/design/scene-sampler.md).
     Medium,
     /// obvhs `very_slow_build` (spatial splits, full reinsertion): the default; ≈0.45 s per 100k triangles,
     /// ≈6 s per million.

@@ -128,7 +128,7 @@ fn perpendicular_rectangle_factor() {
 /// the element. The clamp only lowers G, so the bias is ≤ 0. It vanishes when `b ≥ r_min` (no pair is closer
 /// than r_min); for `b < r_min` it is O(1) *locally* — a receiver within r_min of a perpendicular wall gets most of
 /// that wall's factor from distances ~b — so the clamp's bias lives in a band of width ~r_min along corners,
-/// i.e. a fraction O(r_min / L) of any surface integral. The numbers are printed (see docs/scene-sampler.md).
+/// i.e. a fraction O(r_min / L) of any surface integral. The numbers are printed (see docs/design/scene-sampler.md).
 #[test]
 fn clamp_bias_at_corner() {
     let (a, c) = (1.0, 1.0);

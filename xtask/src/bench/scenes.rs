@@ -227,7 +227,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     writeln!(
         md,
         "\n## Peak resident memory against scene size\n\n\
-         Command: the same (`cargo xtask bench --only scenes`); plot `docs/figures/scaling-memory.png`. \
+         Command: the same (`cargo xtask bench --only scenes`); plot `docs/results/figures/scaling-memory.png`. \
          Each size runs in its own child process (`xtask mem-probe N`, hidden), which builds \
          `random_boxes(N, 1)` in memory (no file is parsed), then its BVH (`BuildQuality::High`), then the surface \
          and kernel samplers, and reads the process's peak resident set (`VmHWM`, the same number `gcr` \

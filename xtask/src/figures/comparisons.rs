@@ -14,7 +14,7 @@
 //!
 //! Errors over the midpoints of an n×n grid: relative RMS `‖L̃ − L‖₂/‖L‖₂`, relative L1
 //! `Σ|L̃ − L|/Σ|L|`, and RMS/max `RMS(L̃ − L)/max L` (the dissertation's apparent normalization, see
-//! docs/hierarchical.md). Outputs `comparison-error-<scene>.png` (error against links, log-log),
+//! docs/design/hierarchical.md). Outputs `comparison-error-<scene>.png` (error against links, log-log),
 //! `comparison-kernels-<scene>.png` (exact | GCR | HR | |GCR − exact| | |HR − exact| per budget) and
 //! `comparison-kernel-error.md` (the table).
 

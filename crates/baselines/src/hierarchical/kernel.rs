@@ -16,7 +16,7 @@
 //!
 //! **Error** ([`kernel_error`]): both evaluated at the midpoints of an `n × n` grid over `[0,1]²`; the
 //! headline number is the relative RMS `‖K̂ − K‖₂ / ‖K‖₂`. Because the thesis' 0.3 % / 0.1 % / 0.07 % cannot be
-//! relative RMS values (see `docs/hierarchical.md`), the other normalizations are reported beside it.
+//! relative RMS values (see `docs/design/hierarchical.md`), the other normalizations are reported beside it.
 
 use super::error::{HrError, Result};
 use super::flatland::FlatHr;

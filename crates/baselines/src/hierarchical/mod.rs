@@ -13,7 +13,7 @@
 //!   point-to-polygon form factors, visibility by rays through [`scene_sampler::SceneBvh`]).
 //!
 //! Shares no code with the growing-cells crates; geometry, visibility and scenes come from [`scene_sampler`].
-//! See `docs/hierarchical.md` for the measured behaviour.
+//! See `docs/design/hierarchical.md` for the measured behaviour.
 
 pub mod budget;
 pub mod error;

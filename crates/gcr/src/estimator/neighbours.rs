@@ -51,11 +51,11 @@ use std::f64::consts::PI;
 
 /// A group's members lie within twice the radius of a disc that holds a full group at the points'
 /// mean density, and at most this fraction of the scene's diagonal, of its first member (a fixed
-/// small radius left sparse point sets ungrouped; docs/estimator-plan.md has the measurements).
+/// small radius left sparse point sets ungrouped; docs/design/estimator.md has the measurements).
 pub(crate) const GROUP_RADIUS: f64 = 0.25;
 /// A member of a group of m casts about `SHARE_FACTOR / m` of a lone point's cosine rays
 /// ([`cosine_share`]), so that it still sees about twice as many hits as alone (1, 2, 4 and 8
-/// measured within noise of each other, 2 the cheapest rounds; docs/estimator-plan.md).
+/// measured within noise of each other, 2 the cheapest rounds; docs/design/estimator.md).
 const SHARE_FACTOR: f64 = 2.0;
 /// Members' normals within this cosine of the first member's (25°).
 const GROUP_FACING: f64 = 0.9;

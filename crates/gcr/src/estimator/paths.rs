@@ -23,7 +23,7 @@
 //! Owen-scrambled Sobol points (`sobol_burley`; a path's later vertices random numbers), in
 //! `REPLICATES` (2) independently scrambled replicates whose spread gives the standard error.
 //!
-//! Measured (docs/estimator-plan.md): fewer corrections, which read the networks, were less
+//! Measured (docs/design/estimator.md): fewer corrections, which read the networks, were less
 //! accurate per second on cornell-box, and MATH.md §9's kernel Ψ(x, y) as the pointwise control
 //! variate of K·B (its integral is the collection in closed form) was worse than none — a sum of a
 //! few hundred 6-D Gaussians does not follow K's 1/r² and cosines pointwise, and Ψ/p is large where

@@ -117,7 +117,7 @@ pub(crate) fn rounds_to_target(
         // missing rays (variance ∝ 1/rays), at least twice and at most four times as many as so
         // far. Owen-scrambled Sobol points are a balanced net only at powers of two: two-blockers'
         // pixels at 296 rays (148 per replicate) had 13× the relative MSE of 512, cornell-box's
-        // and wall-floor's the same or 1.5× per ray (docs/images.md). The cap keeps a long
+        // and wall-floor's the same or 1.5× per ray (docs/guide/images.md). The cap keeps a long
         // extrapolation from overshooting (the points converge faster than 1/√rays at first)⟩
         let needed = (rays as f64 * (bound / target).powi(2)).ceil() as usize;
         let per = rays.div_ceil(REPLICATES);

@@ -2,7 +2,7 @@
 //! and the exposure, checked before the solve ([`ImageSettings::validate`]).
 //!
 //! The camera convention is Mitsuba 3's `perspective` sensor with
-//! `to_world = look_at(eye, target, up)` and `fov_axis = "y"` (`docs/images.md`): the view
+//! `to_world = look_at(eye, target, up)` and `fov_axis = "y"` (`docs/guide/images.md`): the view
 //! direction d = normalize(target − eye), image-left = normalize(up × d), image-up = d × left;
 //! a point at camera coordinates (x_left, y_up, z) > 0 lands at pixel coordinates
 //! ((1 − x_left / (z·a·t)) · W/2, (1 − y_up / (z·t)) · H/2) with t = tan(fov/2) and a = W/H, the

@@ -17,7 +17,7 @@ use glam::DVec3;
 /// none): the edge of this many equilateral triangles covering the scene. Coarse on purpose:
 /// [`crate::refine`] then splits where B varies (shadows), which on cornell-box's floor resolves
 /// the short block's shadow better, and sooner, than starting from the networks' resolution
-/// (docs/bakes.md). Faces already smaller than the edge are kept as they are.
+/// (docs/guide/bakes.md). Faces already smaller than the edge are kept as they are.
 pub const UNIFORM_MESH_TRIANGLES: f64 = 150.0;
 
 /// The local edge length the shading network asks for near `p`: the width (mean edge length,
@@ -89,7 +89,7 @@ impl LocalEdge {
 /// face's centroid. A vertex on an edge of its face where another face meets it (a block standing
 /// on the floor, the floor at a wall) gathers, exactly there, about half its B: the adjoining
 /// face, within the ray offsets of the point, blocks the rays that leave toward it (measured on
-/// cornell-box, docs/bakes.md). The move is far below the mesh's resolution.
+/// cornell-box, docs/guide/bakes.md). The move is far below the mesh's resolution.
 pub fn vertex_gather_point(face: &scene_sampler::Face, p: DVec3) -> DVec3 {
     p + 1e-4 * (face.centroid() - p)
 }

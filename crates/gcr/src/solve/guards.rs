@@ -4,7 +4,7 @@
 //! a sound solve obeys the maximum principle `B ≤ E_max / (1 − ρ_max)` per band
 //! ([`crate::domain::Domain::radiosity_bound`]). A projected kernel can still carry a mode of gain
 //! above 1; these guards see it and [`super::propagate`] acts on them. The measurements behind
-//! each threshold are in `docs/gcr-algorithm.md` ("Stability guards").
+//! each threshold are in `docs/design/gcr-algorithm.md` ("Stability guards").
 
 use super::error::SolveError;
 use crate::element::{BANDS, Bands};

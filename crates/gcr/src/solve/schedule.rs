@@ -72,7 +72,7 @@ impl Schedule {
     /// together cost at most a third of the final one (Σ 4⁻ᵏ from a quarter on). They only keep
     /// the kernel's target K·s current while it places its cells (the final step projects and
     /// bounces to convergence on its own): a step at every growth by a quarter (2.8× the final
-    /// step) gave the same outputs at 1400 cells (`docs/benchmarks-fem.md`).
+    /// step) gave the same outputs at 1400 cells (`docs/results/benchmarks-fem.md`).
     pub(super) fn fem_due(
         &mut self,
         insertions: u64,

@@ -3,7 +3,8 @@
 //! plane and the penumbra of a sun-lit edge, a uniform and a CIE overcast sky over an open plane,
 //! the sky seen through an opening (a converged quadrature of the opening), and a constant
 //! environment — a light written in this test file, through the public interface only — through
-//! radiosity probes, irradiance probes and per-pixel images.
+//! every estimator: radiosity and irradiance probes by the paths gather, the dissertation's ray
+//! gather, per-pixel images, and the path-traced reference of `gcr reference` (`baselines`).
 
 use gcr::output::PinholeCamera;
 use gcr::output::render_pixels;
@@ -405,6 +406,36 @@ fn a_constant_environment_through_every_estimator() {
         .collect();
     for g in radiosity(&scene, 0.005, &on) {
         close(g.radiosity[0], rho * PI * l, 0.02, "B on the cube");
+    }
+    // the dissertation's ray gather (its networks empty: on a convex object all light is direct)
+    {
+        let bvh = SceneBvh::new(&scene);
+        let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+        let rays = SolveConfig {
+            gather: GatherMode::Rays,
+            ..SolveConfig::default()
+        };
+        let trained = Trained::without_networks(&domain, &rays);
+        let got = gcr::radiosity_at_points(&domain, &trained, &Emitters::new(&domain), &rays, &on)
+            .unwrap();
+        for g in got {
+            close(g.radiosity[0], rho * PI * l, 0.03, "B by the ray gather");
+        }
+        // the reference path tracer (`gcr reference`)
+        let points: Vec<_> = (on.iter())
+            .map(|&(point, normal, face)| scene_sampler::SurfacePoint {
+                point,
+                normal,
+                face,
+            })
+            .collect();
+        let adaptive = baselines::Adaptive {
+            rel_error: 0.005,
+            ..baselines::Adaptive::default()
+        };
+        for r in baselines::pointwise::reference_at(&scene, &bvh, &points, &adaptive).unwrap() {
+            close(r.estimate.mean[0], rho * PI * l, 0.02, "B by the reference");
+        }
     }
     // irradiance in the open, facing anywhere away from the cube
     let at = [

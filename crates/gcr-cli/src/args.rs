@@ -192,6 +192,36 @@ pub struct SolveArgs {
     /// Binary glTF mesh with vertex colours (.glb).
     #[arg(help_heading = "Outputs", long)]
     pub mesh: Option<PathBuf>,
+    /// A lightmap bake (.glb): the scene with a second UV set (TEXCOORD_1) and the light baked
+    /// into texture pages there (MOZ_lightmap, 8-bit PNG with its scale), the linear pages beside
+    /// it as <NAME>-lightmap-<K>.exr (docs/guide/lightmaps.md).
+    #[arg(long, help_heading = "Lightmaps", value_name = "OUT.glb")]
+    pub lightmap: Option<PathBuf>,
+    /// Lightmap texels per scene unit [default: the highest density that fits one page].
+    #[arg(
+        long,
+        help_heading = "Lightmaps",
+        value_name = "TEXELS",
+        requires = "lightmap",
+        allow_hyphen_values = true
+    )]
+    pub lightmap_density: Option<f64>,
+    /// Lightmap page width and height in texels (more pages when the atlas does not fit one).
+    #[arg(long, help_heading = "Lightmaps", value_name = "N", default_value_t = gcr::LightmapSettings::default().page_size, requires = "lightmap")]
+    pub lightmap_size: u32,
+    /// Empty texels around each lightmap chart (filled from the chart's edge: no seams when
+    /// filtered).
+    #[arg(long, help_heading = "Lightmaps", value_name = "TEXELS", default_value_t = gcr::LightmapSettings::default().padding, requires = "lightmap")]
+    pub lightmap_padding: u32,
+    /// What the lightmap holds: `irradiance` E (what engines multiply by the albedo) or
+    /// `radiosity` B (the surface's own brightness).
+    #[arg(
+        long,
+        help_heading = "Lightmaps",
+        default_value = "irradiance",
+        requires = "lightmap"
+    )]
+    pub lightmap_quantity: gcr::LightmapQuantity,
     /// PLY mesh with radiosity per vertex (.ply).
     #[arg(help_heading = "Outputs", long)]
     pub ply: Option<PathBuf>,
@@ -441,6 +471,17 @@ impl SolveArgs {
         }
     }
 
+    /// The lightmap settings (not yet validated: `LightmapSettings::validate`, through
+    /// `OutputPlan::with_lightmap`).
+    pub fn lightmap_settings(&self) -> gcr::LightmapSettings {
+        gcr::LightmapSettings {
+            texels_per_unit: self.lightmap_density,
+            page_size: self.lightmap_size,
+            padding: self.lightmap_padding,
+            quantity: self.lightmap_quantity,
+        }
+    }
+
     /// The output files.
     pub fn outputs(&self) -> OutputPaths {
         OutputPaths {
@@ -448,6 +489,7 @@ impl SolveArgs {
             kernel_image: self.kernel_image.clone(),
             mesh: self.mesh.clone(),
             ply: self.ply.clone(),
+            lightmap: self.lightmap.clone(),
             probes_in: self.probes.clone(),
             probe_out: self.probe_out.clone(),
             metrics: self.metrics.clone(),

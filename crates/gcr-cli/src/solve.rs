@@ -45,6 +45,7 @@ fn solve_and_write(
 ) -> Result<()> {
     let outputs = (args.outputs(), args.images(), args.probe_settings());
     let plan = OutputPlan::with_options(domain, outputs.0, outputs.1, outputs.2)
+        .and_then(|plan| plan.with_lightmap(args.lightmap_settings()))
         .and_then(|plan| plan.check_config(config).map(|()| plan))
         .with_context(|| format!("checking the outputs for `{}`", args.scene))?;
     let mut progress = ProgressLine::new(args.quiet);

@@ -232,3 +232,67 @@ fn a_successful_solve_writes_exactly_its_outputs() {
     assert!(json.contains("\"scene\": \"cornell-box\""), "{json}");
     assert!(json.contains("\"stopped_by\": \"unused\""), "{json}");
 }
+
+/// `--lightmap out.glb`: the .glb (TEXCOORD_1 on every primitive, the page as a PNG through
+/// MOZ_lightmap) and its linear EXR page beside it, the lightmap in the metrics; bad lightmap
+/// settings and a Flatland scene are refused before the solve, writing nothing.
+#[test]
+fn a_lightmap_bake_writes_the_glb_and_its_pages() {
+    let d = dir("lightmap");
+    let glb = d.join("room.glb");
+    let metrics = d.join("m.json");
+    let args = [
+        "solve",
+        "cornell-box",
+        "--quality",
+        "draft",
+        "--quiet",
+        "--lightmap",
+        &s(&glb),
+        "--lightmap-size",
+        "128",
+        "--metrics",
+        &s(&metrics),
+    ];
+    let o = gcr(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(entries(&d), ["m.json", "room-lightmap-0.exr", "room.glb"]);
+    let (doc, _, images) = gltf::import(&glb).expect("a valid glb");
+    assert!(doc.extensions_used().any(|e| e == "MOZ_lightmap"));
+    for mesh in doc.meshes() {
+        for p in mesh.primitives() {
+            assert!(p.get(&gltf::Semantic::TexCoords(1)).is_some(), "TEXCOORD_1");
+        }
+    }
+    assert_eq!((images[0].width, images[0].height), (128, 128));
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&metrics).unwrap()).unwrap();
+    assert_eq!(m["lightmap"]["pages"], 1);
+    assert!(m["lightmap"]["texels"].as_u64().unwrap() > 5000);
+    let exr = image::open(d.join("room-lightmap-0.exr")).expect("an EXR page");
+    assert_eq!(exr.width(), 128);
+
+    let bad = dir("lightmap-bad");
+    let target = s(&bad.join("x.glb"));
+    let o = gcr(&[
+        "solve",
+        "cornell-box",
+        "--lightmap",
+        &target,
+        "--lightmap-size",
+        "8",
+    ]);
+    assert_fails(&o, "page size", true);
+    let o = gcr(&[
+        "solve",
+        "cornell-box",
+        "--lightmap",
+        &target,
+        "--lightmap-density",
+        "-1",
+    ]);
+    assert_fails(&o, "texel density", true);
+    let o = gcr(&["solve", "flatland-corner", "--lightmap", &target]);
+    assert_fails(&o, "3-D scene", true);
+    assert!(entries(&bad).is_empty());
+}

@@ -37,6 +37,7 @@ mod estimator;
 mod fem;
 mod gather;
 mod kernel_cells;
+mod lightmap;
 mod mesh;
 mod metrics;
 mod network;
@@ -64,8 +65,12 @@ pub use estimator::{
     relative_std_error,
 };
 pub use gather::Gathered;
+pub use lightmap::{
+    Atlas as LightmapAtlas, FaceUv, Lightmap, LightmapError, LightmapQuantity, LightmapSettings,
+    Texel, bake_lightmap,
+};
 pub use mesh::ShadedMesh;
-pub use metrics::{ImageRecord, Metrics, PhaseTimes, peak_memory_bytes};
+pub use metrics::{ImageRecord, LightmapRecord, Metrics, PhaseTimes, peak_memory_bytes};
 pub use network::GrowingNetwork;
 pub use output::{output_mesh, vertex_gather_point};
 pub use progress::{GatherProgress, observe_gathers};

@@ -24,6 +24,31 @@ pub struct PhaseTimes {
     pub total: f64,
 }
 
+/// A baked lightmap, as the metrics record it.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct LightmapRecord {
+    /// The .glb written (its pages beside it).
+    pub path: String,
+    /// Atlas pages.
+    pub pages: u32,
+    /// Page width in texels.
+    pub width: u32,
+    /// Page height in texels.
+    pub height: u32,
+    /// Texels per scene unit.
+    pub texels_per_unit: f64,
+    /// Charts.
+    pub charts: u32,
+    /// Share of the pages' texels covered by charts.
+    pub utilization: f64,
+    /// Texels estimated.
+    pub texels: usize,
+    /// Texels left out under geometry (filled by dilation).
+    pub left_out: usize,
+    /// The 8-bit pages' scale (PNG value = linear value × scale, sRGB-encoded).
+    pub png_scale: f64,
+}
+
 /// Everything a user may want to know about a solve.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Metrics {
@@ -122,6 +147,9 @@ pub struct Metrics {
     pub probe_quantity: String,
     /// The 3-D images written, with the cameras they were rendered from.
     pub images: Vec<ImageRecord>,
+    /// The lightmap written, if any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lightmap: Option<LightmapRecord>,
 }
 
 /// One 3-D image written by a solve.

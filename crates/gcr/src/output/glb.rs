@@ -261,7 +261,7 @@ pub fn to_glb(mesh: &ShadedMesh, scene: &Scene, exposure: &Exposure) -> Vec<u8> 
 }
 
 /// The binary container: the JSON chunk padded with spaces, then the buffer's chunk (glTF 2.0 §4.4).
-fn glb_bytes(doc: &Value, data: Vec<u8>) -> Vec<u8> {
+pub(crate) fn glb_bytes(doc: &Value, data: Vec<u8>) -> Vec<u8> {
     let mut json = serde_json::to_vec(doc).unwrap_or_default();
     while json.len() % 4 != 0 {
         json.push(b' ');

@@ -9,6 +9,7 @@ mod camera;
 mod flatland;
 mod glb;
 mod hdr;
+mod lightmap;
 mod mesh;
 mod pixel;
 mod ply;
@@ -21,6 +22,7 @@ mod write;
 pub use camera::DEFAULT_FOV;
 pub use camera::{CameraChoice, CameraError, ImageMode, ImageSettings, View};
 pub use glb::{to_glb, write_glb};
+pub use lightmap::{encode_page_exr, page_paths, png_scale, to_lightmap_glb};
 pub use mesh::{UNIFORM_MESH_TRIANGLES, output_mesh, vertex_gather_point};
 pub use pixel::{PixelImage, render_pixels};
 pub use probes::{ProbeQuantity, ProbeSettings};
@@ -34,7 +36,7 @@ pub use write::{OutputPaths, OutputPlan, write_outputs};
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     /// A mesh or PLY output for a Flatland scene.
-    #[error("a mesh or PLY output needs a 3-D scene; this is a Flatland scene")]
+    #[error("a mesh, PLY or lightmap output needs a 3-D scene; this is a Flatland scene")]
     MeshNeeds3d,
     /// A kernel image for a 3-D scene.
     #[error(
@@ -129,6 +131,9 @@ pub enum OutputError {
     /// The radiosity could not be gathered from the solution.
     #[error(transparent)]
     Gather(#[from] crate::estimator::GatherError),
+    /// The lightmap could not be laid out or baked.
+    #[error(transparent)]
+    Lightmap(#[from] crate::lightmap::LightmapError),
 }
 
 /// `png|jpg|exr` as `.png, .jpg or .exr`.

@@ -17,6 +17,7 @@ use crate::config::{GatherMode, SolveConfig};
 use crate::domain::Domain;
 use crate::emitters::Emitters;
 use crate::estimator::{GatherError, GatherStats};
+use crate::lightmap::LightmapSettings;
 use crate::mesh::ShadedMesh;
 use crate::metrics::{ImageRecord, Metrics, peak_memory_bytes};
 use crate::retriangulate::RetriangulateLimits;
@@ -46,6 +47,9 @@ pub struct OutputPaths {
     pub mesh: Option<PathBuf>,
     /// 3-D only: PLY of the output mesh with radiosity per vertex.
     pub ply: Option<PathBuf>,
+    /// 3-D only: binary glTF (.glb) of the scene with a baked lightmap on `TEXCOORD_1`, its pages
+    /// beside it as `<stem>-lightmap-<k>.exr` (`output/lightmap.rs`).
+    pub lightmap: Option<PathBuf>,
     /// Probe points to read (`x y z nx ny nz` per line; Flatland `x y nx ny`).
     pub probes_in: Option<PathBuf>,
     /// Where to write radiosity at the probes (`r g b` per line; grey Flatland `b`).
@@ -62,6 +66,7 @@ impl OutputPaths {
             (&self.kernel_image, "kernel image", Some("png")),
             (&self.mesh, "mesh", Some("glb")),
             (&self.ply, "PLY mesh", Some("ply")),
+            (&self.lightmap, "lightmap", Some("glb")),
             (&self.probe_out, "probe", None),
             (&self.metrics, "metrics", None),
         ]
@@ -79,6 +84,7 @@ pub struct OutputPlan {
     images: ImageSettings,
     probes: Vec<(DVec3, DVec3, u32)>,
     probe_settings: ProbeSettings,
+    lightmap: LightmapSettings,
     /// The scene brings its own camera (a built-in's or a glTF camera node).
     scene_camera: bool,
     /// The scene is a Flatland scene.
@@ -162,7 +168,9 @@ impl OutputPlan {
                 return Err(OutputError::ImageNeeds3d("an EXR image"));
             }
         }
-        if domain.scene_3d().is_none() && (paths.mesh.is_some() || paths.ply.is_some()) {
+        if domain.scene_3d().is_none()
+            && (paths.mesh.is_some() || paths.ply.is_some() || paths.lightmap.is_some())
+        {
             return Err(OutputError::MeshNeeds3d);
         }
         if domain.scene_flat().is_none() && paths.kernel_image.is_some() {
@@ -206,6 +214,7 @@ impl OutputPlan {
             images,
             probes,
             probe_settings,
+            lightmap: LightmapSettings::default(),
             scene_camera: domain.scene_3d().is_some_and(|s| s.camera_given),
             flatland: domain.scene_flat().is_some(),
         })
@@ -219,6 +228,13 @@ impl OutputPlan {
             return Err(GatherError::IrradianceNeedsPaths(config.gather.name()).into());
         }
         Ok(())
+    }
+
+    /// The plan with these lightmap settings, checked ([`LightmapSettings::validate`]).
+    pub fn with_lightmap(mut self, settings: LightmapSettings) -> Result<Self, OutputError> {
+        settings.validate()?;
+        self.lightmap = settings;
+        Ok(self)
     }
 
     /// The checked image settings.
@@ -387,6 +403,9 @@ fn write_3d(
             .images
             .push(image_record(path, settings, camera, source, coverage));
     }
+    if let Some(path) = &paths.lightmap {
+        write_lightmap(domain, trained, config, plan, path, metrics, staged)?;
+    }
     if let Some(mesh) = &mesh {
         if let Some(path) = &paths.mesh {
             staged.write(path, |w| super::glb::write_glb(mesh, scene, &exposure, w))?;
@@ -395,6 +414,56 @@ fn write_3d(
             staged.write(path, |w| super::ply::write_ply(mesh, &exposure, w))?;
         }
     }
+    metrics.seconds.output += to.elapsed().as_secs_f64();
+    Ok(())
+}
+
+/// Bakes the lightmap ([`crate::lightmap::bake_lightmap`]) and stages its .glb and EXR pages.
+fn write_lightmap(
+    domain: &Domain,
+    trained: &Trained,
+    config: &SolveConfig,
+    plan: &OutputPlan,
+    path: &Path,
+    metrics: &mut Metrics,
+    staged: &mut StagedFiles,
+) -> Result<(), OutputError> {
+    let Some(scene) = domain.scene_3d() else {
+        return Err(OutputError::MeshNeeds3d);
+    };
+    let tg = Instant::now();
+    let lightmap = {
+        let _phase = crate::progress::phase("lightmap");
+        crate::lightmap::bake_lightmap(domain, trained, config, &plan.lightmap)?
+    };
+    record_gather(metrics, &lightmap.stats, config);
+    metrics.seconds.gather += tg.elapsed().as_secs_f64();
+    let to = Instant::now();
+    let scale = super::lightmap::png_scale(&lightmap);
+    let io = |source| OutputError::Write {
+        path: path.to_path_buf(),
+        source,
+    };
+    let glb = super::lightmap::to_lightmap_glb(&lightmap, scene, scale).map_err(io)?;
+    staged.write_bytes(path, &glb)?;
+    let pages = super::lightmap::page_paths(path, lightmap.atlas.pages);
+    for (k, page) in pages.iter().enumerate() {
+        check_target(page, "lightmap page", Some("exr"))?;
+        let exr = super::lightmap::encode_page_exr(&lightmap, k).map_err(io)?;
+        staged.write_bytes(page, &exr)?;
+    }
+    metrics.lightmap = Some(crate::metrics::LightmapRecord {
+        path: path.display().to_string(),
+        pages: lightmap.atlas.pages,
+        width: lightmap.atlas.width,
+        height: lightmap.atlas.height,
+        texels_per_unit: lightmap.atlas.texels_per_unit,
+        charts: lightmap.atlas.charts,
+        utilization: lightmap.atlas.utilization,
+        texels: lightmap.texels.len(),
+        left_out: lightmap.left_out,
+        png_scale: scale,
+    });
     metrics.seconds.output += to.elapsed().as_secs_f64();
     Ok(())
 }

@@ -1,0 +1,242 @@
+//! Lightmaps: the scene's light baked into textures on a second UV set, as game engines and web
+//! viewers display it (Unity's and Godot's lightmappers, Bevy's `Lightmap`, three.js' `lightMap`).
+//!
+//! [`bake_lightmap`] in four steps:
+//!
+//! 1. **The atlas** (`atlas.rs`): every face a place on a page, at a texel density;
+//! 2. **the texels' points** (`texels.rs`): a point on the surface per covered texel (chart rims
+//!    included), texels under geometry left out so that no light or darkness leaks;
+//! 3. **the estimate** at every texel point by the default estimator
+//!    ([`crate::irradiance_at_points`] or [`crate::radiosity_at_points`]), run to the solve's
+//!    target error, neighbouring texels sharing paths as any neighbouring output points do;
+//! 4. **dilation** (`dilate.rs`): the left-out texels and the padding around every chart take the
+//!    mean of their filled neighbours, so that bilinear filtering and mipmaps at a chart's edge
+//!    read the chart's own values (no seams of black).
+//!
+//! The writers (OpenEXR pages, 8-bit PNG pages with their scale, the glTF with `TEXCOORD_1` and
+//! the lightmap referenced) are in `output/lightmap.rs`.
+
+mod atlas;
+mod dilate;
+mod texels;
+
+pub use atlas::{Atlas, FaceUv};
+pub use texels::Texel;
+
+use crate::config::SolveConfig;
+use crate::domain::Domain;
+use crate::emitters::Emitters;
+use crate::estimator::{GatherError, GatherStats, irradiance_at_points, radiosity_at_points};
+use crate::solve::Trained;
+use thiserror::Error;
+
+/// What a lightmap's texels hold.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightmapQuantity {
+    /// Irradiance E at the surface (W/m², or lux with photometric lights): what engines multiply
+    /// by the material's albedo (three.js: `lightMap` × diffuse colour / π gives the radiance).
+    /// Smooth where the albedo is textured, so a coarse map holds it.
+    #[default]
+    Irradiance,
+    /// Radiosity B = E + ρ·E_irr (exitance, emission included): the surface's own brightness.
+    Radiosity,
+}
+
+impl std::str::FromStr for LightmapQuantity {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "irradiance" => Ok(Self::Irradiance),
+            "radiosity" => Ok(Self::Radiosity),
+            other => Err(format!(
+                "unknown lightmap quantity `{other}` (expected irradiance or radiosity)"
+            )),
+        }
+    }
+}
+
+/// How a lightmap is laid out and what it holds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightmapSettings {
+    /// Texels per scene unit (`None`: the highest density at which the atlas fits one page).
+    pub texels_per_unit: Option<f64>,
+    /// Page width and height in texels (several pages when the atlas does not fit one).
+    pub page_size: u32,
+    /// Empty texels around each chart (filled by dilation).
+    pub padding: u32,
+    /// What the texels hold.
+    pub quantity: LightmapQuantity,
+}
+
+impl Default for LightmapSettings {
+    fn default() -> Self {
+        Self {
+            texels_per_unit: None,
+            page_size: 512,
+            padding: 2,
+            quantity: LightmapQuantity::Irradiance,
+        }
+    }
+}
+
+/// The largest page side, in texels (16 384² RGB f32 texels are 3 GiB).
+pub const MAX_PAGE_SIZE: u32 = 16_384;
+
+impl LightmapSettings {
+    /// Checks the settings: a density finite and positive, a page of 16 to [`MAX_PAGE_SIZE`]
+    /// texels, padding below a quarter of the page.
+    pub fn validate(&self) -> Result<(), LightmapError> {
+        let bad = |m: String| Err(LightmapError::Settings(m));
+        if let Some(t) = self.texels_per_unit {
+            if !(t.is_finite() && t > 0.0) {
+                return bad(format!("the texel density must be positive (got {t})"));
+            }
+        }
+        if !(16..=MAX_PAGE_SIZE).contains(&self.page_size) {
+            return bad(format!(
+                "the page size must be 16 to {MAX_PAGE_SIZE} texels (got {})",
+                self.page_size
+            ));
+        }
+        if self.padding >= self.page_size / 4 {
+            return bad(format!(
+                "the padding ({}) must be below a quarter of the page ({})",
+                self.padding, self.page_size
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Why a lightmap could not be baked.
+#[derive(Debug, Error)]
+pub enum LightmapError {
+    /// A setting is out of range.
+    #[error("lightmap: {0}")]
+    Settings(String),
+    /// The unwrapper failed (e.g. a chart larger than a page at the density asked for).
+    #[error(
+        "lightmap atlas: {message} (lower the texel density or raise the page size, now {page_size})"
+    )]
+    Unwrap {
+        /// The unwrapper's message.
+        message: String,
+        /// The page size asked for.
+        page_size: u32,
+    },
+    /// Lightmaps need a 3-D scene.
+    #[error("lightmaps need a 3-D scene")]
+    NotThreeD,
+    /// The gather at the texels failed.
+    #[error(transparent)]
+    Gather(#[from] GatherError),
+}
+
+/// A baked lightmap: the atlas and its pages of linear values.
+#[derive(Clone, Debug)]
+pub struct Lightmap {
+    /// The atlas the pages follow.
+    pub atlas: Atlas,
+    /// Per page, `width × height` RGB values, row-major, row 0 at v = 0.
+    pub pages: Vec<Vec<[f32; 3]>>,
+    /// What they hold.
+    pub quantity: LightmapQuantity,
+    /// The texels estimated, with their surface points (in the order of the gather).
+    pub texels: Vec<Texel>,
+    /// Texels left out because their point lay under geometry (filled by dilation).
+    pub left_out: usize,
+    /// What the gather at the texels measured (its estimated relative error among them).
+    pub stats: GatherStats,
+}
+
+impl Lightmap {
+    /// The lightmap's value at `point` of face `face` as a viewer reads it: the point's
+    /// coordinates on the atlas (from its barycentrics in the face) filtered bilinearly, texel
+    /// centres at half-integers, clamped at the page's edges. `None` for a face with no place.
+    pub fn sample(
+        &self,
+        scene: &scene_sampler::Scene,
+        face: u32,
+        point: glam::DVec3,
+    ) -> Option<[f32; 3]> {
+        let uv = self.atlas.faces.get(face as usize).copied().flatten()?;
+        let f = &scene.faces[face as usize];
+        let (e1, e2, d) = (f.v[1] - f.v[0], f.v[2] - f.v[0], point - f.v[0]);
+        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let det = d11 * d22 - d12 * d12;
+        if det <= 0.0 {
+            return None;
+        }
+        let (p1, p2) = (d.dot(e1), d.dot(e2));
+        let b1 = (d22 * p1 - d12 * p2) / det;
+        let b2 = (d11 * p2 - d12 * p1) / det;
+        let at = |k: usize| {
+            f64::from(uv.uv[0][k]) * (1.0 - b1 - b2)
+                + f64::from(uv.uv[1][k]) * b1
+                + f64::from(uv.uv[2][k]) * b2
+        };
+        let (w, h) = (self.atlas.width as usize, self.atlas.height as usize);
+        let x = (at(0) * w as f64 - 0.5).clamp(0.0, (w - 1) as f64);
+        let y = (at(1) * h as f64 - 0.5).clamp(0.0, (h - 1) as f64);
+        let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+        let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
+        let page = &self.pages[uv.page as usize];
+        let texel = |x: usize, y: usize| page[y * w + x];
+        let mut out = [0.0f32; 3];
+        for (k, o) in out.iter_mut().enumerate() {
+            let top = texel(x0, y0)[k] * (1.0 - fx) + texel(x1, y0)[k] * fx;
+            let bottom = texel(x0, y1)[k] * (1.0 - fx) + texel(x1, y1)[k] * fx;
+            *o = top * (1.0 - fy) + bottom * fy;
+        }
+        Some(out)
+    }
+}
+
+/// Bakes the lightmap of a solved 3-D scene (module docs).
+pub fn bake_lightmap(
+    domain: &Domain,
+    trained: &Trained,
+    config: &SolveConfig,
+    settings: &LightmapSettings,
+) -> Result<Lightmap, LightmapError> {
+    settings.validate()?;
+    let Domain::ThreeD(kernel) = domain else {
+        return Err(LightmapError::NotThreeD);
+    };
+    // ⟨The atlas and the texels' points⟩
+    let atlas = Atlas::of_scene(kernel.scene, settings)?;
+    let (texels, left_out) = texels::texels(kernel.scene, kernel.bvh, &atlas);
+    // ⟨The estimate at every texel⟩
+    let emitters = Emitters::new(domain);
+    let gathered = match settings.quantity {
+        LightmapQuantity::Irradiance => {
+            let at: Vec<_> = texels.iter().map(|t| (t.point, t.normal)).collect();
+            irradiance_at_points(domain, trained, &emitters, config, &at)?
+        }
+        LightmapQuantity::Radiosity => {
+            let at: Vec<_> = texels.iter().map(|t| (t.point, t.normal, t.face)).collect();
+            radiosity_at_points(domain, trained, &emitters, config, &at)?
+        }
+    };
+    // ⟨Into the pages, then dilated over the padding and the left-out texels⟩
+    let (w, h) = (atlas.width as usize, atlas.height as usize);
+    let mut pages = vec![vec![[0.0f32; 3]; w * h]; atlas.pages as usize];
+    let mut filled = vec![vec![false; w * h]; atlas.pages as usize];
+    for (t, g) in texels.iter().zip(&gathered) {
+        let i = t.y as usize * w + t.x as usize;
+        pages[t.page as usize][i] = g.radiosity.map(|v| v as f32);
+        filled[t.page as usize][i] = true;
+    }
+    for (page, filled) in pages.iter_mut().zip(&mut filled) {
+        dilate::dilate(page, filled, w, h, 2 * settings.padding as usize + 2);
+    }
+    Ok(Lightmap {
+        stats: GatherStats::of(&gathered),
+        atlas,
+        pages,
+        quantity: settings.quantity,
+        texels,
+        left_out,
+    })
+}

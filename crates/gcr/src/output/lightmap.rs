@@ -1,0 +1,226 @@
+//! Lightmap files: the pages as linear OpenEXR, and a binary glTF of the scene with the
+//! lightmap on a second UV set, as web viewers and engines read it.
+//!
+//! * **`<name>-lightmap-<k>.exr`** beside the .glb: page k, RGB f32, the linear values (irradiance
+//!   E or radiosity B, [`LightmapQuantity`]), row 0 at v = 0 (the image's top row).
+//! * **The .glb**: one node per scene object (world coordinates, identity transform), one
+//!   primitive per (part, page) with `POSITION`, `NORMAL` (the face's), `TEXCOORD_1` (the
+//!   lightmap coordinates; glTF's v = 0 is the image's top row, as the atlas has it); materials
+//!   carry the part's mean albedo as `baseColorFactor` and the page as an 8-bit PNG through the
+//!   **`MOZ_lightmap`** extension (Mozilla Hubs' convention: `{"index": texture, "texCoord": 1,
+//!   "intensity": s}`), sRGB-encoded like glTF's colour textures, scaled so that its 95th
+//!   percentile is 0.8 (`intensity` = 1 / that scale restores the linear value; `asset.extras`
+//!   records it too). A viewer that knows the extension sets `material.lightMap` with
+//!   `lightMapIntensity = intensity` on `uv1` (three.js); one that does not shows the plain
+//!   material. Each face is written as its own three corners (a triangle soup: the lightmap's
+//!   seams need split vertices anyway); back faces of two-sided materials are their own faces.
+
+use super::tonemap::srgb_encode;
+use crate::lightmap::{Lightmap, LightmapQuantity};
+use scene_sampler::Scene;
+use serde_json::{Value, json};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The EXR page files of a lightmap written to `glb`: `<stem>-lightmap-<k>.exr` beside it.
+pub fn page_paths(glb: &Path, pages: u32) -> Vec<PathBuf> {
+    let stem = glb
+        .file_stem()
+        .map_or("lightmap".into(), |s| s.to_string_lossy());
+    (0..pages)
+        .map(|k| glb.with_file_name(format!("{stem}-lightmap-{k}.exr")))
+        .collect()
+}
+
+/// Encodes page `k` of `lightmap` as OpenEXR (RGB f32, lossless), in memory.
+pub fn encode_page_exr(lightmap: &Lightmap, k: usize) -> std::io::Result<Vec<u8>> {
+    use exr::prelude::{Image, SpecificChannels, Vec2, WritableImage};
+    let (w, h) = (
+        lightmap.atlas.width as usize,
+        lightmap.atlas.height as usize,
+    );
+    let page = &lightmap.pages[k];
+    let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
+        let p = page[y * w + x];
+        (p[0], p[1], p[2])
+    });
+    let mut buf = std::io::Cursor::new(Vec::new());
+    Image::from_channels((w, h), channels)
+        .write()
+        .to_buffered(&mut buf)
+        .map_err(std::io::Error::other)?;
+    Ok(buf.into_inner())
+}
+
+/// The scale of the 8-bit pages: 0.8 at the 95th percentile of the texels' luminance (1 when
+/// every texel is dark).
+pub fn png_scale(lightmap: &Lightmap) -> f64 {
+    let mut lum: Vec<f64> = (lightmap.pages.iter().flatten())
+        .map(|p| 0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2]))
+        .filter(|l| *l > 0.0)
+        .collect();
+    if lum.is_empty() {
+        return 1.0;
+    }
+    let k = ((lum.len() - 1) as f64 * 0.95) as usize;
+    let (_, p95, _) = lum.select_nth_unstable_by(k, f64::total_cmp);
+    if *p95 > 0.0 { 0.8 / *p95 } else { 1.0 }
+}
+
+/// Page `k` as an 8-bit sRGB PNG of `value × scale`.
+fn encode_page_png(lightmap: &Lightmap, k: usize, scale: f64) -> std::io::Result<Vec<u8>> {
+    let (w, h) = (lightmap.atlas.width, lightmap.atlas.height);
+    let bytes: Vec<u8> = (lightmap.pages[k].iter())
+        .flat_map(|p| {
+            p.map(|c| (srgb_encode((f64::from(c) * scale).clamp(0.0, 1.0)) * 255.0).round() as u8)
+        })
+        .collect();
+    let img = image::RgbImage::from_raw(w, h, bytes)
+        .ok_or_else(|| std::io::Error::other("lightmap page size"))?;
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, image::ImageFormat::Png)
+        .map_err(std::io::Error::other)?;
+    Ok(out.into_inner())
+}
+
+/// The binary chunk under construction: the bufferViews and accessors, one view per accessor.
+#[derive(Default)]
+struct Bin {
+    bytes: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl Bin {
+    /// Appends raw bytes as a bufferView (4-byte aligned); returns the view.
+    fn view(&mut self, data: &[u8], target: Option<u32>) -> usize {
+        while self.bytes.len() % 4 != 0 {
+            self.bytes.push(0);
+        }
+        let at = self.bytes.len();
+        self.bytes.extend_from_slice(data);
+        let mut v = json!({"buffer": 0, "byteOffset": at, "byteLength": data.len()});
+        if let Some(t) = target {
+            v["target"] = json!(t);
+        }
+        self.views.push(v);
+        self.views.len() - 1
+    }
+
+    /// Appends an f32 vertex attribute of `N` components; returns its accessor.
+    fn floats<const N: usize>(&mut self, data: &[[f32; N]], kind: &str, bounds: bool) -> usize {
+        let raw: Vec<u8> = data
+            .iter()
+            .flatten()
+            .flat_map(|c| c.to_le_bytes())
+            .collect();
+        let view = self.view(&raw, Some(34962));
+        let mut acc = json!({"bufferView": view, "componentType": 5126, "count": data.len(),
+            "type": kind});
+        if bounds {
+            let lo: Vec<f32> = (0..N)
+                .map(|k| data.iter().map(|v| v[k]).fold(f32::INFINITY, f32::min))
+                .collect();
+            let hi: Vec<f32> = (0..N)
+                .map(|k| data.iter().map(|v| v[k]).fold(f32::NEG_INFINITY, f32::max))
+                .collect();
+            acc["min"] = json!(lo);
+            acc["max"] = json!(hi);
+        }
+        self.accessors.push(acc);
+        self.accessors.len() - 1
+    }
+}
+
+/// The lightmapped scene as a .glb (module docs); `scale` is the PNG pages' ([`png_scale`]).
+pub fn to_lightmap_glb(lightmap: &Lightmap, scene: &Scene, scale: f64) -> std::io::Result<Vec<u8>> {
+    let mut bin = Bin::default();
+    // ⟨The pages as PNG images and textures⟩
+    let mut images = Vec::new();
+    for k in 0..lightmap.pages.len() {
+        let png = encode_page_png(lightmap, k, scale)?;
+        let view = bin.view(&png, None);
+        images.push(
+            json!({"bufferView": view, "mimeType": "image/png", "name": format!("lightmap-{k}")}),
+        );
+    }
+    let textures: Vec<Value> = (0..images.len())
+        .map(|k| json!({"source": k, "sampler": 0}))
+        .collect();
+    // ⟨Faces by object, then (part, page)⟩
+    let mut groups: BTreeMap<u32, BTreeMap<(u32, u32), Vec<usize>>> = BTreeMap::new();
+    for (f, uv) in lightmap.atlas.faces.iter().enumerate() {
+        if let Some(uv) = uv {
+            let face = &scene.faces[f];
+            groups
+                .entry(face.object)
+                .or_default()
+                .entry((face.part, uv.page))
+                .or_default()
+                .push(f);
+        }
+    }
+    let (mut nodes, mut meshes, mut materials) = (Vec::new(), Vec::new(), Vec::new());
+    for (object, parts) in &groups {
+        let mut primitives = Vec::new();
+        for (&(_, page), faces) in parts {
+            let (mut pos, mut nrm, mut uv1) = (Vec::new(), Vec::new(), Vec::new());
+            let mut rho = [0.0f64; 3];
+            for &f in faces {
+                let face = &scene.faces[f];
+                let uv = lightmap.atlas.faces[f].expect("grouped faces have a place");
+                for c in 0..3 {
+                    pos.push(face.v[c].as_vec3().to_array());
+                    nrm.push(face.normal.as_vec3().to_array());
+                    uv1.push(uv.uv[c]);
+                }
+                for (k, r) in rho.iter_mut().enumerate() {
+                    *r += face.rho.0[k.min(face.rho.0.len() - 1)] / faces.len() as f64;
+                }
+            }
+            let attributes = json!({
+                "POSITION": bin.floats(&pos, "VEC3", true),
+                "NORMAL": bin.floats(&nrm, "VEC3", false),
+                "TEXCOORD_1": bin.floats(&uv1, "VEC2", false),
+            });
+            materials.push(json!({
+                "pbrMetallicRoughness": {"baseColorFactor": [rho[0], rho[1], rho[2], 1.0],
+                    "metallicFactor": 0.0, "roughnessFactor": 1.0},
+                "extensions": {"MOZ_lightmap": {"index": page, "texCoord": 1, "intensity": 1.0 / scale}},
+            }));
+            primitives.push(
+                json!({"attributes": attributes, "material": materials.len() - 1, "mode": 4}),
+            );
+        }
+        meshes.push(json!({"primitives": primitives}));
+        let mut node = json!({"mesh": meshes.len() - 1});
+        if let Some(name) = scene.objects.get(*object as usize) {
+            node["name"] = json!(name);
+        }
+        nodes.push(node);
+    }
+    let quantity = match lightmap.quantity {
+        LightmapQuantity::Irradiance => "irradiance E",
+        LightmapQuantity::Radiosity => "radiosity B",
+    };
+    let mut doc = json!({
+        "asset": {"version": "2.0", "generator": "gcr (Growing Cells Radiosity)",
+            "extras": {"lightmap_quantity": quantity, "lightmap_png_scale": scale,
+                "lightmap": "MOZ_lightmap pages: sRGB PNG of value * lightmap_png_scale; intensity = 1 / scale; linear pages in the -lightmap-<k>.exr files"}},
+        "extensionsUsed": ["MOZ_lightmap"],
+        "scene": 0,
+        "scenes": [{"nodes": (0..nodes.len()).collect::<Vec<_>>()}],
+        "nodes": nodes,
+        "materials": materials,
+        "samplers": [{"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071}],
+        "images": images,
+        "textures": textures,
+    });
+    if !meshes.is_empty() {
+        doc["meshes"] = json!(meshes);
+    }
+    doc["buffers"] = json!([{"byteLength": bin.bytes.len()}]);
+    doc["bufferViews"] = json!(bin.views);
+    doc["accessors"] = json!(bin.accessors);
+    Ok(super::glb::glb_bytes(&doc, bin.bytes))
+}

@@ -7,7 +7,7 @@
 //! The back faces of two-sided materials (`Scene::add_back_faces`) are wound the other way, so
 //! they get their own charts: each side of a thin wall has its own light.
 
-use super::{LightmapError, LightmapSettings};
+use super::settings::{LightmapError, LightmapSettings};
 use glam::DVec3;
 use scene_sampler::Scene;
 

@@ -5,7 +5,8 @@
 //!   E or radiosity B, [`LightmapQuantity`]), row 0 at v = 0 (the image's top row).
 //! * **The .glb**: one node per scene object (world coordinates, identity transform), one
 //!   primitive per (part, page) with `POSITION`, `NORMAL` (the face's), `TEXCOORD_1` (the
-//!   lightmap coordinates; glTF's v = 0 is the image's top row, as the atlas has it); materials
+//!   lightmap coordinates; glTF's v = 0 is the image's top row, as the atlas has it; the same
+//!   accessor serves as `TEXCOORD_0`, which glTF requires before a `TEXCOORD_1`); materials
 //!   carry the part's mean albedo as `baseColorFactor` and the page as an 8-bit PNG through the
 //!   **`MOZ_lightmap`** extension (Mozilla Hubs' convention: `{"index": texture, "texCoord": 1,
 //!   "intensity": s}`), sRGB-encoded like glTF's colour textures, scaled so that its 95th
@@ -178,10 +179,14 @@ pub fn to_lightmap_glb(lightmap: &Lightmap, scene: &Scene, scale: f64) -> std::i
                     *r += face.rho.0[k.min(face.rho.0.len() - 1)] / faces.len() as f64;
                 }
             }
+            let uv = bin.floats(&uv1, "VEC2", false);
+            // (glTF wants TEXCOORD_0 before TEXCOORD_1; the materials have no other texture,
+            // so the lightmap's coordinates serve as both)
             let attributes = json!({
                 "POSITION": bin.floats(&pos, "VEC3", true),
                 "NORMAL": bin.floats(&nrm, "VEC3", false),
-                "TEXCOORD_1": bin.floats(&uv1, "VEC2", false),
+                "TEXCOORD_0": uv,
+                "TEXCOORD_1": uv,
             });
             materials.push(json!({
                 "pbrMetallicRoughness": {"baseColorFactor": [rho[0], rho[1], rho[2], 1.0],

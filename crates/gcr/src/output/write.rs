@@ -373,6 +373,10 @@ fn write_3d(
         }
     }
     metrics.seconds.gather += tg.elapsed().as_secs_f64();
+    // ⟨The lightmap: its own gather at the texels, its files⟩
+    if let Some(path) = &paths.lightmap {
+        write_lightmap(domain, trained, config, plan, path, metrics, staged)?;
+    }
     let to = Instant::now();
     // ⟨One exposure for every tone-mapped output⟩
     let exposure = match (settings.exposure, &mesh_exposure, rendered.first()) {
@@ -402,9 +406,6 @@ fn write_3d(
         metrics
             .images
             .push(image_record(path, settings, camera, source, coverage));
-    }
-    if let Some(path) = &paths.lightmap {
-        write_lightmap(domain, trained, config, plan, path, metrics, staged)?;
     }
     if let Some(mesh) = &mesh {
         if let Some(path) = &paths.mesh {

@@ -59,6 +59,7 @@ pub mod scene;
 pub mod spectrum;
 pub mod texture;
 pub mod warp;
+mod write;
 
 pub use builtin::{BUILTIN_NAMES, builtin, is_builtin, nearest_builtin, random_boxes};
 pub use bvh::{BuildQuality, FlatHit, FlatVisibility, Hit, SceneBvh};

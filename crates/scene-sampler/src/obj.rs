@@ -9,7 +9,7 @@ use crate::read::{average_albedo, line_of, read_text, stem};
 use crate::scene::check_file_material;
 use crate::texture::TextureBudget;
 use crate::{Face, FaceTexture, LoadOptions, Result, Scene, SceneError, Spectrum, Texture, Wrap};
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use std::f64::consts::PI;
 use std::path::Path;
 
@@ -138,11 +138,43 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Scene> {
     obj_with(path.as_ref(), &LoadOptions::default())
 }
 
+/// [`load_obj`] within `options` ([`crate::load_with`]).
 pub(crate) fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let source = path.display().to_string();
     let text = read_text(path, options.max_file_bytes)?;
     let folder = Folder::of(path, options)?;
+    // ⟨The models and materials; every `usemtl` names a defined material⟩
     let statements = scan_obj(&text);
+    let (models, materials) = parse_obj(&text, &statements, &folder, &source)?;
+    check_usemtl(&statements, &materials, &source)?;
+    // ⟨The materials' textures and cut-outs⟩
+    let mut warnings = Vec::new();
+    let mut budget = TextureBudget::new(options.max_texture_bytes);
+    let (textures, texture_of) = obj_textures(&materials, &folder, &source, &mut budget)?;
+    let (masks, alpha_of) = obj_alphas(&materials, &folder, &source, &mut budget, &mut warnings)?;
+    // ⟨The faces of every model, then the scene⟩
+    let looks = ObjMaterials {
+        source: &source,
+        materials: &materials,
+        texture_of,
+        alpha_of,
+    };
+    let mut faces = ObjFaces::new(materials.len());
+    for m in &models {
+        faces.add_model(m, &looks, &mut warnings)?;
+    }
+    faces.into_scene(path, &source, textures, masks, warnings)
+}
+
+/// The models and materials tobj reads from the OBJ `text` (polygons triangulated), its
+/// material libraries read through the scene's `folder` ([`read_mtl`]; the first error there is
+/// the error); a panic inside tobj is a parse error naming `source`.
+fn parse_obj(
+    text: &str,
+    statements: &[Statement],
+    folder: &Folder,
+    source: &str,
+) -> Result<(Vec<tobj::Model>, Vec<tobj::Material>)> {
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
@@ -150,37 +182,7 @@ pub(crate) fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
     };
     let problem: std::cell::RefCell<Option<SceneError>> = std::cell::RefCell::new(None);
     let material_loader = |mtl: &Path| -> tobj::MTLLoadResult {
-        let full = folder.shown(mtl);
-        let line = (statements.iter())
-            .find(|s| s.key == "mtllib" && Path::new(&s.arg) == mtl)
-            .map_or(0, |s| s.line);
-        let read = (folder.read(mtl))
-            .map_err(|r| match r {
-                Refusal::Outside => SceneError::OutsideFolder {
-                    source_name: format!("{source}:{line}"),
-                    what: "`mtllib`".into(),
-                    uri: mtl.display().to_string(),
-                },
-                Refusal::Refused(e) => e,
-                Refusal::Io(e) => SceneError::MaterialLibrary {
-                    source_name: source.clone(),
-                    line,
-                    path: full.clone(),
-                    source: e,
-                },
-            })
-            .and_then(|bytes| {
-                let mtl_source = full.display().to_string();
-                let text = String::from_utf8(bytes).map_err(|e| SceneError::Parse {
-                    source_name: mtl_source.clone(),
-                    message: format!(
-                        "line {}: not UTF-8 text",
-                        line_of(e.as_bytes(), e.utf8_error().valid_up_to())
-                    ),
-                })?;
-                sanitize_mtl(&mtl_source, &text)
-            });
-        match read {
+        match read_mtl(mtl, statements, folder, source) {
             Ok(clean) => tobj::load_mtl_buf(&mut clean.as_bytes()),
             Err(e) => {
                 problem.borrow_mut().get_or_insert(e);
@@ -193,22 +195,68 @@ pub(crate) fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
         tobj::load_obj_buf(&mut text.as_bytes(), &opts, material_loader)
     }))
     .map_err(|_| SceneError::Parse {
-        source_name: source.clone(),
+        source_name: source.into(),
         message: "the OBJ parser (tobj) failed on this file".into(),
     })?;
     if let Some(e) = problem.into_inner() {
         return Err(e);
     }
     let (models, materials) = loaded.map_err(|e| SceneError::Parse {
-        source_name: source.clone(),
+        source_name: source.into(),
         message: e.to_string(),
     })?;
     let materials = materials.map_err(|e| SceneError::Parse {
-        source_name: source.clone(),
+        source_name: source.into(),
         message: format!("material library: {e}"),
     })?;
-    // tobj silently gives no material for an undefined name: the faces would turn grey and, if the name
-    // was the light's, the scene would fail later with "no face emits light".
+    Ok((models, materials))
+}
+
+/// The text of the material library `mtl` that an `mtllib` statement of the OBJ file `source`
+/// names, read within the scene's `folder` as UTF-8 and rewritten by [`sanitize_mtl`]; errors
+/// name the statement's line (0 when the scan did not find it).
+fn read_mtl(mtl: &Path, statements: &[Statement], folder: &Folder, source: &str) -> Result<String> {
+    let full = folder.shown(mtl);
+    let line = (statements.iter())
+        .find(|s| s.key == "mtllib" && Path::new(&s.arg) == mtl)
+        .map_or(0, |s| s.line);
+    (folder.read(mtl))
+        .map_err(|r| match r {
+            Refusal::Outside => SceneError::OutsideFolder {
+                source_name: format!("{source}:{line}"),
+                what: "`mtllib`".into(),
+                uri: mtl.display().to_string(),
+            },
+            Refusal::Refused(e) => e,
+            Refusal::Io(e) => SceneError::MaterialLibrary {
+                source_name: source.into(),
+                line,
+                path: full.clone(),
+                source: e,
+            },
+        })
+        .and_then(|bytes| {
+            let mtl_source = full.display().to_string();
+            let text = String::from_utf8(bytes).map_err(|e| SceneError::Parse {
+                source_name: mtl_source.clone(),
+                message: format!(
+                    "line {}: not UTF-8 text",
+                    line_of(e.as_bytes(), e.utf8_error().valid_up_to())
+                ),
+            })?;
+            sanitize_mtl(&mtl_source, &text)
+        })
+}
+
+/// An error for the first `usemtl` statement that names no material of `materials`, naming its
+/// line and the materials defined. tobj silently gives no material for an undefined name: the
+/// faces would turn grey and, if the name was the light's, the scene would fail later with "no
+/// face emits light".
+fn check_usemtl(
+    statements: &[Statement],
+    materials: &[tobj::Material],
+    source: &str,
+) -> Result<()> {
     for s in statements.iter().filter(|s| s.key == "usemtl") {
         if !materials.iter().any(|m| m.name == s.arg) {
             let known = if materials.is_empty() {
@@ -222,184 +270,345 @@ pub(crate) fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
                 format!("defined: {}", names.join(", "))
             };
             return Err(SceneError::UndefinedMaterial {
-                source_name: source,
+                source_name: source.into(),
                 line: s.line,
                 name: s.arg.clone(),
                 known,
             });
         }
     }
-    let mut warnings = Vec::new();
+    Ok(())
+}
+
+/// The materials' `map_Kd` textures ([`obj_texture`], decoded within `budget`) and, per
+/// material, its texture's index.
+fn obj_textures(
+    materials: &[tobj::Material],
+    folder: &Folder,
+    source: &str,
+    budget: &mut TextureBudget,
+) -> Result<(Vec<Texture>, Vec<Option<u32>>)> {
     let mut textures: Vec<Texture> = Vec::new();
     // per material: its texture's index once loaded
     let mut texture_of: Vec<Option<u32>> = vec![None; materials.len()];
-    let mut budget = TextureBudget::new(options.max_texture_bytes);
     for (i, mat) in materials.iter().enumerate() {
         if let Some(file) = &mat.diffuse_texture {
-            let tex = obj_texture(&folder, file, &mat.name, &source, &mut budget)?;
+            let tex = obj_texture(folder, file, &mat.name, source, budget)?;
             texture_of[i] = Some(textures.len() as u32);
             textures.push(tex);
         }
     }
-    let (masks, alpha_of) = obj_alphas(&materials, &folder, &source, &mut budget, &mut warnings)?;
-    let mut hidden = 0usize;
-    let mut untextured: Vec<String> = Vec::new();
-    let mut checked: Vec<Option<(Spectrum, Spectrum)>> = vec![None; materials.len()];
-    let mut faces = Vec::new();
-    let mut objects: Vec<String> = Vec::new();
-    let mut missing_material = 0usize;
-    let mut against_normals: Vec<(String, usize)> = Vec::new();
-    let mut surface = 0u32;
-    for m in &models {
+    Ok((textures, texture_of))
+}
+
+/// An OBJ file's materials as its faces take them: per material its texture (index into the
+/// scene's textures) and how its opacity cuts it.
+struct ObjMaterials<'a> {
+    /// The OBJ file, for messages.
+    source: &'a str,
+    materials: &'a [tobj::Material],
+    texture_of: Vec<Option<u32>>,
+    alpha_of: Vec<ObjAlpha>,
+}
+
+/// A model's mesh as its faces read it, with the model's name and the file for messages.
+struct ObjMesh<'a> {
+    mesh: &'a tobj::Mesh,
+    name: &'a str,
+    source: &'a str,
+}
+
+impl ObjMesh<'_> {
+    /// The position of vertex `i`; an error naming the object when it is out of range.
+    fn position(&self, i: u32) -> Result<DVec3> {
+        let i = i as usize * 3;
+        match self.mesh.positions.get(i..i + 3) {
+            Some(p) => Ok(DVec3::new(p[0], p[1], p[2])),
+            None => Err(SceneError::Parse {
+                source_name: self.source.into(),
+                message: format!(
+                    "object `{}`: vertex index {} out of range",
+                    self.name,
+                    i / 3
+                ),
+            }),
+        }
+    }
+
+    /// The normal `i`, if there is one.
+    fn normal(&self, i: u32) -> Option<DVec3> {
+        let i = i as usize * 3;
+        (self.mesh.normals)
+            .get(i..i + 3)
+            .map(|n| DVec3::new(n[0], n[1], n[2]))
+    }
+
+    /// The texture coordinates `i`, v flipped (OBJ's v = 0 is the image's bottom row).
+    fn uv(&self, i: u32) -> Option<DVec2> {
+        let i = i as usize * 2;
+        (self.mesh.texcoords.get(i..i + 2)).map(|t| DVec2::new(t[0], 1.0 - t[1]))
+    }
+
+    /// Whether every corner has a `vt` (texture coordinates).
+    fn with_uv(&self) -> bool {
+        self.mesh.texcoord_indices.len() == self.mesh.indices.len()
+    }
+
+    /// The texture coordinates of triangle `k`'s corners, if all three exist; only for a mesh
+    /// [`Self::with_uv`].
+    fn corner_uvs(&self, k: usize) -> Option<[DVec2; 3]> {
+        let c = &self.mesh.texcoord_indices[3 * k..3 * k + 3];
+        match (self.uv(c[0]), self.uv(c[1]), self.uv(c[2])) {
+            (Some(a), Some(b), Some(d)) => Some([a, b, d]),
+            _ => None,
+        }
+    }
+
+    /// Whether the `vn` normals of triangle `k` (corners `v`) point against its winding
+    /// (false without normals on every corner).
+    fn against_winding(&self, k: usize, v: &[DVec3; 3]) -> bool {
+        let mesh = self.mesh;
+        if mesh.normal_indices.len() != mesh.indices.len() {
+            return false;
+        }
+        let n = &mesh.normal_indices[3 * k..3 * k + 3];
+        if let (Some(a), Some(b), Some(c)) =
+            (self.normal(n[0]), self.normal(n[1]), self.normal(n[2]))
+        {
+            let winding = (v[1] - v[0]).cross(v[2] - v[0]);
+            return (a + b + c).dot(winding) < 0.0;
+        }
+        false
+    }
+}
+
+/// How the faces of one model look: their object, ρ and E, their material's texture (index)
+/// and cut-out.
+struct ModelLook {
+    object: u32,
+    rho: Spectrum,
+    e: Spectrum,
+    texture: Option<u32>,
+    alpha: ObjAlpha,
+}
+
+/// The faces of an OBJ file as its models are read, and what the warnings report.
+struct ObjFaces {
+    faces: Vec<Face>,
+    /// The objects' names (tobj splits an object at every `usemtl`: parts of one name stay one
+    /// object).
+    objects: Vec<String>,
+    /// Per material: its ρ and E once checked.
+    checked: Vec<Option<(Spectrum, Spectrum)>>,
+    /// The next face's surface (one per triangle).
+    surface: u32,
+    /// Faces dropped as cut out everywhere.
+    hidden: usize,
+    /// Faces without a material.
+    missing_material: usize,
+    /// Objects with a textured material but no `vt`.
+    untextured: Vec<String>,
+    /// Per object: its faces whose `vn` normals point against their winding.
+    against_normals: Vec<(String, usize)>,
+}
+
+impl ObjFaces {
+    /// No faces yet, of a file with `materials` materials.
+    fn new(materials: usize) -> Self {
+        Self {
+            faces: Vec::new(),
+            objects: Vec::new(),
+            checked: vec![None; materials],
+            surface: 0,
+            hidden: 0,
+            missing_material: 0,
+            untextured: Vec::new(),
+            against_normals: Vec::new(),
+        }
+    }
+
+    /// Adds the faces of model `m` (its object by name): its material's ρ and E
+    /// ([`Self::material_of`]), its texture mapping on its `vt` (a non-finite `vt` is an
+    /// error naming the object), its cut-out; one surface per triangle (tobj gives
+    /// face_arities only when not triangulating, and does not say which triangles share a
+    /// polygon).
+    fn add_model(
+        &mut self,
+        m: &tobj::Model,
+        looks: &ObjMaterials,
+        warnings: &mut Vec<String>,
+    ) -> Result<()> {
         // tobj splits an object at every `usemtl`: parts of one name stay one object
-        let oi = match objects.iter().position(|o| *o == m.name) {
+        let oi = match self.objects.iter().position(|o| *o == m.name) {
             Some(k) => k,
             None => {
-                objects.push(m.name.clone());
-                objects.len() - 1
+                self.objects.push(m.name.clone());
+                self.objects.len() - 1
             }
         };
-        let mesh = &m.mesh;
-        let (rho, e) = match mesh.material_id.filter(|&i| i < materials.len()) {
-            Some(i) => match checked[i] {
-                Some(v) => v,
-                None => {
-                    let mat = &materials[i];
-                    let kd = Spectrum(mat.diffuse.unwrap_or([0.0; 3]));
-                    let e = Spectrum(mat.emissive.unwrap_or([0.0; 3]).map(|v| v * PI));
-                    let rho = check_file_material(&source, &mat.name, kd, e, &mut warnings)?;
-                    checked[i] = Some((rho, e));
-                    (rho, e)
-                }
-            },
-            None => {
-                missing_material += mesh.indices.len() / 3;
-                (Spectrum::grey(0.5), Spectrum::ZERO)
-            }
+        let (rho, e) = self.material_of(&m.mesh, looks, warnings)?;
+        let mesh = ObjMesh {
+            mesh: &m.mesh,
+            name: &m.name,
+            source: looks.source,
         };
-        let pos = |i: u32| -> Result<DVec3> {
-            let i = i as usize * 3;
-            match mesh.positions.get(i..i + 3) {
-                Some(p) => Ok(DVec3::new(p[0], p[1], p[2])),
-                None => Err(SceneError::Parse {
-                    source_name: source.clone(),
-                    message: format!("object `{}`: vertex index {} out of range", m.name, i / 3),
-                }),
-            }
-        };
-        let normal = |i: u32| -> Option<DVec3> {
-            let i = i as usize * 3;
-            mesh.normals
-                .get(i..i + 3)
-                .map(|n| DVec3::new(n[0], n[1], n[2]))
-        };
-        let with_normals = mesh.normal_indices.len() == mesh.indices.len();
-        // ⟨The texture mapping of a textured material: vt per corner, v flipped (OBJ's v = 0 is the
-        // image's bottom row)⟩
-        let texture = mesh
-            .material_id
-            .and_then(|i| texture_of.get(i).copied().flatten());
-        let with_uv = mesh.texcoord_indices.len() == mesh.indices.len();
+        // ⟨The texture mapping of a textured material: vt per corner⟩
+        let texture = (m.mesh.material_id).and_then(|i| looks.texture_of.get(i).copied().flatten());
         // a `vt nan` would read texel 0 (ρ = 0) in silence
-        if with_uv && mesh.texcoords.iter().any(|t| !t.is_finite()) {
+        if mesh.with_uv() && m.mesh.texcoords.iter().any(|t| !t.is_finite()) {
             return Err(SceneError::Parse {
-                source_name: source.clone(),
+                source_name: looks.source.into(),
                 message: format!(
                     "object `{}`: a `vt` coordinate is not a finite number",
                     m.name
                 ),
             });
         }
-        if texture.is_some() && !with_uv && !untextured.contains(&m.name) {
-            untextured.push(m.name.clone());
+        if texture.is_some() && !mesh.with_uv() && !self.untextured.contains(&m.name) {
+            self.untextured.push(m.name.clone());
         }
-        let uv = |i: u32| -> Option<glam::DVec2> {
-            let i = i as usize * 2;
-            (mesh.texcoords.get(i..i + 2)).map(|t| glam::DVec2::new(t[0], 1.0 - t[1]))
+        let look = ModelLook {
+            object: oi as u32,
+            rho,
+            e,
+            texture,
+            alpha: (m.mesh.material_id)
+                .and_then(|i| looks.alpha_of.get(i).copied())
+                .unwrap_or(ObjAlpha::Opaque),
         };
-        let alpha = (mesh.material_id)
-            .and_then(|i| alpha_of.get(i).copied())
-            .unwrap_or(ObjAlpha::Opaque);
         let mut against = 0usize;
-        // tobj gives face_arities only when not triangulating; with triangulation each polygon's fan shares a
-        // surface id only if we track it, which tobj does not expose: one surface per triangle then.
-        for (k, t) in mesh.indices.chunks_exact(3).enumerate() {
-            let v = [pos(t[0])?, pos(t[1])?, pos(t[2])?];
-            if with_normals {
-                let n = &mesh.normal_indices[3 * k..3 * k + 3];
-                if let (Some(a), Some(b), Some(c)) = (normal(n[0]), normal(n[1]), normal(n[2])) {
-                    let winding = (v[1] - v[0]).cross(v[2] - v[0]);
-                    if (a + b + c).dot(winding) < 0.0 {
-                        against += 1;
-                    }
-                }
+        for k in 0..m.mesh.indices.len() / 3 {
+            if self.add_triangle(&mesh, k, &look)? {
+                against += 1;
             }
-            let mut face = Face::new(v, rho, e, oi as u32, surface);
-            match (alpha, with_uv) {
-                (ObjAlpha::Hidden, _) => {
-                    hidden += 1;
-                    continue;
-                }
-                (ObjAlpha::Cut(mask, threshold), true) => {
-                    let c = &mesh.texcoord_indices[3 * k..3 * k + 3];
-                    if let (Some(a), Some(b), Some(d)) = (uv(c[0]), uv(c[1]), uv(c[2])) {
-                        face.cutout = Some(crate::FaceCutout {
-                            mask,
-                            uv: [a, b, d],
-                            threshold,
-                        });
-                    }
-                }
-                _ => {}
-            }
-            if let (Some(tex), true) = (texture, with_uv) {
-                let c = &mesh.texcoord_indices[3 * k..3 * k + 3];
-                if let (Some(a), Some(b), Some(d)) = (uv(c[0]), uv(c[1]), uv(c[2])) {
-                    let ft = FaceTexture {
-                        texture: tex,
-                        uv: [a, b, d],
-                        factor: rho,
-                    };
-                    face.texture = Some(ft);
-                }
-            }
-            faces.push(face);
-            surface += 1;
         }
         if against > 0 {
-            match against_normals.iter_mut().find(|(o, _)| *o == m.name) {
+            match self.against_normals.iter_mut().find(|(o, _)| *o == m.name) {
                 Some((_, n)) => *n += against,
-                None => against_normals.push((m.name.clone(), against)),
+                None => self.against_normals.push((m.name.clone(), against)),
             }
         }
+        Ok(())
     }
-    average_albedo(&mut faces, &textures);
-    if hidden > 0 {
-        warnings.push(format!(
-            "{source}: dropped {hidden} face(s) whose material's opacity `d` is below 0.5 (fully \
-             cut out)"
-        ));
+
+    /// ρ and E = π·Ke of `mesh`'s material, checked once per material
+    /// ([`check_file_material`]: ρ ≥ 1 clamped with a warning); ρ = 0.5 grey and E = 0 for a
+    /// mesh without a material (its faces counted for the warning).
+    fn material_of(
+        &mut self,
+        mesh: &tobj::Mesh,
+        looks: &ObjMaterials,
+        warnings: &mut Vec<String>,
+    ) -> Result<(Spectrum, Spectrum)> {
+        let materials = looks.materials;
+        Ok(match mesh.material_id.filter(|&i| i < materials.len()) {
+            Some(i) => match self.checked[i] {
+                Some(v) => v,
+                None => {
+                    let mat = &materials[i];
+                    let kd = Spectrum(mat.diffuse.unwrap_or([0.0; 3]));
+                    let e = Spectrum(mat.emissive.unwrap_or([0.0; 3]).map(|v| v * PI));
+                    let rho = check_file_material(looks.source, &mat.name, kd, e, warnings)?;
+                    self.checked[i] = Some((rho, e));
+                    (rho, e)
+                }
+            },
+            None => {
+                self.missing_material += mesh.indices.len() / 3;
+                (Spectrum::grey(0.5), Spectrum::ZERO)
+            }
+        })
     }
-    let mut scene = Scene::new(&stem(path), &source, faces, objects, None)?
-        .with_textures(textures)?
-        .with_masks(masks)?;
-    warnings.extend(untextured.into_iter().map(|o| {
-        format!("{source}: object `{o}`: a textured material (map_Kd) but no `vt`: its Kd is used")
-    }));
-    warnings.extend(against_normals.into_iter().map(|(o, n)| {
-        format!(
-            "{source}: object `{o}`: {n} face(s) whose `vn` normals point against their winding; the front \
-             side comes from the winding (counter-clockwise), so these faces are lit from behind and \
-             look black: fix the winding or the normals"
-        )
-    }));
-    if missing_material > 0 {
-        warnings.push(format!(
-            "{source}: {missing_material} face(s) without material: ρ = 0.5, E = 0"
-        ));
+
+    /// Adds triangle `k` of `mesh` as a face that looks as `look` says, with its cut-out and
+    /// texture mapping when the mesh has `vt`, unless it is cut out everywhere (then only
+    /// counted); returns whether its `vn` normals point against its winding.
+    fn add_triangle(&mut self, mesh: &ObjMesh, k: usize, look: &ModelLook) -> Result<bool> {
+        let t = &mesh.mesh.indices[3 * k..3 * k + 3];
+        let v = [
+            mesh.position(t[0])?,
+            mesh.position(t[1])?,
+            mesh.position(t[2])?,
+        ];
+        let against = mesh.against_winding(k, &v);
+        let mut face = Face::new(v, look.rho, look.e, look.object, self.surface);
+        let with_uv = mesh.with_uv();
+        match (look.alpha, with_uv) {
+            (ObjAlpha::Hidden, _) => {
+                self.hidden += 1;
+                return Ok(against);
+            }
+            (ObjAlpha::Cut(mask, threshold), true) => {
+                if let Some(uv) = mesh.corner_uvs(k) {
+                    face.cutout = Some(crate::FaceCutout {
+                        mask,
+                        uv,
+                        threshold,
+                    });
+                }
+            }
+            _ => {}
+        }
+        if let (Some(tex), true) = (look.texture, with_uv) {
+            if let Some(uv) = mesh.corner_uvs(k) {
+                let ft = FaceTexture {
+                    texture: tex,
+                    uv,
+                    factor: look.rho,
+                };
+                face.texture = Some(ft);
+            }
+        }
+        self.faces.push(face);
+        self.surface += 1;
+        Ok(against)
     }
-    scene.warnings.extend(warnings);
-    Ok(scene)
+
+    /// The scene of the faces (named after `path`), textured faces' ρ their texture's mean,
+    /// with its `textures` and cut-out `masks`; the load's `warnings` and this file's
+    /// (faces cut out, textures without `vt`, normals against windings, faces without a
+    /// material) after the scene's own.
+    fn into_scene(
+        self,
+        path: &Path,
+        source: &str,
+        textures: Vec<Texture>,
+        masks: Vec<crate::AlphaMask>,
+        mut warnings: Vec<String>,
+    ) -> Result<Scene> {
+        let mut faces = self.faces;
+        average_albedo(&mut faces, &textures);
+        if self.hidden > 0 {
+            warnings.push(format!(
+                "{source}: dropped {} face(s) whose material's opacity `d` is below 0.5 (fully \
+                 cut out)",
+                self.hidden
+            ));
+        }
+        let mut scene = Scene::new(&stem(path), source, faces, self.objects, None)?
+            .with_textures(textures)?
+            .with_masks(masks)?;
+        warnings.extend(self.untextured.into_iter().map(|o| {
+            format!(
+                "{source}: object `{o}`: a textured material (map_Kd) but no `vt`: its Kd is used"
+            )
+        }));
+        warnings.extend(self.against_normals.into_iter().map(|(o, n)| {
+            format!(
+                "{source}: object `{o}`: {n} face(s) whose `vn` normals point against their winding; the front \
+                 side comes from the winding (counter-clockwise), so these faces are lit from behind and \
+                 look black: fix the winding or the normals"
+            )
+        }));
+        if self.missing_material > 0 {
+            warnings.push(format!(
+                "{source}: {} face(s) without material: ρ = 0.5, E = 0",
+                self.missing_material
+            ));
+        }
+        scene.warnings.extend(warnings);
+        Ok(scene)
+    }
 }
 
 /// How an OBJ material's opacity cuts its faces ([`crate::cutout`]).

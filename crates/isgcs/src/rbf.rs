@@ -23,6 +23,78 @@ fn dist2(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(p, q)| (p - q) * (p - q)).sum()
 }
 
+/// k-means centres (`centres` × n, row-major) of the N × n `inputs`: `centres` distinct random
+/// inputs (partial Fisher–Yates, seeded by `seed`), then at most `iterations` Lloyd rounds
+/// (each input to its nearest centre, each centre to the mean of its inputs) until no input
+/// changes centre.
+fn lloyd_centres(
+    inputs: &[f64],
+    n: usize,
+    centres: usize,
+    iterations: usize,
+    seed: u64,
+) -> Vec<f64> {
+    let count = inputs.len() / n;
+    // k-means initialisation: distinct random samples (partial Fisher–Yates).
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut order: Vec<usize> = (0..count).collect();
+    for i in 0..centres {
+        let j = rng.random_range(i..count);
+        order.swap(i, j);
+    }
+    let mut c: Vec<f64> = order[..centres]
+        .iter()
+        .flat_map(|&s| inputs[s * n..(s + 1) * n].iter().copied())
+        .collect();
+    let mut assign = vec![usize::MAX; count];
+    for _ in 0..iterations {
+        let mut changed = false;
+        for (s, x) in inputs.chunks_exact(n).enumerate() {
+            let best = (0..centres)
+                .map(|j| (j, dist2(x, &c[j * n..(j + 1) * n])))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .map_or(0, |(j, _)| j);
+            changed |= assign[s] != best;
+            assign[s] = best;
+        }
+        if !changed {
+            break;
+        }
+        let mut sum = vec![0.0; centres * n];
+        let mut cnt = vec![0usize; centres];
+        for (s, x) in inputs.chunks_exact(n).enumerate() {
+            cnt[assign[s]] += 1;
+            for a in 0..n {
+                sum[assign[s] * n + a] += x[a];
+            }
+        }
+        for j in 0..centres {
+            if cnt[j] > 0 {
+                for a in 0..n {
+                    c[j * n + a] = sum[j * n + a] / cnt[j] as f64;
+                }
+            }
+        }
+    }
+    c
+}
+
+/// The width of each of the `centres` centres `c` (× n): `multiplier` × the mean distance to
+/// its n + 1 nearest other centres (all others when there are fewer).
+fn centre_widths(c: &[f64], n: usize, centres: usize, multiplier: f64) -> Vec<f64> {
+    let q = (n + 1).min(centres - 1);
+    (0..centres)
+        .map(|j| {
+            let mut d: Vec<f64> = (0..centres)
+                .filter(|&i| i != j)
+                .map(|i| dist2(&c[i * n..(i + 1) * n], &c[j * n..(j + 1) * n]).sqrt())
+                .collect();
+            d.select_nth_unstable_by(q - 1, |a, b| a.total_cmp(b));
+            multiplier * d[..q].iter().sum::<f64>() / q as f64
+        })
+        .collect()
+}
+
 impl GaussianRbf {
     /// Fits `centres` Gaussians to N points `inputs` (N × n, row-major) with values `targets`
     /// (N × m): `kmeans_iterations` Lloyd iterations from `centres` distinct random inputs
@@ -61,59 +133,9 @@ impl GaussianRbf {
         if !knobs_ok || inputs.iter().chain(targets).any(|v| !v.is_finite()) {
             return bad("rbf: non-finite data, width multiplier <= 0 or ridge < 0".into());
         }
-        // k-means initialisation: distinct random samples (partial Fisher–Yates).
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let mut order: Vec<usize> = (0..count).collect();
-        for i in 0..centres {
-            let j = rng.random_range(i..count);
-            order.swap(i, j);
-        }
-        let mut c: Vec<f64> = order[..centres]
-            .iter()
-            .flat_map(|&s| inputs[s * n..(s + 1) * n].iter().copied())
-            .collect();
-        let mut assign = vec![usize::MAX; count];
-        for _ in 0..kmeans_iterations {
-            let mut changed = false;
-            for (s, x) in inputs.chunks_exact(n).enumerate() {
-                let best = (0..centres)
-                    .map(|j| (j, dist2(x, &c[j * n..(j + 1) * n])))
-                    .min_by(|a, b| a.1.total_cmp(&b.1))
-                    .map_or(0, |(j, _)| j);
-                changed |= assign[s] != best;
-                assign[s] = best;
-            }
-            if !changed {
-                break;
-            }
-            let mut sum = vec![0.0; centres * n];
-            let mut cnt = vec![0usize; centres];
-            for (s, x) in inputs.chunks_exact(n).enumerate() {
-                cnt[assign[s]] += 1;
-                for a in 0..n {
-                    sum[assign[s] * n + a] += x[a];
-                }
-            }
-            for j in 0..centres {
-                if cnt[j] > 0 {
-                    for a in 0..n {
-                        c[j * n + a] = sum[j * n + a] / cnt[j] as f64;
-                    }
-                }
-            }
-        }
-        // Widths from the n + 1 nearest other centres.
-        let q = (n + 1).min(centres - 1);
-        let widths: Vec<f64> = (0..centres)
-            .map(|j| {
-                let mut d: Vec<f64> = (0..centres)
-                    .filter(|&i| i != j)
-                    .map(|i| dist2(&c[i * n..(i + 1) * n], &c[j * n..(j + 1) * n]).sqrt())
-                    .collect();
-                d.select_nth_unstable_by(q - 1, |a, b| a.total_cmp(b));
-                width_multiplier * d[..q].iter().sum::<f64>() / q as f64
-            })
-            .collect();
+        // ⟨k-means centres, their widths, the output weights by least squares⟩
+        let c = lloyd_centres(inputs, n, centres, kmeans_iterations, seed);
+        let widths = centre_widths(&c, n, centres, width_multiplier);
         let mut net = Self {
             n,
             m,
@@ -121,11 +143,25 @@ impl GaussianRbf {
             widths,
             weights: vec![0.0; centres * m],
         };
+        net.weights = net.least_squares_weights(inputs, targets, ridge)?;
+        Ok(net)
+    }
+
+    /// The output weights (centres × m) by least squares on the rows `inputs` (N × n) and
+    /// `targets` (N × m), with relative ridge `ridge` ([`crate::linalg::ridge_solve`]); the
+    /// centres and widths are the network's.
+    fn least_squares_weights(
+        &self,
+        inputs: &[f64],
+        targets: &[f64],
+        ridge: f64,
+    ) -> Result<Vec<f64>, IsgcsError> {
+        let (n, m, centres) = (self.n, self.m, self.widths.len());
         let mut gram = vec![0.0; centres * centres];
         let mut rhs = vec![0.0; centres * m];
         let mut act = Vec::new();
         for (x, y) in inputs.chunks_exact(n).zip(targets.chunks_exact(m)) {
-            net.activations(x, &mut act);
+            self.activations(x, &mut act);
             for &(i, a) in &act {
                 for &(j, b) in &act {
                     if j <= i {
@@ -139,8 +175,7 @@ impl GaussianRbf {
         }
         crate::linalg::ridge_solve(&gram, centres, &mut rhs, m, ridge)
             .ok_or_else(|| IsgcsError::Invalid("rbf: no sample activates any centre".into()))?;
-        net.weights = rhs;
-        Ok(net)
+        Ok(rhs)
     }
 
     /// Number of centres.

@@ -611,11 +611,11 @@ pub(crate) fn fit_gcv(
 /// candidate is scored at `start` (in parallel), the [`RACE_KEEP`] best walk their
 /// multiplier from there (in parallel), and the one with the lowest score (the lowest index
 /// on ties) is refitted on every row. The score is the error on the rows after the selection
-/// rows ([`holdout_at`]) when there are enough of them, else the leave-one-out error on the
-/// selection rows (`gcv_at`). Returns the winner's index in `candidates`, weights and choice,
-/// and with the holdout score the second walked candidate and its share α when the blend
-/// (1 − α)·winner + α·second ([`blend_share`]) has the lower holdout error (its score is then
-/// the blend's).
+/// rows ([`fit_best_holdout`]) when there are enough of them, else the leave-one-out error on
+/// the selection rows (`gcv_at`: [`lone_walk`], [`loo_race`], [`loo_refit`]). Returns the
+/// winner's index in `candidates`, weights and choice, and with the holdout score the second
+/// walked candidate and its share α when the blend (1 − α)·winner + α·second
+/// ([`blend_share`]) has the lower holdout error (its score is then the blend's).
 pub(crate) fn fit_best(
     candidates: &[(&Basis, &[f64])],
     ys: ArrayView2<'_, f64>,
@@ -624,7 +624,6 @@ pub(crate) fn fit_best(
     select_rows: usize,
     start: f64,
 ) -> Option<Choice> {
-    type Fit = (f64, Array2<f64>, f64, f64);
     let rows = ys.nrows();
     let sel = select_rows.min(rows).max(1);
     let sy = ys.slice_axis(Axis(0), Slice::from(..sel));
@@ -635,138 +634,162 @@ pub(crate) fn fit_best(
     // few per column.)
     let use_holdout =
         ridge.is_none() && (2 * hold >= sel || 5 * hold >= rows) && hold >= HOLDOUT_MIN;
-    let hy = ys.slice_axis(Axis(0), Slice::from(sel..sel + hold));
     if use_holdout {
         return fit_best_holdout(candidates, ys, mult, sel, hold, start);
     }
-    let eval = |&(basis, xs): &(&Basis, &[f64]), mult: f64, hint: Option<f64>| {
-        let n = basis.n;
-        let fit = if use_holdout {
-            holdout_at(
-                basis,
-                mult,
-                (&xs[..sel * n], sy),
-                (&xs[sel * n..(sel + hold) * n], hy),
-                hint,
-            )
-        } else {
-            gcv_at(basis, mult, ridge, &xs[..sel * n], sy, sel)
-        };
-        fit.map(|fit| (mult, fit))
-    };
+    // ⟨The leave-one-out selection on the first `sel` rows: the walks, the best of them
+    // refitted on every row⟩
     let first = mult.unwrap_or_else(|| start.clamp(MULT_RANGE.0, MULT_RANGE.1));
-    // A lone candidate scored by leave-one-out (the metric pilots; no ridge hint: every score
-    // depends on its multiplier only) walks speculatively: the next two multipliers at once
-    // on the two threads (at the start up and down), the results taken in the order of the
-    // walk, so the choice is the one-by-one walk's. Its raw Gaussians are computed once, at
-    // the first multiplier, and moved along the walk ([`move_raw`]) as in the holdout walk.
-    let lone = candidates.len() == 1 && !use_holdout && mult.is_none();
-    let walks: Vec<(usize, (f64, Fit))> = if lone {
+    let walks: Vec<(usize, (f64, Scored))> = if candidates.len() == 1 && mult.is_none() {
         let (basis, xs) = candidates[0];
-        let xs = &xs[..sel * basis.n];
-        let step = std::f64::consts::SQRT_2;
-        let in_range = |m: f64| (MULT_RANGE.0..=MULT_RANGE.1).contains(&m);
-        type At = (f64, Fit, Array2<f64>);
-        // The fit at `at`'s multiplier · √2^steps, from `at`'s raw values.
-        let try_at = |at: &At, steps: i32| -> Option<At> {
-            let m = at.0 * step.powi(steps);
-            if !in_range(m) {
-                return None;
-            }
-            let mut raw = at.2.clone();
-            move_raw(&mut raw, steps, basis, m, xs);
-            let fit = gcv_of_raw(basis, &raw, xs, sy, ridge, sel)?;
-            Some((m, fit, raw))
-        };
-        let better = |f: &Option<At>, at: &At| f.as_ref().is_some_and(|f| f.1.0 < at.1.0);
-        let raw = basis.raw(first, xs);
-        let mut at = match gcv_of_raw(basis, &raw, xs, sy, ridge, sel) {
-            Some(fit) => (first, fit, raw),
-            None => return None,
-        };
-        let (up, down) = rayon::join(|| try_at(&at, 1), || try_at(&at, -1));
-        let dir = if better(&up, &at) {
-            at = up.expect("better implies some");
-            Some(1)
-        } else if better(&down, &at) {
-            at = down.expect("better implies some");
-            Some(-1)
-        } else {
-            None
-        };
-        if let Some(dir) = dir {
-            loop {
-                let (fa, fb) = rayon::join(|| try_at(&at, dir), || try_at(&at, 2 * dir));
-                if !better(&fa, &at) {
-                    break;
-                }
-                at = fa.expect("better implies some");
-                if !better(&fb, &at) {
-                    break;
-                }
-                at = fb.expect("better implies some");
-            }
-        }
-        vec![(0, (at.0, at.1))]
+        vec![(0, lone_walk(basis, &xs[..sel * basis.n], sy, ridge, first)?)]
     } else {
-        // Every candidate at the first multiplier (in parallel) …
-        let mut starts: Vec<Option<(f64, Fit)>> = candidates
-            .par_iter()
-            .map(|c| eval(c, first, None))
-            .collect();
-        // … then the walk (module docs of `regressor`) only from the RACE_KEEP best of them: a
-        // candidate that starts behind the leaders rarely overtakes both of them.
-        let keep = if mult.is_some() { 1 } else { RACE_KEEP };
-        let order = leaders(
-            candidates.len(),
-            |i| starts[i].as_ref().map(|s| s.1.0),
-            keep,
-        );
-        let seeds: Vec<(usize, (f64, Fit))> = order
-            .iter()
-            .filter_map(|&i| starts[i].take().map(|s| (i, s)))
-            .collect();
-        let walk = |(i, at): (usize, (f64, Fit))| -> (usize, (f64, Fit)) {
-            if mult.is_some() {
-                return (i, at);
-            }
-            let c = &candidates[i];
-            let at = walk_width(
-                at,
-                |f: &Fit| f.0,
-                |m, f: &Fit| eval(c, m, Some(f.2)).map(|(_, fit)| fit),
-            );
-            (i, at)
-        };
-        seeds.into_par_iter().map(walk).collect()
+        loo_race(candidates, sy, mult, ridge, first)
     };
     let (index, (mult, fit)) = walks
         .into_iter()
         .min_by(|a, b| a.1.1.0.total_cmp(&b.1.1.0).then(a.0.cmp(&b.0)))?;
-    // Refit on every row unless the selection rows were all rows.
     let (basis, xs) = candidates[index];
-    let (score, weights, relative, dof) = if sel == rows {
-        fit
-    } else if ridge.is_none() {
-        // The same absolute ridge ρ on every row: the relative ridge is ρ over the mean
-        // diagonal of G, which grows with the rows (floored as in the selection). One Cholesky
-        // solve, the ridge raised by half decades while it fails; the eigendecomposition's
-        // ridge path only if no relative ridge up to 1 factorises.
-        let floor = if use_holdout {
-            holdout_floor()
-        } else {
-            RIDGE_FLOOR
-        };
-        let r = (fit.2 * sel as f64 / rows as f64).max(floor);
-        match refit_all(basis, mult, xs, ys, r, 1.0) {
-            Some((w, relative, dof)) => (fit.0, w, relative, dof),
-            None => gcv_at(basis, mult, ridge, xs, ys, sel)?,
-        }
-    } else {
-        gcv_at(basis, mult, ridge, xs, ys, sel)?
-    };
+    let (score, weights, relative, dof) = loo_refit(basis, mult, xs, ys, ridge, sel, fit)?;
     let (index, weights, chosen) = picked(index, weights, mult, relative, dof, score);
     Some((index, weights, chosen, None))
+}
+
+/// The width walk of a lone candidate scored by leave-one-out ([`fit_best`]: the metric
+/// pilots; no ridge hint, every score depends on its multiplier only), `basis` on the
+/// selection rows `xs` with targets `sy`, from the multiplier `first`: speculative, the next
+/// two multipliers at once on the two threads (at the start up and down), the results taken
+/// in the order of the walk, so the choice is the one-by-one walk's. Its raw Gaussians are
+/// computed once, at the first multiplier, and moved along the walk ([`move_raw`]) as in the
+/// holdout walk. Returns the multiplier and fit where the walk stops; `None` without a fit at
+/// `first`.
+fn lone_walk(
+    basis: &Basis,
+    xs: &[f64],
+    sy: ArrayView2<'_, f64>,
+    ridge: Option<f64>,
+    first: f64,
+) -> Option<(f64, Scored)> {
+    let sel = sy.nrows();
+    let step = std::f64::consts::SQRT_2;
+    let in_range = |m: f64| (MULT_RANGE.0..=MULT_RANGE.1).contains(&m);
+    type At = (f64, Scored, Array2<f64>);
+    // The fit at `at`'s multiplier · √2^steps, from `at`'s raw values.
+    let try_at = |at: &At, steps: i32| -> Option<At> {
+        let m = at.0 * step.powi(steps);
+        if !in_range(m) {
+            return None;
+        }
+        let mut raw = at.2.clone();
+        move_raw(&mut raw, steps, basis, m, xs);
+        let fit = gcv_of_raw(basis, &raw, xs, sy, ridge, sel)?;
+        Some((m, fit, raw))
+    };
+    let better = |f: &Option<At>, at: &At| f.as_ref().is_some_and(|f| f.1.0 < at.1.0);
+    let raw = basis.raw(first, xs);
+    let mut at = match gcv_of_raw(basis, &raw, xs, sy, ridge, sel) {
+        Some(fit) => (first, fit, raw),
+        None => return None,
+    };
+    let (up, down) = rayon::join(|| try_at(&at, 1), || try_at(&at, -1));
+    let dir = if better(&up, &at) {
+        at = up.expect("better implies some");
+        Some(1)
+    } else if better(&down, &at) {
+        at = down.expect("better implies some");
+        Some(-1)
+    } else {
+        None
+    };
+    if let Some(dir) = dir {
+        loop {
+            let (fa, fb) = rayon::join(|| try_at(&at, dir), || try_at(&at, 2 * dir));
+            if !better(&fa, &at) {
+                break;
+            }
+            at = fa.expect("better implies some");
+            if !better(&fb, &at) {
+                break;
+            }
+            at = fb.expect("better implies some");
+        }
+    }
+    Some((at.0, at.1))
+}
+
+/// The leave-one-out race of [`fit_best`] on the selection rows (targets `sy`): every
+/// candidate scored at the multiplier `first` (in parallel), then the walk (module docs of
+/// `regressor`; none with a given `mult`) only from the [`RACE_KEEP`] best of them (one with
+/// a given `mult`), in parallel: a candidate that starts behind the leaders rarely overtakes
+/// both of them. Each walked candidate's index, multiplier and fit.
+fn loo_race(
+    candidates: &[(&Basis, &[f64])],
+    sy: ArrayView2<'_, f64>,
+    mult: Option<f64>,
+    ridge: Option<f64>,
+    first: f64,
+) -> Vec<(usize, (f64, Scored))> {
+    let sel = sy.nrows();
+    let eval = |&(basis, xs): &(&Basis, &[f64]), mult: f64| {
+        gcv_at(basis, mult, ridge, &xs[..sel * basis.n], sy, sel).map(|fit| (mult, fit))
+    };
+    // Every candidate at the first multiplier (in parallel) …
+    let mut starts: Vec<Option<(f64, Scored)>> =
+        candidates.par_iter().map(|c| eval(c, first)).collect();
+    // … then the walk only from the RACE_KEEP best of them.
+    let keep = if mult.is_some() { 1 } else { RACE_KEEP };
+    let order = leaders(
+        candidates.len(),
+        |i| starts[i].as_ref().map(|s| s.1.0),
+        keep,
+    );
+    let seeds: Vec<(usize, (f64, Scored))> = order
+        .iter()
+        .filter_map(|&i| starts[i].take().map(|s| (i, s)))
+        .collect();
+    let walk = |(i, at): (usize, (f64, Scored))| -> (usize, (f64, Scored)) {
+        if mult.is_some() {
+            return (i, at);
+        }
+        let c = &candidates[i];
+        let at = walk_width(
+            at,
+            |f: &Scored| f.0,
+            |m, _: &Scored| eval(c, m).map(|(_, fit)| fit),
+        );
+        (i, at)
+    };
+    seeds.into_par_iter().map(walk).collect()
+}
+
+/// The leave-one-out selection's winner, `basis` at the multiplier `mult` with its `fit` on
+/// the first `sel` rows, refitted on every row `xs` (targets `ys`) unless the selection rows
+/// were all rows. Without a given `ridge`: the same absolute ridge ρ on every row (the
+/// relative ridge is ρ over the mean diagonal of G, which grows with the rows; floored at
+/// [`RIDGE_FLOOR`] as in the selection), one Cholesky solve, the ridge raised while it fails
+/// ([`refit_all`]); the eigendecomposition's ridge path only if no relative ridge up to 1
+/// factorises. The score stays the selection's.
+fn loo_refit(
+    basis: &Basis,
+    mult: f64,
+    xs: &[f64],
+    ys: ArrayView2<'_, f64>,
+    ridge: Option<f64>,
+    sel: usize,
+    fit: Scored,
+) -> Option<Scored> {
+    let rows = ys.nrows();
+    if sel == rows {
+        return Some(fit);
+    }
+    if ridge.is_some() {
+        return gcv_at(basis, mult, ridge, xs, ys, sel);
+    }
+    let r = (fit.2 * sel as f64 / rows as f64).max(RIDGE_FLOOR);
+    match refit_all(basis, mult, xs, ys, r, 1.0) {
+        Some((w, relative, dof)) => Some((fit.0, w, relative, dof)),
+        None => gcv_at(basis, mult, ridge, xs, ys, sel),
+    }
 }
 
 /// A refitted candidate's [`Picked`] from its weights (cols × m) and choice.
@@ -843,14 +866,10 @@ pub(crate) fn selection_rows(rows: usize, cols: usize) -> usize {
     }
 }
 
-/// One multiplier's output layer fitted on the rows `fit` (inputs, targets) and scored by
-/// the mean squared error per row on the rows `hold`: the weights, the relative ridge
-/// (ε…1, [`holdout_floor`], the one with the lowest holdout error) and tr H (NaN: not
-/// computed). Each ridge is one Cholesky solve (skipped when the factorisation fails).
-/// Without a `hint`, the ridges 1, 10⁻², … down to ε, then the best one's neighbours at ±1
-/// decade; with a `hint` (the ridge chosen at a neighbouring multiplier), the hint and ±2
-/// decades (upwards by half decades while every factorisation failed); then half decades
-/// around the best until both its neighbours are tried.
+/// [`holdout_solve`] on the rows `fit` and `hold` (inputs, targets) at the multiplier `mult`,
+/// from their design matrices: the tests' reference (the selection scores the holdout rows
+/// from their raw values, [`HoldoutRows::score`]).
+#[cfg(test)]
 fn holdout_at(
     basis: &Basis,
     mult: f64,
@@ -881,8 +900,15 @@ type Normal = (Array2<f64>, Array2<f64>);
 /// A selection's score, weights (cols × m), relative ridge and tr H.
 type Scored = (f64, Array2<f64>, f64, f64);
 
-/// [`holdout_at`] on given design matrices of the fitted rows and of the holdout rows; also
-/// returns the fitted rows' G and B (the refit adds the other rows to them).
+/// One multiplier's output layer fitted on the rows of the design matrix `a_fit` (targets
+/// `y_fit`) and scored by the mean squared error per row on the holdout rows `a` (targets
+/// `y_hold`): the weights, the relative ridge (ε…1, [`holdout_floor`], the one with the lowest
+/// holdout error) and tr H (NaN: not computed); also the fitted rows' G and B (the refit adds
+/// the other rows to them). Each ridge is one Cholesky solve (skipped when the factorisation
+/// fails). Without a `hint`, the ridges 1, 10⁻², … down to ε, then the best one's neighbours
+/// at ±1 decade; with a `hint` (the ridge chosen at a neighbouring multiplier), the hint and
+/// ±2 decades (upwards by half decades while every factorisation failed); then half decades
+/// around the best until both its neighbours are tried.
 fn holdout_solve(
     a_fit: ArrayView2<'_, f64>,
     y_fit: ArrayView2<'_, f64>,
@@ -972,6 +998,9 @@ fn holdout_solve(
 /// rounding of the row sum) while they are read.
 #[derive(Clone, Copy)]
 enum Holdout<'a> {
+    /// The design matrix: the tests' reference ([`holdout_at`]; the selection scores from raw
+    /// values).
+    #[cfg(test)]
     Design(ArrayView2<'a, f64>),
     Raw {
         raw: ArrayView2<'a, f64>,
@@ -997,6 +1026,7 @@ impl Holdout<'_> {
         let rows = y.nrows();
         let row_err = |r: usize, acc: &mut [f64], pred: &mut [f64]| {
             match *self {
+                #[cfg(test)]
                 Holdout::Design(a) => {
                     let row = a.row(r);
                     let row = row.as_slice().expect("design rows are contiguous");
@@ -1135,31 +1165,52 @@ fn move_raw(a: &mut Array2<f64>, steps: i32, basis: &Basis, to: f64, xs: &[f64])
         });
 }
 
-/// [`fit_best`] scored on a holdout: `sel` fitted rows, the next `hold` rows scored. The raw
-/// Gaussians of the rows are computed once per candidate geometry (normalized and plain
-/// candidates on the same centres and rows share them) and moved along the width walk by
-/// [`RawRows::move_to`]; the refit on every row reuses the winner's raw values of the
-/// selection and holdout rows and computes only the remaining rows afresh.
-fn fit_best_holdout(
-    candidates: &[(&Basis, &[f64])],
-    ys: ArrayView2<'_, f64>,
-    mult: Option<f64>,
+/// A holdout selection's score, weights, relative ridge and tr H, with the fitted rows' G and B.
+type HoldoutFit = (Scored, Normal);
+/// A candidate of the holdout selection along its walk: its index, multiplier and fit there,
+/// and its raw values.
+type Walked = (usize, (f64, HoldoutFit), RawRows);
+
+/// The rows of a holdout selection ([`fit_best_holdout`]): the first `sel` rows fitted, the
+/// next `hold` rows scored, the rest only refitted; with a pool of spare matrices.
+struct HoldoutRows<'a> {
+    /// The targets of every row.
+    ys: ArrayView2<'a, f64>,
+    /// The targets of the fitted rows.
+    sy: ArrayView2<'a, f64>,
+    /// The targets of the holdout rows.
+    hy: ArrayView2<'a, f64>,
     sel: usize,
     hold: usize,
-    start: f64,
-) -> Option<Choice> {
-    // The selection's score, weights, relative ridge and tr H, with the fitted rows' G and B.
-    type Fit = (Scored, Normal);
-    let rows = ys.nrows();
-    let sy = ys.slice_axis(Axis(0), Slice::from(..sel));
-    let hy = ys.slice_axis(Axis(0), Slice::from(sel..sel + hold));
-    let scratch = Scratch::default();
-    fn split<'a>(c: &(&Basis, &'a [f64]), sel: usize, hold: usize) -> (&'a [f64], &'a [f64]) {
+    scratch: Scratch,
+}
+
+impl<'a> HoldoutRows<'a> {
+    /// The rows of `ys`: `sel` fitted, the next `hold` scored.
+    fn new(ys: ArrayView2<'a, f64>, sel: usize, hold: usize) -> Self {
+        Self {
+            ys,
+            sy: ys.slice_axis_move(Axis(0), Slice::from(..sel)),
+            hy: ys.slice_axis_move(Axis(0), Slice::from(sel..sel + hold)),
+            sel,
+            hold,
+            scratch: Scratch::default(),
+        }
+    }
+
+    /// A candidate's inputs of the fitted rows and of the holdout rows.
+    fn split<'b>(&self, c: &(&Basis, &'b [f64])) -> (&'b [f64], &'b [f64]) {
+        let (sel, hold) = (self.sel, self.hold);
         let n = c.0.n;
         (&c.1[..sel * n], &c.1[sel * n..(sel + hold) * n])
     }
-    let eval = |c: &(&Basis, &[f64]), raw: &RawRows, hint: Option<f64>| -> Option<Fit> {
-        let (xf, xh) = split(c, sel, hold);
+
+    /// Candidate `c` fitted on the fitted rows and scored on the holdout rows
+    /// ([`holdout_solve`]) from its raw values `raw` at their multiplier, the ridge search
+    /// from `hint` when given.
+    fn score(&self, c: &(&Basis, &[f64]), raw: &RawRows, hint: Option<f64>) -> Option<HoldoutFit> {
+        let (sy, hy, scratch) = (self.sy, self.hy, &self.scratch);
+        let (xf, xh) = self.split(c);
         let basis = c.0;
         // The holdout rows are scored from their raw values (normalized and completed row
         // by row as they are read), the selection rows' design matrix made in a spare matrix
@@ -1170,126 +1221,96 @@ fn fit_best_holdout(
             xs: xh,
         };
         if !basis.normalized && !basis.affine {
-            return holdout_solve(raw.fit.view(), sy, holdout, hy, hint, &scratch);
+            return holdout_solve(raw.fit.view(), sy, holdout, hy, hint, scratch);
         }
-        let mut a_fit = scratch.take(sel, basis.cols());
+        let mut a_fit = scratch.take(self.sel, basis.cols());
         basis.design_of_raw_into(&raw.fit, xf, &mut a_fit);
-        let fit = holdout_solve(a_fit.view(), sy, holdout, hy, hint, &scratch);
+        let fit = holdout_solve(a_fit.view(), sy, holdout, hy, hint, scratch);
         scratch.give(a_fit);
         fit
-    };
-    let first = mult.unwrap_or_else(|| start.clamp(MULT_RANGE.0, MULT_RANGE.1));
-    // Candidates with the same centres, widths and rows share their raw values.
-    let same = |a: &(&Basis, &[f64]), b: &(&Basis, &[f64])| {
-        std::ptr::eq(a.1, b.1) && a.0.centres == b.0.centres && a.0.base == b.0.base
-    };
-    let geometry: Vec<usize> = (0..candidates.len())
-        .map(|i| {
-            (0..i)
-                .find(|&j| same(&candidates[i], &candidates[j]))
-                .unwrap_or(i)
-        })
-        .collect();
-    let owners: Vec<usize> = (0..candidates.len())
-        .filter(|&i| geometry[i] == i)
-        .collect();
-    let raws: Vec<RawRows> = owners
-        .par_iter()
-        .map(|&i| {
-            let (xf, xh) = split(&candidates[i], sel, hold);
-            let basis = candidates[i].0;
-            RawRows {
-                mult: first,
-                fit: basis.raw(first, xf),
-                hold: basis.raw(first, xh),
-            }
-        })
-        .collect();
-    let raw_of = |i: usize| {
-        &raws[owners
-            .iter()
-            .position(|&o| o == geometry[i])
-            .expect("owner")]
-    };
-    // Every candidate at the first multiplier: the first one with the full ridge search,
-    // the others (in parallel) from its ridge as the hint (the ridge is the noise-to-signal
-    // ratio of the data, relative to the Gram's mean diagonal, so it carries over between
-    // bases; the hint's probes two decades to either side and the refinement still walk to
-    // a different optimum) …
-    let lead = eval(&candidates[0], raw_of(0), None);
-    let hint = lead.as_ref().map(|f| f.0.2);
-    let mut starts: Vec<Option<Fit>> = std::iter::once(lead)
-        .chain(
-            (1..candidates.len())
-                .into_par_iter()
-                .map(|i| eval(&candidates[i], raw_of(i), hint))
-                .collect::<Vec<_>>(),
-        )
-        .collect();
-    // … then the walk (module docs of `regressor`) only from the RACE_KEEP best of them.
-    let keep = if mult.is_some() { 1 } else { RACE_KEEP };
-    let order = leaders(
-        candidates.len(),
-        |i| starts[i].as_ref().map(|s| s.0.0),
-        keep,
-    );
-    let seeds: Vec<(usize, (f64, Fit), RawRows)> = order
-        .iter()
-        .filter_map(|&i| starts[i].take().map(|s| (i, (first, s), raw_of(i).clone())))
-        .collect();
-    drop(raws);
-    let walk = |(i, at, raw): (usize, (f64, Fit), RawRows)| {
-        let mut raw = raw;
-        if mult.is_some() {
+    }
+
+    /// Every candidate at the first multiplier (its raw values there in `raws`): the first
+    /// one with the full ridge search, the others (in parallel) from its ridge as the hint
+    /// (the ridge is the noise-to-signal ratio of the data, relative to the Gram's mean
+    /// diagonal, so it carries over between bases; the hint's probes two decades to either
+    /// side and the refinement still walk to a different optimum).
+    fn starts(
+        &self,
+        candidates: &[(&Basis, &[f64])],
+        raws: &SharedRaws,
+    ) -> Vec<Option<HoldoutFit>> {
+        let lead = self.score(&candidates[0], raws.of(0), None);
+        let hint = lead.as_ref().map(|f| f.0.2);
+        std::iter::once(lead)
+            .chain(
+                (1..candidates.len())
+                    .into_par_iter()
+                    .map(|i| self.score(&candidates[i], raws.of(i), hint))
+                    .collect::<Vec<_>>(),
+            )
+            .collect()
+    }
+
+    /// The width walk ([`walk_width`]) of a started candidate, its raw values moved along
+    /// ([`RawRows::move_to`]), each multiplier's ridge search from the previous one's ridge;
+    /// none with a given multiplier (`fixed`).
+    fn walk(&self, candidates: &[(&Basis, &[f64])], start: Walked, fixed: bool) -> Walked {
+        let (i, at, mut raw) = start;
+        if fixed {
             return (i, at, raw);
         }
         let c = &candidates[i];
-        let (xf, xh) = split(c, sel, hold);
+        let (xf, xh) = self.split(c);
         let at = walk_width(
             at,
-            |f: &Fit| f.0.0,
-            |m, f: &Fit| {
+            |f: &HoldoutFit| f.0.0,
+            |m, f: &HoldoutFit| {
                 raw.move_to(m, c.0, xf, xh);
-                eval(c, &raw, Some(f.0.2))
+                self.score(c, &raw, Some(f.0.2))
             },
         );
         (i, at, raw)
-    };
-    let walks: Vec<(usize, (f64, Fit), RawRows)> = seeds.into_par_iter().map(walk).collect();
-    let mut walks = walks;
-    walks.sort_by(|a, b| a.1.1.0.0.total_cmp(&b.1.1.0.0).then(a.0.cmp(&b.0)));
-    // Holdout predictions of every walked candidate at its chosen multiplier. From here on
-    // only the holdout rows' design matrix is needed (the refit adds its Gram matrix): it
-    // replaces their raw values in `raw.hold`.
-    let preds: Vec<Array2<f64>> = walks
-        .par_iter_mut()
-        .map(|(i, (mult, fit), raw)| {
-            let c = &candidates[*i];
-            let (_, xh) = split(c, sel, hold);
-            raw.fit = Array2::zeros((0, c.0.cells()));
-            raw.move_to(*mult, c.0, &[], xh);
-            if c.0.normalized || c.0.affine {
-                raw.hold = c.0.design_of_raw(&raw.hold, xh).into_owned();
-            }
-            mul_few(raw.hold.view(), fit.0.1.view())
-        })
-        .collect();
-    let share = if BLEND && walks.len() > 1 {
-        blend_share(preds[0].view(), preds[1].view(), hy)
-    } else {
-        None
-    };
-    let used = if share.is_some() { 2 } else { 1 };
-    walks.truncate(used);
-    let score = match share {
-        Some((_, err)) => err,
-        None => walks[0].1.1.0.0,
-    };
-    // The refit on every row with the same absolute ridge (module docs of `regressor`): G and
-    // B of the selection rows as scored at the chosen multiplier, plus those of the holdout
-    // rows (their design matrix made for the predictions above) and of the remaining rows.
-    let yy: f64 = ys.iter().map(|v| v * v).sum();
-    let refit = |(index, (mult, fit), raw): (usize, (f64, Fit), RawRows)| {
+    }
+
+    /// The holdout predictions of every walked candidate at its chosen multiplier. From here
+    /// on only the holdout rows' design matrix is needed (the refit adds its Gram matrix): it
+    /// replaces their raw values in `raw.hold` (and the fitted rows' raw values are dropped).
+    fn predictions(
+        &self,
+        candidates: &[(&Basis, &[f64])],
+        walks: &mut [Walked],
+    ) -> Vec<Array2<f64>> {
+        walks
+            .par_iter_mut()
+            .map(|(i, (mult, fit), raw)| {
+                let c = &candidates[*i];
+                let (_, xh) = self.split(c);
+                raw.fit = Array2::zeros((0, c.0.cells()));
+                raw.move_to(*mult, c.0, &[], xh);
+                if c.0.normalized || c.0.affine {
+                    raw.hold = c.0.design_of_raw(&raw.hold, xh).into_owned();
+                }
+                mul_few(raw.hold.view(), fit.0.1.view())
+            })
+            .collect()
+    }
+
+    /// The refit of a walked candidate on every row with the same absolute ridge (module docs
+    /// of `regressor`): G and B of the selection rows as scored at the chosen multiplier,
+    /// plus those of the holdout rows (their design matrix, made for [`Self::predictions`],
+    /// in `raw.hold`) and of the remaining rows; the ridge raised while the factorisation
+    /// fails ([`refit_solve`]). `yy` is Σ y² over every row; `score` the selection's.
+    fn refit(
+        &self,
+        candidates: &[(&Basis, &[f64])],
+        walked: Walked,
+        yy: f64,
+        score: f64,
+    ) -> Option<Picked> {
+        let (ys, hy, sel, hold) = (self.ys, self.hy, self.sel, self.hold);
+        let rows = ys.nrows();
+        let (index, (mult, fit), raw) = walked;
         let (fit, (mut g, mut b)) = fit;
         let (basis, xs) = candidates[index];
         let n = basis.n;
@@ -1297,7 +1318,7 @@ fn fit_best_holdout(
         // (`raw.hold` holds the holdout rows' design matrix since the predictions.)
         let pieces = [
             (raw.hold, hy),
-            (rest, ys.slice_axis(Axis(0), Slice::from(sel + hold..))),
+            (rest, ys.slice_axis_move(Axis(0), Slice::from(sel + hold..))),
         ];
         for (a, y) in &pieces {
             gram_add(a.view(), &mut g);
@@ -1307,7 +1328,120 @@ fn fit_best_holdout(
         let r = (fit.2 * sel as f64 / rows as f64).max(holdout_floor());
         let (weights, relative, dof) = refit_solve(&g, &b, yy, r, 1.0)?;
         Some(picked(index, weights, mult, relative, dof, score))
+    }
+}
+
+/// The raw Gaussians ([`RawRows`]) of the holdout selection's candidates at the first
+/// multiplier, computed once per geometry: candidates with the same centres, widths and rows
+/// (normalized and plain ones on the same centres) share them.
+struct SharedRaws {
+    /// Per candidate: the first candidate of its geometry.
+    geometry: Vec<usize>,
+    /// The first candidate of each geometry, in order.
+    owners: Vec<usize>,
+    /// Per owner: the raw values.
+    raws: Vec<RawRows>,
+}
+
+impl SharedRaws {
+    /// The raw values of the `candidates`' geometries on the rows of `h` at the multiplier
+    /// `first` (in parallel).
+    fn at(candidates: &[(&Basis, &[f64])], h: &HoldoutRows, first: f64) -> Self {
+        let same = |a: &(&Basis, &[f64]), b: &(&Basis, &[f64])| {
+            std::ptr::eq(a.1, b.1) && a.0.centres == b.0.centres && a.0.base == b.0.base
+        };
+        let geometry: Vec<usize> = (0..candidates.len())
+            .map(|i| {
+                (0..i)
+                    .find(|&j| same(&candidates[i], &candidates[j]))
+                    .unwrap_or(i)
+            })
+            .collect();
+        let owners: Vec<usize> = (0..candidates.len())
+            .filter(|&i| geometry[i] == i)
+            .collect();
+        let raws: Vec<RawRows> = owners
+            .par_iter()
+            .map(|&i| {
+                let (xf, xh) = h.split(&candidates[i]);
+                let basis = candidates[i].0;
+                RawRows {
+                    mult: first,
+                    fit: basis.raw(first, xf),
+                    hold: basis.raw(first, xh),
+                }
+            })
+            .collect();
+        Self {
+            geometry,
+            owners,
+            raws,
+        }
+    }
+
+    /// The raw values of candidate `i`.
+    fn of(&self, i: usize) -> &RawRows {
+        &self.raws[self
+            .owners
+            .iter()
+            .position(|&o| o == self.geometry[i])
+            .expect("owner")]
+    }
+}
+
+/// [`fit_best`] scored on a holdout: `sel` fitted rows, the next `hold` rows scored. The raw
+/// Gaussians of the rows are computed once per candidate geometry (normalized and plain
+/// candidates on the same centres and rows share them: [`SharedRaws`]) and moved along the
+/// width walk by [`RawRows::move_to`]; the refit on every row reuses the winner's raw values of
+/// the selection and holdout rows and computes only the remaining rows afresh.
+fn fit_best_holdout(
+    candidates: &[(&Basis, &[f64])],
+    ys: ArrayView2<'_, f64>,
+    mult: Option<f64>,
+    sel: usize,
+    hold: usize,
+    start: f64,
+) -> Option<Choice> {
+    let h = HoldoutRows::new(ys, sel, hold);
+    let first = mult.unwrap_or_else(|| start.clamp(MULT_RANGE.0, MULT_RANGE.1));
+    // ⟨Every candidate at the first multiplier …⟩
+    let raws = SharedRaws::at(candidates, &h, first);
+    let mut starts = h.starts(candidates, &raws);
+    // ⟨… then the walk (module docs of `regressor`) only from the RACE_KEEP best of them⟩
+    let keep = if mult.is_some() { 1 } else { RACE_KEEP };
+    let order = leaders(
+        candidates.len(),
+        |i| starts[i].as_ref().map(|s| s.0.0),
+        keep,
+    );
+    let seeds: Vec<Walked> = order
+        .iter()
+        .filter_map(|&i| {
+            starts[i]
+                .take()
+                .map(|s| (i, (first, s), raws.of(i).clone()))
+        })
+        .collect();
+    drop(raws);
+    let walk = |seed: Walked| h.walk(candidates, seed, mult.is_some());
+    let mut walks: Vec<Walked> = seeds.into_par_iter().map(walk).collect();
+    walks.sort_by(|a, b| a.1.1.0.0.total_cmp(&b.1.1.0.0).then(a.0.cmp(&b.0)));
+    // ⟨The blend of the two best on the holdout rows⟩
+    let preds = h.predictions(candidates, &mut walks);
+    let share = if BLEND && walks.len() > 1 {
+        blend_share(preds[0].view(), preds[1].view(), h.hy)
+    } else {
+        None
     };
+    let used = if share.is_some() { 2 } else { 1 };
+    walks.truncate(used);
+    let score = match share {
+        Some((_, err)) => err,
+        None => walks[0].1.1.0.0,
+    };
+    // ⟨The refit on every row⟩
+    let yy: f64 = ys.iter().map(|v| v * v).sum();
+    let refit = |walked: Walked| h.refit(candidates, walked, yy, score);
     let mut fits: Vec<Option<Picked>> = walks.into_par_iter().map(refit).collect();
     let (index, weights, chosen) = fits[0].take()?;
     let partner = match (share, fits.get_mut(1).and_then(Option::take)) {

@@ -69,8 +69,8 @@ pub use crate::data::RegressorError;
 use crate::data::check_data;
 use crate::kmeans::kmeans;
 use crate::readout::{
-    Basis, Readout, Selected, Standardizer, egop, fit_best, fit_fixed, fit_gcv, nearest_widths,
-    selection_rows,
+    Basis, Choice, Readout, Selected, Standardizer, egop, fit_best, fit_fixed, fit_gcv,
+    nearest_widths, selection_rows,
 };
 use crate::{GoalFunction, Isgcs, IsgcsError, Params, Termination};
 use ndarray::ArrayView2;
@@ -508,45 +508,64 @@ const METRIC_FLOOR: f64 = 0.1;
 /// a share of their variance) above which no metric is learned from it.
 const METRIC_UNRESOLVED: f64 = 0.5;
 
-impl Regressor {
-    /// Fits N rows: `inputs` N × n and `targets` N × m, row-major (module docs).
-    pub fn fit(
-        params: &RegressorParams,
+/// Refuses parameters out of range for `n` inputs: the topology dimension, λ, the settling
+/// share, a given ridge or width multiplier.
+fn check_params(params: &RegressorParams, n: usize) -> Result<(), RegressorError> {
+    let invalid = |s: String| Err(RegressorError::InvalidParams(s));
+    if params.topology_dim == Some(0) || params.topology_dim.is_some_and(|k| k > n) {
+        return invalid(format!(
+            "topology_dim {:?} must be 1 ≤ k ≤ n = {n}",
+            params.topology_dim
+        ));
+    }
+    if params.lambda == Some(0) {
+        return invalid("lambda must be at least 1".into());
+    }
+    if !(params.settle.is_finite() && params.settle >= 0.0) {
+        return invalid(format!("settle {} must be finite and >= 0", params.settle));
+    }
+    if params.ridge.is_some_and(|r| !(r.is_finite() && r >= 0.0)) {
+        return invalid(format!("ridge {:?} must be finite and >= 0", params.ridge));
+    }
+    if params
+        .width_multiplier
+        .is_some_and(|w| !(w.is_finite() && w > 0.0))
+    {
+        return invalid(format!(
+            "width_multiplier {:?} must be finite and > 0",
+            params.width_multiplier
+        ));
+    }
+    Ok(())
+}
+
+/// The training rows (module docs, step 1): inputs and targets standardized and in one
+/// shuffled order (rows of one input kept together: [`group_repeats`]), with their
+/// standardizers and the random stream, which goes on to shuffle the growth's epochs.
+struct Rows {
+    xstd: Standardizer,
+    ystd: Standardizer,
+    /// Standardized inputs, N × n, shuffled.
+    xs: Vec<f64>,
+    /// Standardized targets, N × m, in the same order.
+    ys: Vec<f64>,
+    rng: ChaCha8Rng,
+}
+
+impl Rows {
+    /// Standardizes `inputs` (N × n) and `targets` (N × m) and shuffles their `rows` rows once
+    /// with `seed` (the output layer's selection uses a prefix of them).
+    fn shuffled(
         inputs: &[f64],
         targets: &[f64],
         n: usize,
         m: usize,
-    ) -> Result<Self, RegressorError> {
-        let rows = check_data(inputs, targets, n, m)?;
-        let invalid = |s: String| Err(RegressorError::InvalidParams(s));
-        if params.topology_dim == Some(0) || params.topology_dim.is_some_and(|k| k > n) {
-            return invalid(format!(
-                "topology_dim {:?} must be 1 ≤ k ≤ n = {n}",
-                params.topology_dim
-            ));
-        }
-        if params.lambda == Some(0) {
-            return invalid("lambda must be at least 1".into());
-        }
-        if !(params.settle.is_finite() && params.settle >= 0.0) {
-            return invalid(format!("settle {} must be finite and >= 0", params.settle));
-        }
-        if params.ridge.is_some_and(|r| !(r.is_finite() && r >= 0.0)) {
-            return invalid(format!("ridge {:?} must be finite and >= 0", params.ridge));
-        }
-        if params
-            .width_multiplier
-            .is_some_and(|w| !(w.is_finite() && w > 0.0))
-        {
-            return invalid(format!(
-                "width_multiplier {:?} must be finite and > 0",
-                params.width_multiplier
-            ));
-        }
-        // Standardize, and shuffle the rows once (the GCV width search uses a prefix).
+        rows: usize,
+        seed: u64,
+    ) -> Self {
         let xstd = Standardizer::of(inputs, n);
         let ystd = Standardizer::of(targets, m);
-        let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let mut order: Vec<usize> = (0..rows).collect();
         shuffle(&mut order, &mut rng);
         let order = group_repeats(&order, inputs, n);
@@ -558,8 +577,35 @@ impl Regressor {
         };
         let xs = xstd.apply(&permute(inputs, n));
         let ys = ystd.apply(&permute(targets, m));
+        Self {
+            xstd,
+            ystd,
+            xs,
+            ys,
+            rng,
+        }
+    }
+}
+
+/// The standardized inputs in the learned metric (module docs, step 1b).
+struct InMetric {
+    /// The rows T·x (the standardized rows when no metric was learned).
+    xs: Vec<f64>,
+    /// The standardized rows, for the output layer's candidates in the standardized metric
+    /// (empty when no metric was learned).
+    xs_plain: Vec<f64>,
+    /// T (n × n row-major), `None`: the identity.
+    transform: Option<Vec<f64>>,
+    /// The metric pilot's width multiplier, where the output layer's walks start.
+    pilot_mult: f64,
+}
+
+impl InMetric {
+    /// Learns the metric from the standardized rows `xs` and targets `ys` ([`learn_metric`],
+    /// when `params.metric`) and maps the rows into it.
+    fn learn(xs: Vec<f64>, ys: &[f64], n: usize, m: usize, params: &RegressorParams) -> Self {
         let (transform, pilot_mult) = if params.metric {
-            learn_metric(&xs, &ys, n, m, params)
+            learn_metric(&xs, ys, n, m, params)
         } else {
             (None, 1.0)
         };
@@ -568,160 +614,284 @@ impl Regressor {
             Some(t) => (apply_transform(t, &xs, n), xs),
             None => (xs, Vec::new()),
         };
-
-        let (k, simplex) = topology_from_data(&xs, n, params.topology_dim);
-        if params.max_cells < k + 1 || params.max_cells > rows {
-            return Err(RegressorError::CellBudget {
-                cells: params.max_cells,
-                min: k + 1,
-                max: rows,
-            });
+        Self {
+            xs,
+            xs_plain,
+            transform,
+            pilot_mult,
         }
-        let lambda = params.lambda.unwrap_or(10);
-        let net_params = Params {
-            lambda,
-            ..Params::accurate()
-        };
-        let mut net = Isgcs::new(net_params, n, m, k, simplex)?;
-        net.set_growing(false);
-        // Only the centres are trained: the output layer is fitted by least squares and the
-        // resources are set from its residuals (the delta rule's outputs were never used).
-        net.set_unsupervised_only(true);
-        let mut goal = Epochs {
-            xs: &xs,
-            ys: &ys,
-            n,
-            m,
-            order: (0..rows).collect(),
-            next: rows,
-            rng,
-            last: 0,
-        };
+    }
+}
+
+impl Epochs<'_> {
+    /// `steps` online ISGCS steps of `net` on the rows (none when 0).
+    fn train(&mut self, net: &mut Isgcs, steps: u64) -> Result<(), IsgcsError> {
         let go_on = |_: &Isgcs, _: &crate::Event| ControlFlow::Continue(());
-        let mut train = |net: &mut Isgcs, steps: u64| -> Result<(), IsgcsError> {
-            if steps > 0 {
-                net.fit(
-                    &mut goal,
-                    &Termination {
-                        max_steps: Some(steps),
-                        ..Termination::default()
-                    },
-                    go_on,
-                )?;
-            }
-            Ok(())
-        };
-        // Growth in rounds: adapt (λ online steps per cell, then two batch steps), fit the
-        // output layer by least squares on a sample of rows, make each cell's resource the
-        // squared residuals of its rows, and insert 30 % more cells where that resource is
-        // largest (ISGCS insertion).
-        let mut tau = vec![0.0; 0];
-        let (relax_rounds, relax_final) = (2, 5);
-        while net.len() < params.max_cells {
-            let z = net.len();
-            train(&mut net, (lambda * z) as u64)?;
-            let sample = rows.min(4 * z + 200);
-            net.relax(&xs[..sample * n], relax_rounds)?;
-            let centres: Vec<f64> = (0..z).flat_map(|i| net.centre(i).to_vec()).collect();
-            let basis = Basis {
-                n,
-                base: nearest_widths(&centres, n, n + 1),
-                centres,
-                normalized: params.normalized,
-                affine: params.affine,
-            };
-            let yv = ArrayView2::from_shape((sample, m), &ys[..sample * m]).expect("shape");
-            let fitted = fit_fixed(&basis, GROWTH_MULT, GROWTH_RIDGE, &xs[..sample * n], yv);
-            tau.clear();
-            tau.resize(z, 0.0);
-            if let Some((_, pred)) = fitted {
-                let bmus: Vec<usize> = xs[..sample * n]
-                    .par_chunks(n)
-                    .with_min_len(64)
-                    .map(|x| net.bmu(x, None))
-                    .collect();
-                for (r, &bmu) in bmus.iter().enumerate() {
-                    let e: f64 = (0..m).map(|c| (pred[[r, c]] - ys[r * m + c]).powi(2)).sum();
-                    tau[bmu] += e;
-                }
-            }
-            let add = (z * 3 / 10).max(1).min(params.max_cells - z);
-            insert_by_resource(&mut net, &mut tau, add)?;
+        if steps > 0 {
+            net.fit(
+                self,
+                &Termination {
+                    max_steps: Some(steps),
+                    ..Termination::default()
+                },
+                go_on,
+            )?;
         }
-        let growth_steps = net.steps();
-        let settle_steps = (growth_steps as f64 * params.settle).round() as u64;
-        train(&mut net, settle_steps)?;
-        net.relax(&xs, relax_final)?;
+        Ok(())
+    }
+}
 
-        let z = net.len();
-        let centres: Vec<f64> = (0..z).flat_map(|i| net.centre(i).to_vec()).collect();
-        let basis = Basis {
-            n,
+/// The Gaussians at the cells of `net` (n inputs): widths from the n + 1 nearest other
+/// centres, normalized and affine as `params` say.
+fn cell_basis(net: &Isgcs, n: usize, params: &RegressorParams) -> Basis {
+    let z = net.len();
+    let centres: Vec<f64> = (0..z).flat_map(|i| net.centre(i).to_vec()).collect();
+    Basis {
+        n,
+        base: nearest_widths(&centres, n, n + 1),
+        centres,
+        normalized: params.normalized,
+        affine: params.affine,
+    }
+}
+
+/// The grown network and how it grew (module docs, steps 2 and 3).
+struct Grown {
+    net: Isgcs,
+    /// The topology dimension k.
+    k: usize,
+    lambda: usize,
+    growth_steps: u64,
+    settle_steps: u64,
+}
+
+/// Batch USL steps of each growth round, and after the settling steps.
+const RELAX_ROUNDS: (usize, usize) = (2, 5);
+
+/// Module docs, steps 2 and 3, on the rows `xs` (in the metric) and targets `ys`: the topology
+/// and initial simplex, growth rounds ([`growth_round`]) up to `params.max_cells` cells, then
+/// the settling steps and five batch steps on all rows. `rng` shuffles the epochs.
+fn grow(
+    params: &RegressorParams,
+    xs: &[f64],
+    ys: &[f64],
+    n: usize,
+    m: usize,
+    rng: ChaCha8Rng,
+) -> Result<Grown, RegressorError> {
+    let rows = xs.len() / n;
+    let (k, simplex) = topology_from_data(xs, n, params.topology_dim);
+    if params.max_cells < k + 1 || params.max_cells > rows {
+        return Err(RegressorError::CellBudget {
+            cells: params.max_cells,
+            min: k + 1,
+            max: rows,
+        });
+    }
+    let lambda = params.lambda.unwrap_or(10);
+    let net_params = Params {
+        lambda,
+        ..Params::accurate()
+    };
+    let mut net = Isgcs::new(net_params, n, m, k, simplex)?;
+    net.set_growing(false);
+    // Only the centres are trained: the output layer is fitted by least squares and the
+    // resources are set from its residuals (the delta rule's outputs were never used).
+    net.set_unsupervised_only(true);
+    let mut epochs = Epochs {
+        xs,
+        ys,
+        n,
+        m,
+        order: (0..rows).collect(),
+        next: rows,
+        rng,
+        last: 0,
+    };
+    let mut tau = vec![0.0; 0];
+    while net.len() < params.max_cells {
+        growth_round(&mut net, &mut epochs, &mut tau, params, lambda)?;
+    }
+    let growth_steps = net.steps();
+    let settle_steps = (growth_steps as f64 * params.settle).round() as u64;
+    epochs.train(&mut net, settle_steps)?;
+    net.relax(xs, RELAX_ROUNDS.1)?;
+    Ok(Grown {
+        net,
+        k,
+        lambda,
+        growth_steps,
+        settle_steps,
+    })
+}
+
+/// One growth round (module docs, step 3): adapt (λ online steps per cell, then two batch
+/// steps), fit the output layer by least squares on a sample of rows, make each cell's
+/// resource `tau` the squared residuals of its rows ([`residual_resources`]), and insert 30 %
+/// more cells (at most up to `params.max_cells`) where that resource is largest
+/// ([`insert_by_resource`]).
+fn growth_round(
+    net: &mut Isgcs,
+    epochs: &mut Epochs,
+    tau: &mut Vec<f64>,
+    params: &RegressorParams,
+    lambda: usize,
+) -> Result<(), IsgcsError> {
+    let (xs, n) = (epochs.xs, epochs.n);
+    let rows = xs.len() / n;
+    let z = net.len();
+    epochs.train(net, (lambda * z) as u64)?;
+    let sample = rows.min(4 * z + 200);
+    net.relax(&xs[..sample * n], RELAX_ROUNDS.0)?;
+    residual_resources(net, epochs, params, sample, tau);
+    let add = (z * 3 / 10).max(1).min(params.max_cells - z);
+    insert_by_resource(net, tau, add)?;
+    Ok(())
+}
+
+/// Each cell's resource τ^SL into `tau` (one entry per cell of `net`): the summed squared
+/// residuals of the rows it wins among the first `sample` rows of `epochs`, under a least-squares
+/// output layer fitted on those rows ([`GROWTH_MULT`], [`GROWTH_RIDGE`]); all 0 when that fit
+/// fails.
+fn residual_resources(
+    net: &Isgcs,
+    epochs: &Epochs,
+    params: &RegressorParams,
+    sample: usize,
+    tau: &mut Vec<f64>,
+) {
+    let (xs, ys, n, m) = (epochs.xs, epochs.ys, epochs.n, epochs.m);
+    let z = net.len();
+    let basis = cell_basis(net, n, params);
+    let yv = ArrayView2::from_shape((sample, m), &ys[..sample * m]).expect("shape");
+    let fitted = fit_fixed(&basis, GROWTH_MULT, GROWTH_RIDGE, &xs[..sample * n], yv);
+    tau.clear();
+    tau.resize(z, 0.0);
+    if let Some((_, pred)) = fitted {
+        let bmus: Vec<usize> = xs[..sample * n]
+            .par_chunks(n)
+            .with_min_len(64)
+            .map(|x| net.bmu(x, None))
+            .collect();
+        for (r, &bmu) in bmus.iter().enumerate() {
+            let e: f64 = (0..m).map(|c| (pred[[r, c]] - ys[r * m + c]).powi(2)).sum();
+            tau[bmu] += e;
+        }
+    }
+}
+
+/// The output layer's candidate bases (module docs, step 4), each with whether it is in the
+/// learned metric: normalized and plain Gaussians (unless `params.choose_basis` is off: only
+/// `params.normalized`) at the network's cells `basis`, and, when a metric T was learned (and
+/// inverts), the same kinds at the same centres mapped back (x = T⁻¹c) in the standardized
+/// metric.
+fn output_bases(
+    basis: Basis,
+    params: &RegressorParams,
+    transform: Option<&[f64]>,
+    n: usize,
+) -> Vec<(Basis, bool)> {
+    let kinds: &[bool] = if params.choose_basis {
+        &[true, false]
+    } else {
+        std::slice::from_ref(&params.normalized)
+    };
+    // The metric was chosen by small pilots; at the model's size the standardized metric
+    // can be better (more cells resolve the weak directions too): the same centres, mapped
+    // back (x = T⁻¹ c), are candidates in the standardized metric as well.
+    let t_inv = transform.and_then(|t| inverse(t, n));
+    let back = t_inv.as_ref().map(|t_inv| {
+        let centres = apply_transform(t_inv, &basis.centres, n);
+        Basis {
             base: nearest_widths(&centres, n, n + 1),
             centres,
-            normalized: params.normalized,
-            affine: params.affine,
-        };
-        let yv = ArrayView2::from_shape((rows, m), &ys).expect("shape checked");
-        let select_rows = selection_rows(rows, basis.cols());
-        // Normalized and plain Gaussians (unless fixed), in the learned and the standardized
-        // metric: the lowest score (holdout, or leave-one-out below 1000 rows; module docs,
-        // step 4) wins; the walks start at the metric pilot's multiplier.
-        let kinds: &[bool] = if params.choose_basis {
-            &[true, false]
-        } else {
-            std::slice::from_ref(&params.normalized)
-        };
-        // The metric was chosen by small pilots; at the model's size the standardized metric
-        // can be better (more cells resolve the weak directions too): the same centres, mapped
-        // back (x = T⁻¹ c), are candidates in the standardized metric as well.
-        let t_inv = transform.as_ref().and_then(|t| inverse(t, n));
-        let back = t_inv.as_ref().map(|t_inv| {
-            let centres = apply_transform(t_inv, &basis.centres, n);
-            Basis {
-                base: nearest_widths(&centres, n, n + 1),
-                centres,
-                ..basis.clone()
-            }
-        });
-        let mut bases: Vec<(Basis, bool)> = Vec::new();
-        for (geometry, in_metric) in [(Some(&basis), true), (back.as_ref(), false)] {
-            if let Some(g) = geometry {
-                for &normalized in kinds {
-                    let b = Basis {
-                        normalized,
-                        ..g.clone()
-                    };
-                    bases.push((b, in_metric));
-                }
+            ..basis.clone()
+        }
+    });
+    let mut bases: Vec<(Basis, bool)> = Vec::new();
+    for (geometry, in_metric) in [(Some(&basis), true), (back.as_ref(), false)] {
+        if let Some(g) = geometry {
+            for &normalized in kinds {
+                let b = Basis {
+                    normalized,
+                    ..g.clone()
+                };
+                bases.push((b, in_metric));
             }
         }
-        let candidates: Vec<(&Basis, &[f64])> = bases
-            .iter()
-            .map(|(b, in_metric)| (b, if *in_metric { &xs[..] } else { &xs_plain[..] }))
-            .collect();
-        let (index, weights, chosen, partner) = fit_best(
-            &candidates,
-            yv,
-            params.width_multiplier,
-            params.ridge,
-            select_rows,
-            pilot_mult,
-        )
-        .ok_or_else(|| {
-            RegressorError::Solve(match params.ridge {
-                // A fixed ridge is used as given: below the rounding level of AᵀA the
-                // Cholesky factorisation meets a non-positive pivot.
-                Some(r) => format!(
-                    "the normal equations AᵀA + ρI are not positive definite at the fixed \
-                     relative ridge {r:e} (the Cholesky factorisation failed); use a larger \
-                     ridge, or leave it unset to choose it from the data"
-                ),
-                None => "no ridge factorised the normal equations, or no row activates any \
-                         cell"
-                    .into(),
-            })
-        })?;
+    }
+    bases
+}
+
+/// The output layer among the candidate `bases` ([`fit_best`]; module docs, step 4) on the
+/// rows of `metric` (each candidate's in its metric) and the standardized targets `ys` (× m),
+/// selected on the first `select_rows` rows; an error says why none could be fitted.
+fn select_output_layer(
+    bases: &[(Basis, bool)],
+    metric: &InMetric,
+    ys: &[f64],
+    m: usize,
+    select_rows: usize,
+    params: &RegressorParams,
+) -> Result<Choice, RegressorError> {
+    let rows = ys.len() / m;
+    let yv = ArrayView2::from_shape((rows, m), ys).expect("shape checked");
+    // Normalized and plain Gaussians (unless fixed), in the learned and the standardized
+    // metric: the lowest score (holdout, or leave-one-out below 1000 rows; module docs,
+    // step 4) wins; the walks start at the metric pilot's multiplier.
+    let (xs, xs_plain) = (&metric.xs, &metric.xs_plain);
+    let candidates: Vec<(&Basis, &[f64])> = bases
+        .iter()
+        .map(|(b, in_metric)| (b, if *in_metric { &xs[..] } else { &xs_plain[..] }))
+        .collect();
+    fit_best(
+        &candidates,
+        yv,
+        params.width_multiplier,
+        params.ridge,
+        select_rows,
+        metric.pilot_mult,
+    )
+    .ok_or_else(|| {
+        RegressorError::Solve(match params.ridge {
+            // A fixed ridge is used as given: below the rounding level of AᵀA the
+            // Cholesky factorisation meets a non-positive pivot.
+            Some(r) => format!(
+                "the normal equations AᵀA + ρI are not positive definite at the fixed \
+                 relative ridge {r:e} (the Cholesky factorisation failed); use a larger \
+                 ridge, or leave it unset to choose it from the data"
+            ),
+            None => "no ridge factorised the normal equations, or no row activates any \
+                     cell"
+                .into(),
+        })
+    })
+}
+
+impl Regressor {
+    /// Fits N rows: `inputs` N × n and `targets` N × m, row-major (module docs).
+    pub fn fit(
+        params: &RegressorParams,
+        inputs: &[f64],
+        targets: &[f64],
+        n: usize,
+        m: usize,
+    ) -> Result<Self, RegressorError> {
+        let rows = check_data(inputs, targets, n, m)?;
+        check_params(params, n)?;
+        // ⟨1. Standardize, and shuffle the rows once (the output layer's selection uses a
+        // prefix)⟩
+        let data = Rows::shuffled(inputs, targets, n, m, rows, params.seed);
+        // ⟨1b. The input metric⟩
+        let metric = InMetric::learn(data.xs, &data.ys, n, m, params);
+        // ⟨2, 3. Topology and start, growth, settling⟩
+        let grown = grow(params, &metric.xs, &data.ys, n, m, data.rng)?;
+        // ⟨4. The output layer: its candidates, the selection, the readouts⟩
+        let basis = cell_basis(&grown.net, n, params);
+        let select_rows = selection_rows(rows, basis.cols());
+        let bases = output_bases(basis, params, metric.transform.as_deref(), n);
+        let (index, weights, chosen, partner) =
+            select_output_layer(&bases, &metric, &data.ys, m, select_rows, params)?;
         let readout_of = |index: usize, weights: Vec<f64>, chosen: &Selected| {
             let (basis, in_metric) = bases[index].clone();
             Readout {
@@ -729,10 +899,14 @@ impl Regressor {
                 mult: chosen.mult,
                 weights,
                 m,
-                x: xstd.clone(),
-                y: ystd.clone(),
+                x: data.xstd.clone(),
+                y: data.ystd.clone(),
                 ridge: chosen.ridge,
-                transform: if in_metric { transform.clone() } else { None },
+                transform: if in_metric {
+                    metric.transform.clone()
+                } else {
+                    None
+                },
             }
         };
         let readout = readout_of(index, weights, &chosen);
@@ -742,14 +916,14 @@ impl Regressor {
         });
         let blend_share = blend.as_ref().map_or(0.0, |b| b.share);
         Ok(Self {
-            net,
+            net: grown.net,
             readout,
             blend,
             report: RegressorReport {
-                topology_dim: k,
-                lambda,
-                growth_steps,
-                settle_steps,
+                topology_dim: grown.k,
+                lambda: grown.lambda,
+                growth_steps: grown.growth_steps,
+                settle_steps: grown.settle_steps,
                 width_multiplier: chosen.mult,
                 ridge: chosen.ridge,
                 dof: chosen.dof,

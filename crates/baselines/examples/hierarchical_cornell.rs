@@ -1,4 +1,4 @@
-//! 3-D hierarchical radiosity against the pointwise path tracer (MATH.md §8) at the probes of cornell-box:
+//! 3-D hierarchical radiosity against the pointwise path tracer (docs/design/math.md §8) at the probes of cornell-box:
 //! relative L2 error of B over the probes and the three bands at several link budgets, both for HR's
 //! constant leaf value and for a final gather from HR's solution, for `docs/design/hierarchical.md`.
 //!

@@ -14,7 +14,7 @@ use scene_sampler::{Scene, SceneBvh, SurfacePoint};
 /// unit normal of the plane through `x` and that edge). The polygon is first clipped to the front half-space
 /// of `x`; visibility is not considered. Zero if `x` is behind the polygon's plane.
 ///
-/// This is the quantity of the analytic configuration factors of MATH.md §8.
+/// This is the quantity of the analytic configuration factors of docs/design/math.md §8.
 pub fn point_to_polygon(x: DVec3, n: DVec3, poly: &[DVec3]) -> f64 {
     if poly.len() < 3 {
         return 0.0;
@@ -569,13 +569,13 @@ mod tests {
     use scene_sampler::{AnyScene, Face, Spectrum, builtin};
     use std::f64::consts::PI;
 
-    /// MATH.md §8, parallel rectangle a×b at height c above one corner.
+    /// docs/design/math.md §8, parallel rectangle a×b at height c above one corner.
     fn parallel(a: f64, b: f64, c: f64) -> f64 {
         let (x, y) = (a / c, b / c);
         let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
         (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * PI)
     }
-    /// MATH.md §8, perpendicular rectangle: edge a on the element's plane at distance b, height c.
+    /// docs/design/math.md §8, perpendicular rectangle: edge a on the element's plane at distance b, height c.
     fn perpendicular(a: f64, b: f64, c: f64) -> f64 {
         let (x, y) = (c / a, b / a);
         let s = (x * x + y * y).sqrt();

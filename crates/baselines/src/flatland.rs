@@ -1,8 +1,8 @@
-//! Flatland references (MATH.md §7): a pointwise path tracer ([`path_trace_at`], [`path_trace_adaptive`]) and
+//! Flatland references (docs/design/math.md §7): a pointwise path tracer ([`path_trace_at`], [`path_trace_adaptive`]) and
 //! the converged fine-mesh solver with exact form factors ([`ExactSolver`]).
 //!
 //! The Flatland radiosity equation is `B(y) = E(y) + ρ(y) ∫ cos θx cos θy / (2 r) · V(x,y) · B(x) dx`
-//! (eq. 1.4 with the 2-D kernel of MATH.md §7). Sampling directions at `y` with density `cos θ / 2` per radian
+//! (eq. 1.4 with the 2-D kernel of docs/design/math.md §7). Sampling directions at `y` with density `cos θ / 2` per radian
 //! ([`cosine_halfplane`]) cancels the kernel exactly, as in 3-D: `B(y) = E(y) + ρ(y)·E_ω[B(hit(y, ω))]`.
 //! As in 3-D, every path vertex also sends a shadow ray to the emitters (next-event estimation, combined with
 //! the cosine continuation's hits by the power heuristic).
@@ -31,7 +31,7 @@ fn geometry(y: DVec2, ny: DVec2, x: DVec2, nx: DVec2) -> f64 {
     cx * cy / (2.0 * d.length().powi(3))
 }
 
-/// One Flatland path's radiosity contribution leaving `p` (emission included): the estimator of MATH.md §8
+/// One Flatland path's radiosity contribution leaving `p` (emission included): the estimator of docs/design/math.md §8
 /// with next-event estimation and MIS as in 3-D (`crate::pointwise`): at every vertex a shadow ray to a point
 /// drawn on the emitting segments (segment ∝ power, point uniform) and the cosine continuation, the two
 /// weighted by the power heuristic; Russian roulette after three bounces (survival ∝ the largest
@@ -214,7 +214,7 @@ pub fn point_on(scene: &FlatlandScene, segment: u32, t: f64) -> FlatPoint {
 }
 
 /// A closed Flatland box (unit square, normals inward, counter-clockwise), every wall with emission `e` and
-/// reflectance `rho`, each wall split into `split` segments: the Flatland furnace, `B = E/(1 − ρ)` (MATH.md §8).
+/// reflectance `rho`, each wall split into `split` segments: the Flatland furnace, `B = E/(1 − ρ)` (docs/design/math.md §8).
 /// For tests and examples.
 ///
 /// # Errors

@@ -1,6 +1,6 @@
 //! Reference radiosity solvers that share no code with the growing-cells networks.
 //!
-//! * [`pointwise`] — the path-traced pointwise reference of MATH.md §8 for 3-D scenes, fixed-count or adaptive
+//! * [`pointwise`] — the path-traced pointwise reference of docs/design/math.md §8 for 3-D scenes, fixed-count or adaptive
 //!   (to a relative standard error).
 //! * [`flatland`] — the same path tracer in Flatland, and the converged fine-mesh solver with crossed-strings
 //!   form factors and exact visibility ([`flatland::ExactSolver`]).

@@ -1,4 +1,4 @@
-//! Pointwise path-traced radiosity (MATH.md §8): `B(y) = E(y) + ρ(y)·mean_k B(hit(y, ω_k))` with
+//! Pointwise path-traced radiosity (docs/design/math.md §8): `B(y) = E(y) + ρ(y)·mean_k B(hit(y, ω_k))` with
 //! cosine-weighted directions ω_k, recursively with Russian roulette. Unbiased and independent
 //! of any mesh; every probe reports its standard error.
 //!
@@ -206,7 +206,7 @@ fn other_light(
     s.emission.map(|e| w * e)
 }
 
-/// The estimator of MATH.md §8 as it was before next-event estimation: light is found only when a
+/// The estimator of docs/design/math.md §8 as it was before next-event estimation: light is found only when a
 /// cosine-weighted path hits an emitter. Kept for comparisons ([`radiosity_at_cosine_only`]).
 fn path_cosine_only(
     scene: &Scene,
@@ -515,7 +515,7 @@ mod tests {
         Scene::new("cf", "test", faces, vec!["l".into(), "f".into()], None).unwrap()
     }
 
-    /// The differential-area configuration factors of MATH.md §8, parallel and perpendicular rectangle:
+    /// The differential-area configuration factors of docs/design/math.md §8, parallel and perpendicular rectangle:
     /// B(origin) = ρ·E·F within four standard errors, and the standard error below 0.5 %.
     #[test]
     fn configuration_factors_of_math_8() {

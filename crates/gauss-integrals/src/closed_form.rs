@@ -1,4 +1,4 @@
-//! Exact integrals of `exp(−a|x − c|²)` (MATH.md §2).
+//! Exact integrals of `exp(−a|x − c|²)` (docs/design/math.md §2).
 
 use std::f64::consts::PI;
 
@@ -43,7 +43,7 @@ pub fn line(a: f64, h: f64) -> f64 {
     (PI / a).sqrt() * (-a * h * h).exp()
 }
 
-/// ∫ over the segment p–q of `exp(−a|x − c|²)` ds (any dimension; erf form of MATH.md §2).
+/// ∫ over the segment p–q of `exp(−a|x − c|²)` ds (any dimension; erf form of docs/design/math.md §2).
 /// Zero-length segments give 0.
 pub fn segment(c: V, a: f64, p: V, q: V) -> f64 {
     let d = sub(q, p);
@@ -73,7 +73,7 @@ pub fn segment(c: V, a: f64, p: V, q: V) -> f64 {
 /// relative error ≤ 1e−12 wherever the integral is ≥ 1e−12·π/a, absolute error ≤ 1e−15·π/a
 /// everywhere.
 ///
-/// The exact signed edge decomposition of MATH.md §2 is evaluated by [`triangle_fast`] (absolute
+/// The exact signed edge decomposition of docs/design/math.md §2 is evaluated by [`triangle_fast`] (absolute
 /// error ~1e−15·π/a·e^{−ah²}). Where that is not enough for the relative bound (the integral is
 /// below ~2e−3·π/a because the triangle is tiny against the width, a sliver, or far from the
 /// centre), the integral is computed by the adaptive cubature to a relative tolerance, after an
@@ -109,7 +109,7 @@ pub fn triangle(c: V, a: f64, p: V, q: V, r: V) -> f64 {
 }
 
 /// ∫ over the planar convex quadrilateral (p, q, r, s) (corners in order) of `exp(−a|x − c|²)` dA,
-/// to the accuracy contract of [`triangle`]: the signed edge decomposition of MATH.md §2 over its
+/// to the accuracy contract of [`triangle`]: the signed edge decomposition of docs/design/math.md §2 over its
 /// four edges (8 table values instead of the 12 of two triangles: a scene's rectangles, split in two
 /// triangles on load, cost a third less), and where that sum is too small for the relative bound,
 /// [`triangle`] on (p, q, r) plus (p, r, s). The caller guarantees planarity and convexity; a
@@ -133,7 +133,7 @@ pub fn quad_fast(c: V, a: f64, q: [V; 4]) -> f64 {
     ConvexPolygon::quad(q).map_or(0.0, |g| g.gaussian_integral(c, a))
 }
 
-/// The exact triangle integral of MATH.md §2 (signed edge decomposition around the centre's foot
+/// The exact triangle integral of docs/design/math.md §2 (signed edge decomposition around the centre's foot
 /// c' on the plane) with each right triangle read from the tabulated function `R(ε, u)` of
 /// [`crate::wedge`] instead of two Owen's T calls: 6 × 45 multiply–adds (in two-lane SIMD), one
 /// `exp`, four square roots and divisions (the frame, see [`ConvexPolygon`]), no other transcendental call.
@@ -247,7 +247,7 @@ impl ConvexPolygon {
     }
 
     /// The integral for `a` finite and > 0, `sa = √a`: the signed edge decomposition around the
-    /// centre's foot (MATH.md §2), one [`crate::wedge::r_diff`] (two right triangles sharing ε)
+    /// centre's foot (docs/design/math.md §2), one [`crate::wedge::r_diff`] (two right triangles sharing ε)
     /// per edge:
     /// `∫ = (1/a)·exp(−a h²)·Σ_i sign(ε_i)·[R(|ε_i|, u_i + ℓ_i) − R(|ε_i|, u_i)]` with
     /// `ε_i = √a·(v_i − c)·ŵ_i`, `u_i = √a·(v_i − c)·ê_i`, `ℓ_i = √a·len_i` and `h` the centre's

@@ -1,16 +1,16 @@
 //! Gram matrices of Gaussian bases on a triangulated (3-D) or segmented (2-D) domain
-//! (sec. 3.6.1, 3.9.2 and fig. 3.6; MATH.md §2 and §5).
+//! (sec. 3.6.1, 3.9.2 and fig. 3.6; docs/design/math.md §2 and §5).
 //!
 //! An entry `G_ij = ⟨A_i|A_j⟩ = ∫_S A_i A_j dx` is, per pair,
 //! - **0** by the zero rules of fig. 3.6: the two Gaussians lie on different sub-networks, or
 //!   their normals are opposed (`n_i·n_j < 0`);
-//! - the **flat closed form** of eq. 3.52 with MATH.md's corrected norm,
+//! - the **flat closed form** of eq. 3.52 with docs/design/math.md's corrected norm,
 //!   `π d_i²d_j²/(d_i²+d_j²)·exp(−|w_i−w_j|²/(d_i²+d_j²))` in 3-D (its square root form
 //!   `√(π d_i²d_j²/(d_i²+d_j²))·exp(…)` in 2-D), when the caller's criterion accepts both
 //!   Gaussians as lying on a unique flat domain ([`Gaussian::flat`], e.g. from
 //!   [`crate::criteria::decide`]);
 //! - otherwise the **exact element sum**: the product of the two Gaussians is one Gaussian
-//!   (product rule, MATH.md §2) integrated in closed form over every element under its support.
+//!   (product rule, docs/design/math.md §2) integrated in closed form over every element under its support.
 //!
 //! The matrix is sparse: a pair whose product is below `tol` everywhere
 //! (`a_i a_j/(a_i+a_j)·|w_i−w_j|² > ln(1/tol)`) is 0, and an element farther than the product's
@@ -26,7 +26,7 @@
 //! let dom = Domain::triangles(v, &[[0, 1, 2], [0, 2, 3]]).unwrap();
 //! let g = [Gaussian::new([10.0, 10.0, 0.0], 0.5), Gaussian::new([10.4, 10.0, 0.0], 0.5)];
 //! let m = gram(&dom, &g, &GramConfig::default()).unwrap().matrix;
-//! // ⟨A|A⟩ = π d²/2 (MATH.md §2's correction of eq. 3.53).
+//! // ⟨A|A⟩ = π d²/2 (docs/design/math.md §2's correction of eq. 3.53).
 //! assert!((m.get(0, 0) - std::f64::consts::PI * 0.25 / 2.0).abs() < 1e-13);
 //! let o = Orthonormal::new(&m.to_dense(), 1e-12);
 //! assert_eq!(o.rejected(), 0);
@@ -279,7 +279,7 @@ impl Domain {
     }
 
     /// `∫_S exp(−a|x − c|²) dx` over the elements among `candidates` (all when `None`) that come
-    /// within `√(ln(1/tol)/a)` of `c`; each element in closed form (MATH.md §2): [`segment`] in
+    /// within `√(ln(1/tol)/a)` of `c`; each element in closed form (docs/design/math.md §2): [`segment`] in
     /// 2-D, [`triangle_fast`](crate::triangle_fast) (or the relative-accuracy [`triangle`] when `accurate`) in 3-D.
     pub fn integrate(
         &self,
@@ -404,7 +404,7 @@ pub fn inner_product_rule(i: &Gaussian, j: &Gaussian) -> Integration {
     }
 }
 
-/// The flat closed form of the inner product (eq. 3.52, norm corrected by MATH.md §2):
+/// The flat closed form of the inner product (eq. 3.52, norm corrected by docs/design/math.md §2):
 /// 3-D `π d_i²d_j²/(d_i²+d_j²)·exp(−|w_i−w_j|²/(d_i²+d_j²))`, 2-D with `√(π d_i²d_j²/(d_i²+d_j²))`.
 /// Hence `⟨A_i|A_i⟩ = π d_i²/2` (not eq. 3.53's value).
 pub fn flat_inner_product(dim: Dim, wi: V, di: f64, wj: V, dj: f64) -> f64 {
@@ -766,7 +766,7 @@ where
 }
 
 /// The rectangular matrix `M_ij = ∫_S R_i C_j dx` between two sets of Gaussians (e.g. kernel
-/// halves against a base, MATH.md §3), each pair by the caller's `rule`.
+/// halves against a base, docs/design/math.md §3), each pair by the caller's `rule`.
 pub fn cross_with<R>(
     domain: &Domain,
     rows: &[Gaussian],

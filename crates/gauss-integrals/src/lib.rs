@@ -1,17 +1,17 @@
 //! Closed-form Gaussian integrals over segments and triangles, adaptive cubature, and the
-//! orthonormalization of a Gaussian base (Bohn 2000, ch. 3, with the corrections of MATH.md).
+//! orthonormalization of a Gaussian base (Bohn 2000, ch. 3, with the corrections of docs/design/math.md).
 //!
 //! A Gaussian here is `exp(−a|x − c|²)` with `a = 1/d²` (eq. 2.1; `d` is not the standard
 //! deviation). Everything takes plain `[f64; 3]` points: this crate knows nothing of scenes or
 //! networks.
 //!
-//! - [`closed_form`], [`wedge`]: exact integrals over segments and triangles (MATH.md §2);
+//! - [`closed_form`], [`wedge`]: exact integrals over segments and triangles (docs/design/math.md §2);
 //! - [`cubature`]: adaptive cubature, the reference of the tests;
 //! - [`criteria`]: the error estimates of sec. 3.9.4 and the decision of fig. 3.6;
 //! - [`gram`]: sparse Gram matrices of Gaussian bases on triangulated or segmented domains
 //!   (zero rules, flat closed form eq. 3.52, exact element sums);
-//! - [`orthonormal`]: the Cholesky orthonormalization (MATH.md §5);
-//! - [`transfer`]: the factorized transfer coefficients of MATH.md §3.
+//! - [`orthonormal`]: the Cholesky orthonormalization (docs/design/math.md §5);
+//! - [`transfer`]: the factorized transfer coefficients of docs/design/math.md §3.
 //!
 //! ```
 //! use gauss_integrals::{triangle, plane};

@@ -1,4 +1,4 @@
-//! Orthonormalization of a Gaussian base (sec. 3.8.1, MATH.md §5).
+//! Orthonormalization of a Gaussian base (sec. 3.8.1, docs/design/math.md §5).
 //!
 //! Gram–Schmidt on functions with Gram matrix G equals, in exact arithmetic, the Cholesky
 //! factorization `G = L Lᵀ` with `A = L⁻¹` (so `A G Aᵀ = I`). We factor G directly, in the

@@ -1,4 +1,4 @@
-//! The factorized transfer step (MATH.md §3; sec. 3.8.2, eq. 3.41–3.43).
+//! The factorized transfer step (docs/design/math.md §3; sec. 3.8.2, eq. 3.41–3.43).
 //!
 //! A kernel Gaussian `Ω_o(x, y) = exp(−(|x−w_o^x|² + |y−w_o^y|²)/d_o²)` is isotropic in the joint
 //! space, so it is the product `g(x; w_o^x, d_o)·g(y; w_o^y, d_o)` and the coefficient of eq. 3.43
@@ -7,7 +7,7 @@
 //! `α_{p,o} = ∫ Λ_p g(·; w_o^x, d_o)`, `β_{q,o} = ∫ Λ_q g(·; w_o^y, d_o)`.
 //! With the orthonormal base `N = A Λ` (eq. 3.38) the transfer matrix of eq. 3.42 is
 //! `H = Σ_o v_o (A α_o)(A β_o)ᵀ` (row: sender, column: receiver) and is never formed:
-//! - [`reflect`] (MATH.md §3): the sender is the exact constant 1, so
+//! - [`reflect`] (docs/design/math.md §3): the sender is the exact constant 1, so
 //!   `r = A Σ_o v_o c_o β_o` with `c_o = ∫_S g(·; w_o^x, d_o)`;
 //! - [`reflect_projected`] (the dissertation's variant, eq. 3.10–3.12): the constant is first
 //!   projected onto the base (coefficients `b̄`), `r = Hᵀ b̄ = A Σ_o v_o β_o (α_o · Aᵀ b̄)`;
@@ -120,7 +120,7 @@ fn check(f: &Factors, kernel: &[KernelGaussian], ortho: &Orthonormal) -> Result<
     Ok(n)
 }
 
-/// Reflected coefficients of the exact constant sender radiosity 1 (MATH.md §3):
+/// Reflected coefficients of the exact constant sender radiosity 1 (docs/design/math.md §3):
 /// `r = A Σ_o v_o c_o β_o`, O(z · neighbours) plus one triangular solve.
 pub fn reflect(
     f: &Factors,

@@ -6,7 +6,7 @@
 //! `R(ε, u) = ½ ∫_0^{atan(u/ε)} (1 − exp(−ε² sec²φ)) dφ = (½) ε ∫_0^u φ₁(ε² + s²) ds`,
 //! `φ₁(z) = (1 − e^{−z})/z`,
 //!
-//! i.e. `R = ½ atan(u/ε) − π T(√2 ε, u/ε)` with Owen's T (MATH.md §2). The second form shows that
+//! i.e. `R = ½ atan(u/ε) − π T(√2 ε, u/ε)` with Owen's T (docs/design/math.md §2). The second form shows that
 //! `R` is an entire function of `(ε, u)`, bounded by π/4, with no cancellation near `ε = 0`: it is
 //! tabulated once as piecewise tensor-Chebyshev polynomials (converted to monomials) on
 //! `[0, L)²`, so that one evaluation costs `(D+1)(D+2)/2 = 45` multiply-adds (two-lane SIMD

@@ -16,7 +16,7 @@ pub enum GatherMode {
     #[default]
     Rays,
     /// Consistent: paths continued from the output point with the kernel network as a control
-    /// variate at every vertex (MATH.md §9); unbiased whatever the networks' error, with a
+    /// variate at every vertex (docs/design/math.md §9); unbiased whatever the networks' error, with a
     /// standard error per point (beyond the dissertation).
     Paths,
 }
@@ -548,7 +548,7 @@ pub enum BaseDomain {
 /// Which sender integral multiplies each kernel cell ([`crate::fem`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Transfer {
-    /// c_o = ∫_S exp(−|x − w_o^x|²/d_o²) dx, exact on the scene: MATH.md §3.
+    /// c_o = ∫_S exp(−|x − w_o^x|²/d_o²) dx, exact on the scene: docs/design/math.md §3.
     #[default]
     Direct,
     /// The dissertation's B̄ (eq. 3.9–3.12): the constant 1 projected onto the base first.

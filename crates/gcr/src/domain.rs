@@ -28,7 +28,7 @@ pub struct Ray {
     pub face_y: u32,
     /// The kernel K(x,y) = ρ(y)·G(x,y)·V(x,y) per band (distance-clamped G, see scene-sampler).
     pub kernel: Bands,
-    /// Emission E(x) per band, read exactly from the scene (MATH.md §4).
+    /// Emission E(x) per band, read exactly from the scene (docs/design/math.md §4).
     pub emission_x: Bands,
 }
 

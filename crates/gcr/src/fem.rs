@@ -1,4 +1,4 @@
-//! One FEM step (sec. 3.3–3.9 with MATH.md §3–§5): from the kernel network and the shading
+//! One FEM step (sec. 3.3–3.9 with docs/design/math.md §3–§5): from the kernel network and the shading
 //! network to the reflected radiosity, in O(kernel cells × neighbours).
 //!
 //! With Λ_q the shading network's Gaussians (eq. 3.20), G their Gram matrix (eq. 3.31),
@@ -6,7 +6,7 @@
 //! kernel network Ψ(x,y) = Σ_o v_o exp(−|x − w_o^x|²/d_o²)·exp(−|y − w_o^y|²/d_o²):
 //!
 //! ```text
-//! c_o   = ∫_S exp(−|x − w_o^x|²/d_o²) dx                 (sender side; MATH.md §3)
+//! c_o   = ∫_S exp(−|x − w_o^x|²/d_o²) dx                 (sender side; docs/design/math.md §3)
 //! β_qo  = ∫_Ŝ Λ_q(y) exp(−|y − w_o^y|²/d_o²) dy          (receiver side, product rule)
 //! u_q   = Σ_o v_o c_o β_qo = ⟨Λ_q | B_refl⟩
 //! r     = A u                                              (eq. 3.11 without forming H)
@@ -414,7 +414,7 @@ impl Base {
         self.geo.is_empty()
     }
 
-    /// ∫ Λ_k(x) · exp(−b|x − w|²) dx over k's domain: the product rule (MATH.md §2) turns the
+    /// ∫ Λ_k(x) · exp(−b|x − w|²) dx over k's domain: the product rule (docs/design/math.md §2) turns the
     /// integrand into one Gaussian, integrated over k's tangent plane when k is flat, else
     /// exactly over Ŝ or over the part of S that faces like k ([`BaseDomain`]).
     pub fn product_integral(&self, k: usize, w: DVec3, b: f64, scratch: &mut Vec<u32>) -> f64 {
@@ -608,7 +608,7 @@ impl FemSolution {
 }
 
 /// Sender integrals c_o = ∫_S exp(−|x − w_o^x|²/d_o²) dx for every kernel cell, exact on the
-/// scene's elements (MATH.md §3).
+/// scene's elements (docs/design/math.md §3).
 pub fn sender_integrals(kernel: &KernelCells, scene: &SceneSurface, tol: f64) -> Vec<f64> {
     half_integrals(kernel, scene, tol, |o| (kernel.wx[o], kernel.facing_x(o)))
 }
@@ -661,7 +661,7 @@ const MIN_MASS_FRACTION: f64 = 0.01;
 /// radiosity in the base. Under [`Transfer::Projected`] `sender` is first replaced by the
 /// dissertation's c̄_o (eq. 3.9–3.12), so that it holds the integrals the step used.
 pub fn fem_step(base: Base, kernel: &KernelCells, sender: &mut Vec<f64>) -> FemSolution {
-    // ⟨Gram matrix and orthonormalization (eq. 3.31, 3.38; MATH.md §5)⟩
+    // ⟨Gram matrix and orthonormalization (eq. 3.31, 3.38; docs/design/math.md §5)⟩
     let ortho = orthonormalize(&base);
     // ⟨The dissertation's sender integrals c̄_o, when selected⟩
     if base.settings.transfer == Transfer::Projected {

@@ -403,7 +403,7 @@ mod tests {
     use super::*;
     use scene_sampler::{AnyScene, FlatKernelSampler, KernelSampler, SceneBvh, builtin};
 
-    /// A light rectangle a×b at height c over a floor corner (MATH.md §8), the floor point at the
+    /// A light rectangle a×b at height c over a floor corner (docs/design/math.md §8), the floor point at the
     /// rectangle's corner.
     fn parallel_rectangle() -> (Domain<'static>, f64) {
         use scene_sampler::{Face, Scene, Spectrum};

@@ -1,4 +1,4 @@
-//! The kernel network frozen for the FEM steps and the projection (MATH.md §3): per cell the
+//! The kernel network frozen for the FEM steps and the projection (docs/design/math.md §3): per cell the
 //! sender and receiver halves of its centre, its width, its outputs and the facing masks of its
 //! halves.
 

@@ -3,7 +3,7 @@
 //!
 //! The dissertation learns the output weights v_o with the delta rule (eq. 2.8) on single samples of
 //! `K(x,y)·s(x)`. That is stochastic gradient descent on `Σ_i (Ψ(ξ_i) − K s(ξ_i))²`, whose samples are
-//! heavy-tailed near the edges where surfaces meet (MATH.md §6): a few samples decide the fit, and on
+//! heavy-tailed near the edges where surfaces meet (docs/design/math.md §6): a few samples decide the fit, and on
 //! `cornell-box` with 200 cells the learned Ψ misses the samples by 93 % (relative RMS) and the kernel
 //! collection misses B_refl by 82 %. For fixed centres and widths, the best weights solve the normal
 //! equations of the Galerkin projection
@@ -15,14 +15,14 @@
 //! Both are computable well:
 //! - the 2n-dimensional isotropic Gaussians factor into sender and receiver halves, so
 //!   `G_oo' = I_oo'(x)·I_oo'(y)`, each a product of two Gaussians on the scene surface — one
-//!   Gaussian (the product rule of MATH.md §2) integrated exactly over the scene's triangles
+//!   Gaussian (the product rule of docs/design/math.md §2) integrated exactly over the scene's triangles
 //!   (segments);
 //! - `b_o` is a Monte-Carlo sum over *shot* rays ([`crate::shooting`]) whose importance weights
 //!   `ρ(y)·s(x)/p_x(x)` are bounded: `b_o ≈ (1/N) Σ_i g_o(ξ_i)·ρ(y_i)·s_i/p_x(x_i)`, N counting
 //!   every shot, also those that left the scene.
 //!
 //! The Gram matrix of overlapping Gaussians is ill-conditioned; it is solved with the rejecting
-//! Cholesky factorization of MATH.md §5 ([`gauss_integrals::Orthonormal`]), which drops nearly
+//! Cholesky factorization of docs/design/math.md §5 ([`gauss_integrals::Orthonormal`]), which drops nearly
 //! dependent cells instead of amplifying the Monte-Carlo noise in b.
 
 use crate::cell_lanes::CellLanes;
@@ -48,7 +48,7 @@ pub struct ProjectionReport {
 }
 
 /// `∫_S g(x; w1, d1)·g(x; w2, d2) dx` (3-D: the 3 first coordinates; Flatland embeds z = 0):
-/// the product is one Gaussian (MATH.md §2) integrated exactly over the scene's elements among
+/// the product is one Gaussian (docs/design/math.md §2) integrated exactly over the scene's elements among
 /// `candidates` (ascending ids covering the product's support).
 fn half_overlap(
     scene: &SceneSurface,

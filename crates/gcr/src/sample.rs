@@ -8,7 +8,7 @@ use crate::element::Bands;
 pub struct Sample {
     /// The ray and its kernel value.
     pub ray: Ray,
-    /// Emitting strength s at the sender (MATH.md §4).
+    /// Emitting strength s at the sender (docs/design/math.md §4).
     pub s: Bands,
     /// `1/p_x(x)` of a shot ray ([`crate::shooting`]); 0 for area-uniform samples.
     pub inv_px: f64,

@@ -2,7 +2,7 @@
 //!
 //! The dissertation draws rays (x, y) area-uniformly on S × S (fig. B.2). The pair density is then
 //! 1/A², and a single sample of the kernel `K(x,y)·s(x)` can be arbitrarily large near the edges
-//! where two surfaces meet (`K ~ 1/r²`, MATH.md §6): on `cornell-box`, 1 % of the samples carry
+//! where two surfaces meet (`K ~ 1/r²`, docs/design/math.md §6): on `cornell-box`, 1 % of the samples carry
 //! 96 % of the sum of squared targets. This module *shoots* rays instead:
 //!
 //! 1. x is drawn from the sender density `p_x = α/A + (1 − α)·[x on an emitter]/A_E`

@@ -1,5 +1,5 @@
 //! Converged bounces (issue 16, item 4): closed boxes with ρ near 1, where B = E/(1 − ρ)
-//! (MATH.md §8) and the light makes ~1/(1 − ρ) bounces before it is absorbed.
+//! (docs/design/math.md §8) and the light makes ~1/(1 − ρ) bounces before it is absorbed.
 
 use gcr::{Domain, Emitters, GatherMode, SolveConfig, Trained, radiosity_at_points};
 use scene_sampler::{KernelSampler, Scene, SceneBvh, Spectrum, SurfacePoint};

@@ -28,7 +28,7 @@ fn irradiance(scene: &Scene, config: &SolveConfig, at: &[(DVec3, DVec3)]) -> Vec
 
 /// A light rectangle a×b (E = π, facing down, ρ = 0) at height c over a grey floor, and the
 /// point-to-rectangle configuration factor F of a point at height h below its corner, looking
-/// up (MATH.md §8): the irradiance there is E·F, on the floor (h = 0) and in the air alike (the
+/// up (docs/design/math.md §8): the irradiance there is E·F, on the floor (h = 0) and in the air alike (the
 /// floor is behind the point, and nothing reflects back onto it).
 fn parallel_rectangle() -> (Scene, impl Fn(f64) -> f64) {
     let (a, b, c) = (1.0, 2.0, 1.5);

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 pub struct Params {
     /// ε_BMU: adaption strength of the best-matching unit (eq. 2.6; 0.01–0.05).
     pub eps_bmu: f64,
-    /// ε_N: adaption strength of its neighbours (eq. 2.9 as corrected in MATH.md; 0.001–0.009).
+    /// ε_N: adaption strength of its neighbours (eq. 2.9 as corrected in docs/design/math.md; 0.001–0.009).
     pub eps_neighbour: f64,
     /// α: decay rate of the resource terms (eq. 2.15–2.18; 0.01–0.05).
     pub alpha: f64,
@@ -37,7 +37,7 @@ pub struct Params {
     #[serde(default)]
     pub kappa: usize,
     /// Use the extended resource τ^x_i = (τ^SL_i / h_i) · l̄_i^k (eq. 2.19 as corrected in
-    /// MATH.md §6: the mean error per hit times the cell's volume estimate, h_i the hits decayed
+    /// docs/design/math.md §6: the mean error per hit times the cell's volume estimate, h_i the hits decayed
     /// like the resources, l̄_i the mean edge length, k̃ = k) for insertion and deletion instead
     /// of τ^SL + `usl_weight` · τ^USL. Off by default.
     #[serde(default)]
@@ -51,7 +51,7 @@ pub struct Params {
     #[serde(default)]
     pub gamma_redistribution: bool,
     /// ε: every κ steps the cell with the lowest resource τ_i is deleted if τ_i < ε
-    /// (sec. 2.4.2; fig. 2.9 says "exceeds", a typo per MATH.md §6). The dissertation
+    /// (sec. 2.4.2; fig. 2.9 says "exceeds", a typo per docs/design/math.md §6). The dissertation
     /// recommends 0.001–0.01 for its resource scale.
     #[serde(default)]
     pub epsilon: f64,

@@ -855,8 +855,8 @@ const HOLDOUT_MIN: usize = 200;
 /// the rows is left over for the holdout, else S = N − ⌈N/5⌉ (a fifth of the rows held out,
 /// as the k-means RBF does). [`fit_best`] scores on a holdout whenever it has at least
 /// [`HOLDOUT_MIN`] rows; with fewer (N < 1000) it falls back to the exact leave-one-out
-/// error, whose eigendecomposition per width costs O(cols³) (measured in docs/isgcs.md,
-/// round eleven).
+/// error, whose eigendecomposition per width costs O(cols³) (measured: docs/design/isgcs.md,
+/// "Tried and not kept").
 pub(crate) fn selection_rows(rows: usize, cols: usize) -> usize {
     let wanted = (3 * cols).max(1500);
     if 4 * rows >= 5 * wanted {

@@ -53,7 +53,7 @@
 //!    error on the holdout rows (one least-squares parameter; stacked regression). Two
 //!    output layers of different bases (normalized and plain Gaussians, or two metrics)
 //!    err in partly different places, so their blend is more accurate than either when
-//!    both are about equally good (measured in `docs/isgcs.md`, round eight), and α = 0
+//!    both are about equally good (measured: `docs/design/isgcs.md`, "The regressor"), and α = 0
 //!    leaves the best one alone. Each
 //!    layer used is refitted on all rows with its own absolute ridge
 //!    (relative ridge × S/N, floored at ε, raised by quarter decades while the
@@ -216,7 +216,7 @@ fn shuffle(v: &mut [usize], rng: &mut ChaCha8Rng) {
 /// The shuffled row `order` with rows of identical inputs moved next to the first of them
 /// (otherwise in the same order). The output layer is fitted on a prefix of the rows and
 /// scored on the next ones (module docs, step 4): a repeated input on both sides would score
-/// the interpolation of its noise as accuracy (docs/isgcs.md, round eleven). Inputs compare
+/// the interpolation of its noise as accuracy (docs/design/isgcs.md, "Tried and not kept"). Inputs compare
 /// bit for bit (−0 as +0).
 fn group_repeats(order: &[usize], inputs: &[f64], n: usize) -> Vec<usize> {
     // ⟨each row's group: the rank of its input's first occurrence in `order`⟩

@@ -552,7 +552,7 @@ fn two_blockers_with(t: TwoBlockers) -> Scene {
 }
 
 /// A furnace: the closed unit cube seen from inside (normals inward), every face with emission `e` and
-/// reflectance `rho`. Exact solution `B = E/(1 − ρ)` everywhere (MATH.md §8). The built-in uses E = 1, ρ = 0.5.
+/// reflectance `rho`. Exact solution `B = E/(1 − ρ)` everywhere (docs/design/math.md §8). The built-in uses E = 1, ρ = 0.5.
 ///
 /// # Panics
 /// If `rho` is outside `[0,1)` or `e` is negative/not finite (this is a programming error, not input).

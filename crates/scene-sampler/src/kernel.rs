@@ -1,20 +1,20 @@
-//! The radiosity kernel as a goal function (sec. 3.1, MATH.md §4, §6, §7).
+//! The radiosity kernel as a goal function (sec. 3.1, docs/design/math.md §4, §6, §7).
 //!
 //! The kernel of the radiosity equation (eq. 1.2) is `K(x, y) = ρ(y)·G(x, y)·V(x, y)`, with
 //! * 3-D: `G = cos θx cos θy / (π r²)`,
 //! * Flatland: `G = cos θx cos θy / (2 r)` (integrates to 1 over a half-plane),
 //!
-//! and the kernel network's training target is `K(x, y)·s(x)` per band, `s(x) = E(x) + B_refl(x)` (MATH.md §4).
+//! and the kernel network's training target is `K(x, y)·s(x)` per band, `s(x) = E(x) + B_refl(x)` (docs/design/math.md §4).
 //! A [`KernelSample`] stores everything but `s`, so a caller can re-evaluate `K·s` for a new `s` without
 //! tracing again.
 //!
-//! # The `r → 0` singularity (MATH.md §6)
+//! # The `r → 0` singularity (docs/design/math.md §6)
 //! Where two surfaces meet (a corner), `G` grows like `1/r²` (Flatland `1/r`): the integral stays finite but
 //! single samples become arbitrarily large. We clamp the distance: `G_c = cos θx cos θy / (π max(r, r_min)²)`
 //! (Flatland `/(2 max(r, r_min))`) with `r_min = 10⁻³ · diagonal` by default ([`KernelSampler::r_min`]).
 //! The clamp only lowers `G`, so the bias is negative and confined to pairs closer than `r_min`; for a receiver
 //! at distance `h` from a right-angle corner the lost fraction of the form factor is O(r_min/h)·small — the
-//! test `clamp_bias_at_corner` measures it against the analytic perpendicular-rectangle factor (MATH.md §8).
+//! test `clamp_bias_at_corner` measures it against the analytic perpendicular-rectangle factor (docs/design/math.md §8).
 //! `g_unclamped` is kept for callers who want the raw value.
 
 use crate::{
@@ -55,7 +55,7 @@ impl KernelSample {
             Spectrum::ZERO
         }
     }
-    /// The goal function `K(x,y)·s(x)` per band for the sender strength `s` at x (MATH.md §4).
+    /// The goal function `K(x,y)·s(x)` per band for the sender strength `s` at x (docs/design/math.md §4).
     pub fn k_times_s(&self, s: Spectrum) -> Spectrum {
         self.kernel() * s
     }
@@ -99,7 +99,7 @@ impl FlatKernelSample {
     }
 }
 
-/// Evaluates the 3-D kernel at surface pairs, sampled area-uniformly from `(s,t,u,v) ∈ [0,1]⁴` (MATH.md §6, B.2).
+/// Evaluates the 3-D kernel at surface pairs, sampled area-uniformly from `(s,t,u,v) ∈ [0,1]⁴` (docs/design/math.md §6, B.2).
 pub struct KernelSampler<'a> {
     /// The scene.
     pub scene: &'a Scene,

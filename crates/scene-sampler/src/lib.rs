@@ -13,7 +13,7 @@
 //! * **Visibility** — [`SceneBvh`] (a CWBVH from obvhs, f32, with a documented self-intersection policy):
 //!   occlusion between surface points, batched in parallel, and closest-hit queries; [`FlatVisibility`].
 //! * **The kernel** — [`KernelSampler`] / [`FlatKernelSampler`] evaluate `K(x,y) = ρ(y)·G(x,y)·V(x,y)` (sec. 3.1,
-//!   MATH.md §4), with the `r → 0` singularity clamped as documented in [`kernel`].
+//!   docs/design/math.md §4), with the `r → 0` singularity clamped as documented in [`kernel`].
 //! * **Provenance** — [`Face::part`], [`Scene::parts`] and [`Scene::gltf`] ([`provenance`]): which input
 //!   primitive of which node each face came from, and the glTF node tree, so that outputs can keep the
 //!   input's structure.

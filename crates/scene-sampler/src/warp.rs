@@ -17,7 +17,7 @@ pub fn orthonormal_basis(n: DVec3) -> (DVec3, DVec3) {
 }
 
 /// Cosine-weighted direction on the hemisphere around unit `n`: density `cos θ / π` per steradian
-/// (Malley's method: uniform disk, lifted). With it the pointwise estimator of MATH.md §8,
+/// (Malley's method: uniform disk, lifted). With it the pointwise estimator of docs/design/math.md §8,
 /// `B(y) = E(y) + ρ(y)·B(hit(y, ω))`, needs no cosine or π factor.
 pub fn cosine_hemisphere(n: DVec3, u: [f64; 2]) -> DVec3 {
     let r = u[0].clamp(0.0, 1.0).sqrt();

@@ -1,4 +1,4 @@
-//! The sampled kernel integral against exact configuration factors (MATH.md §7, §8), and the clamp bias.
+//! The sampled kernel integral against exact configuration factors (docs/design/math.md §7, §8), and the clamp bias.
 
 use glam::{DVec2, DVec3};
 use rand::{Rng, SeedableRng};
@@ -185,7 +185,7 @@ fn closed_box_sums_to_one() {
     assert!((mean - 1.0).abs() < 4.0 * se, "∫G = {mean} ± {se}");
 }
 
-/// Flatland: segment-to-segment form factor by sampling against crossed strings (MATH.md §7), and the
+/// Flatland: segment-to-segment form factor by sampling against crossed strings (docs/design/math.md §7), and the
 /// point-to-segment factor ½|sin θb − sin θa|.
 #[test]
 fn flatland_crossed_strings() {

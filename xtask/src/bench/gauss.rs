@@ -184,7 +184,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         md,
         "## Gram matrix and orthonormalization\n\n{n} Gaussians (jittered grid, width 1.14 × spacing) on a \
          bumpy {}-triangle surface (`z = 0.3 sin(0.7x) cos(0.5y)`, unit squares). Support cut-off \
-         `tol` (products below it count as 0). Cholesky with rejection threshold 1e-12 (MATH.md §5).\n\n\
+         `tol` (products below it count as 0). Cholesky with rejection threshold 1e-12 (docs/design/math.md §5).\n\n\
          Rows: every pair by exact element sums (two cut-offs); every pair by the flat closed form; \
          the decision of fig. 3.6 as a caller would make it here (the surface's roughness \
          tan α ≤ 0.26 is under the 0.4 threshold everywhere, so only the depth decides: Gaussians \
@@ -286,7 +286,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     let mut ker = kernel(nx, ny, z, 1.5, &mut rng);
     writeln!(
         md,
-        "## Factorized transfer (MATH.md §3)\n\n{z} kernel Gaussians (width 1.5, both halves uniform on the \
+        "## Factorized transfer (docs/design/math.md §3)\n\n{z} kernel Gaussians (width 1.5, both halves uniform on the \
          surface) × {n} base Gaussians. `factors` computes α, β (sparse, {z}×{n}) and c; the FEM step \
          is `r = A Σ_o v_o c_o β_o` (one sparse pass and one triangular solve).\n\n\
          | α, β, c by | factors s | step s | factors + step s |\n|---|---:|---:|---:|"

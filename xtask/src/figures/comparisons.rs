@@ -3,12 +3,12 @@
 //!
 //! **What is compared.** The light flow `L(x,y) = K(x,y)·B(x)` over the kernel domain
 //! `(s,t) ∈ [0,1]²` (arc length of the sender x and receiver y, fig. B.2), with
-//! `K = ρ(y) cos θx cos θy / (2 max(r, r_min)) · V` (eq. 1.4 in Flatland, MATH.md §7; the clamp
+//! `K = ρ(y) cos θx cos θy / (2 max(r, r_min)) · V` (eq. 1.4 in Flatland, docs/design/math.md §7; the clamp
 //! `r_min = 10⁻³·diagonal` is the one GCR is trained with):
 //! * **exact**: the sampled kernel times the converged fine-mesh radiosity of
 //!   [`baselines::flatland::ExactSolver`] at x (final gather);
 //! * **GCR**: the kernel network's output Ψ(x,y) = Σ_o v_o exp(−|(x,y) − w_o|²/d_o²) (eq. 2.10), which
-//!   is trained on `K·s` with the sender strength `s = E + B_refl` (MATH.md §4), i.e. on `K·B`;
+//!   is trained on `K·s` with the sender strength `s = E + B_refl` (docs/design/math.md §4), i.e. on `K·B`;
 //! * **HR**: the piecewise-constant kernel `K̂ = ρ_r F_rs / L_s` of the link covering (s,t)
 //!   (fig. 4.2b, [`baselines::hierarchical::HrKernel`]) times HR's own leaf radiosity at x.
 //!

@@ -31,7 +31,7 @@ struct Fit {
 /// Sec. 3.7: an n×n grid of unit spacing, every centre moved by a uniform random offset in the
 /// disk of radius `jitter` (fraction of the spacing; below 0.35 no triangle folds over), the
 /// grid triangulated (two triangles per square), each width the mean length of the cell's edges
-/// (eq. 2.10) times `width_factor`. The base is orthonormalized (Cholesky, MATH.md §5) on that triangulated domain, 1
+/// (eq. 2.10) times `width_factor`. The base is orthonormalized (Cholesky, docs/design/math.md §5) on that triangulated domain, 1
 /// is projected onto it (`γ = G⁻¹ u`, `u_p = ∫_S Λ_p`), and `f = Σ γ_p Λ_p` is compared to 1 at
 /// 231 barycentric grid points of the triangle at the centre of the network. Returns the errors
 /// with exact element sums and Cholesky, with the flat closed forms of an unbounded plane

@@ -2,7 +2,7 @@
 //! radiosity (HR) at equal numbers of links in 3-D (sec. 4.3, figs. 4.14 and 4.16: "two geometries
 //! without blockers" and "with blockers"; the dissertation reports GCR's error at about half HR's).
 //!
-//! The light flow `L(x,y) = K(x,y)·B(x)` (MATH.md §4, K = ρ(y)·G(x,y)·V(x,y)) is compared at N random
+//! The light flow `L(x,y) = K(x,y)·B(x)` (docs/design/math.md §4, K = ρ(y)·G(x,y)·V(x,y)) is compared at N random
 //! pairs (x, y) drawn area-uniformly over the scene's faces ((s,t,u,v) ∈ [0,1]⁴, fig. B.2):
 //! * **exact**: the traced kernel times B(x) from the pointwise path tracer (`paths` per point; its own
 //!   noise is part of the reference, reported);

@@ -1,5 +1,5 @@
 //! The Flatland "exact" solver: a uniform fine mesh of constant elements, form factors that are exact up to
-//! quadrature round-off (crossed strings, MATH.md §7, when nothing can block; the exact visible part of the
+//! quadrature round-off (crossed strings, docs/design/math.md §7, when nothing can block; the exact visible part of the
 //! target per receiving point, integrated piecewise-analytically, when something can), and Gauss–Seidel to
 //! convergence on `b = e + K b` (eqs. 1.13, 1.17).
 
@@ -8,7 +8,7 @@ use glam::DVec2;
 use rayon::prelude::*;
 use scene_sampler::{FlatPoint, FlatlandScene};
 
-/// The unoccluded form factor from segment `a→b` to segment `c→d` by Hottel's crossed strings (MATH.md §7):
+/// The unoccluded form factor from segment `a→b` to segment `c→d` by Hottel's crossed strings (docs/design/math.md §7):
 /// `F = |(|ac| + |bd|) − (|ad| + |bc|)| / (2 |ab|)`.
 ///
 /// Valid when each segment lies in the closed front half-plane of the other and nothing blocks; the absolute

@@ -4,7 +4,7 @@
 //! * **Patches.** Every input segment is a root patch; a patch is split into two halves on demand (binary
 //!   subdivision), never below [`FlatHrConfig::min_length`].
 //! * **Links.** A link carries light from a sender patch `s` to a receiver patch `r`. Its transfer is the
-//!   form factor `F_rs = F_u · V̄`: the unoccluded crossed-strings factor `F_u` (MATH.md §7) times a visible
+//!   form factor `F_rs = F_u · V̄`: the unoccluded crossed-strings factor `F_u` (docs/design/math.md §7) times a visible
 //!   fraction `V̄` estimated with [`FlatHrConfig::visibility_rays`] rays. Initially every ordered pair of root
 //!   patches that face each other is linked (the "initial linking" of sec. 1.4); refinement replaces a link by
 //!   two links to the halves of one of its patches, so the links always partition the kernel domain.
@@ -138,7 +138,7 @@ pub struct Link {
     pub receiver: u32,
     /// Sending patch.
     pub sender: u32,
-    /// Unoccluded form factor `F_u` from receiver to sender (crossed strings, MATH.md §7).
+    /// Unoccluded form factor `F_u` from receiver to sender (crossed strings, docs/design/math.md §7).
     pub unoccluded: f64,
     /// Estimated G-weighted visible fraction `V̄`.
     pub visibility: f64,

@@ -11,7 +11,7 @@
 //! invisible) have `K̂ = 0`.
 //!
 //! **Goal function.** The kernel network learns `K(x,y) · s(x)` with the sender strength `s = E + B_refl`
-//! (MATH.md §4); the thesis' comparison uses the first shot, `s = E` (sec. 4.1). [`Weight::Emission`] weights
+//! (docs/design/math.md §4); the thesis' comparison uses the first shot, `s = E` (sec. 4.1). [`Weight::Emission`] weights
 //! both kernels by the exact `E(x)`; [`Weight::None`] compares the bare kernels.
 //!
 //! **Error** ([`kernel_error`]): both evaluated at the midpoints of an `n × n` grid over `[0,1]²`; the
@@ -37,7 +37,7 @@ pub struct HrKernel<'a> {
 pub enum Weight {
     /// The bare kernel `K(x, y)`.
     None,
-    /// The first-shot goal function `K(x, y) · E(x)` (sec. 4.1, MATH.md §4).
+    /// The first-shot goal function `K(x, y) · E(x)` (sec. 4.1, docs/design/math.md §4).
     Emission,
 }
 
@@ -114,8 +114,8 @@ impl<'a> HrKernel<'a> {
     }
 }
 
-/// The exact Flatland kernel `K(s,t) = ρ(y) cos θx cos θy / (2 max(r, r_min)) · V(x,y)` (sec. 4.1, MATH.md §7)
-/// at x = sample(s), y = sample(t), with the sampler's distance clamp `r_min` (MATH.md §6; set
+/// The exact Flatland kernel `K(s,t) = ρ(y) cos θx cos θy / (2 max(r, r_min)) · V(x,y)` (sec. 4.1, docs/design/math.md §7)
+/// at x = sample(s), y = sample(t), with the sampler's distance clamp `r_min` (docs/design/math.md §6; set
 /// `k.r_min = 0` for the unclamped kernel). Use a sampler built from the same scene.
 pub fn exact_kernel_at(k: &FlatKernelSampler, s: f64, t: f64) -> Result<Spectrum> {
     check_param("s", s)?;
@@ -160,7 +160,7 @@ pub fn kernel_error(hr: &FlatHr, n: usize, weight: Weight) -> Result<KernelError
     kernel_error_clamped(hr, n, weight, 0.0)
 }
 
-/// [`kernel_error`] against the kernel with the distance clamp `r_min` (MATH.md §6) — the goal function the
+/// [`kernel_error`] against the kernel with the distance clamp `r_min` (docs/design/math.md §6) — the goal function the
 /// kernel network is trained on uses `r_min = 10⁻³ · diagonal` ([`FlatKernelSampler`]'s default). The clamp
 /// bounds the corner singularity `G ~ 1/r`, whose square is only logarithmically integrable.
 pub fn kernel_error_clamped(

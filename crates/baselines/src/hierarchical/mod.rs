@@ -1,7 +1,7 @@
 //! Hierarchical radiosity (HR; Hanrahan, Salzman and Aupperle 1991) with a constant base — the method chapter 4
 //! of the dissertation compares the growing-cells kernel with, at equal numbers of links (sec. 4.1, fig. 4.5).
 //!
-//! * [`strings`] — Flatland form factors by crossed strings (MATH.md §7) and the ray estimate of the visible
+//! * [`strings`] — Flatland form factors by crossed strings (docs/design/math.md §7) and the ray estimate of the visible
 //!   fraction.
 //! * [`flatland`] — [`FlatHr`]: binary patch subdivision, links, the BF refinement oracle with partial
 //!   visibility as a reason to refine, gathering with push-pull, refinement/solution passes to convergence.

@@ -1,10 +1,10 @@
-//! Flatland form factors between segments: Hottel's crossed strings (MATH.md §7) and a ray estimate of the
+//! Flatland form factors between segments: Hottel's crossed strings (docs/design/math.md §7) and a ray estimate of the
 //! visible fraction.
 //!
 //! For two segments `i = (a, b)` and `j = (c, d)`, both with their front (left of `a → b`) side facing the
 //! other and each lying entirely in front of the other's line, the unoccluded form factor is
 //!
-//! `F_ij = ((|ac| + |bd|) − (|ad| + |bc|)) / (2 L_i)`              (MATH.md §7)
+//! `F_ij = ((|ac| + |bd|) − (|ad| + |bc|)) / (2 L_i)`              (docs/design/math.md §7)
 //!
 //! — the fraction of the energy leaving i (uniform radiosity) that arrives at j, i.e.
 //! `F_ij = (1/L_i) ∫_i ∫_j cos θx cos θy / (2r) dy dx` with the Flatland kernel of sec. 4.1.
@@ -97,7 +97,7 @@ pub fn mutually_visible_parts(i: &Piece, j: &Piece) -> Option<(Piece, Piece)> {
     ))
 }
 
-/// Unoccluded Flatland form factor `F_ij` from piece `i` to piece `j` by crossed strings (MATH.md §7), after
+/// Unoccluded Flatland form factor `F_ij` from piece `i` to piece `j` by crossed strings (docs/design/math.md §7), after
 /// clipping both to each other's front half-plane. Exact; 0 if they do not face each other.
 pub fn form_factor(i: &Piece, j: &Piece) -> f64 {
     let li = i.length();
@@ -113,7 +113,7 @@ pub fn form_factor(i: &Piece, j: &Piece) -> f64 {
     ((crossed - uncrossed) / (2.0 * li)).max(0.0)
 }
 
-/// The Flatland geometry term `G(x, y) = cos θx cos θy / (2r)` (sec. 4.1, MATH.md §7), 0 if either side
+/// The Flatland geometry term `G(x, y) = cos θx cos θy / (2r)` (sec. 4.1, docs/design/math.md §7), 0 if either side
 /// faces away.
 pub fn geometry_term(x: DVec2, nx: DVec2, y: DVec2, ny: DVec2) -> f64 {
     let d = y - x;

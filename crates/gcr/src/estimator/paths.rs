@@ -24,7 +24,7 @@
 //! `REPLICATES` (2) independently scrambled replicates whose spread gives the standard error.
 //!
 //! Measured (docs/design/estimator.md): fewer corrections, which read the networks, were less
-//! accurate per second on cornell-box, and MATH.md §9's kernel Ψ(x, y) as the pointwise control
+//! accurate per second on cornell-box, and docs/design/math.md §9's kernel Ψ(x, y) as the pointwise control
 //! variate of K·B (its integral is the collection in closed form) was worse than none — a sum of a
 //! few hundred 6-D Gaussians does not follow K's 1/r² and cosines pointwise, and Ψ/p is large where
 //! the cosine density p is small.

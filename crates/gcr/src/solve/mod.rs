@@ -1,5 +1,5 @@
 //! The solve: from a scene's kernel domain to trained networks and their last FEM step (figs.
-//! 1.2, 3.1 and B.1 of the dissertation, with the corrections of MATH.md).
+//! 1.2, 3.1 and B.1 of the dissertation, with the corrections of docs/design/math.md).
 //!
 //! [`train`] is the main loop, as named steps:
 //!

@@ -1,5 +1,5 @@
 //! The two networks: created on a starting simplex (sec. 2.4.1), frozen into the FEM step's view
-//! of them (MATH.md §3: a kernel cell as its sender and receiver halves; sec. 3.2: the shading
+//! of them (docs/design/math.md §3: a kernel cell as its sender and receiver halves; sec. 3.2: the shading
 //! network as a Gaussian base with learned normals).
 
 use super::error::SolveError;
@@ -49,7 +49,7 @@ pub fn make_networks(domain: &Domain, config: &SolveConfig) -> Result<(Isgcs, Is
     Ok((kernel, shading))
 }
 
-/// Freezes the kernel network into per-cell sender/receiver halves (MATH.md §3).
+/// Freezes the kernel network into per-cell sender/receiver halves (docs/design/math.md §3).
 pub fn freeze_kernel(net: &impl GrowingNetwork, dim: usize, bands: usize) -> KernelCells {
     let n = net.cell_count();
     let mut k = KernelCells::default();

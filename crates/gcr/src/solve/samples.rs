@@ -1,4 +1,4 @@
-//! The sample set: rays (x, y) with their emitting strength s = E(x) + B_refl(x) (MATH.md §4),
+//! The sample set: rays (x, y) with their emitting strength s = E(x) + B_refl(x) (docs/design/math.md §4),
 //! drawn area-uniformly (fig. B.2; the delta rule), shot from the sender density
 //! ([`crate::shooting`]; the projection), or resampled in critical regions (sec. 2.5).
 

@@ -1,6 +1,6 @@
 //! Training steps (fig. 2.9 through [`GrowingNetwork::train`]): the kernel network on (x, y) with
 //! the target of [`NetworkTarget`], the shading network on the receivers y with their normals
-//! (sec. 3.2; MATH.md §6: the ray *end* points).
+//! (sec. 3.2; docs/design/math.md §6: the ray *end* points).
 
 use crate::config::{NetworkTarget, SolveConfig};
 use crate::domain::Domain;

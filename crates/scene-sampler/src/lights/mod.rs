@@ -1,6 +1,6 @@
 //! Lights: where a receiver's direct light comes from, behind one interface.
 //!
-//! Every estimator of the workspace lights a receiver (y, n) the same two ways (MATH.md §8; Veach
+//! Every estimator of the workspace lights a receiver (y, n) the same two ways (docs/design/math.md §8; Veach
 //! 1997 ch. 9): **light sampling** — pick a light ([`LightSet::pick`]), ask it for a sample toward
 //! y ([`Light::sample`]), cast one shadow ray — and **cosine sampling** — a cosine-weighted ray
 //! that happens to reach a light (an emitting face it hits, or an infinite light when it escapes

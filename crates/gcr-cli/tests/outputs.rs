@@ -292,6 +292,15 @@ fn a_lightmap_bake_writes_the_glb_and_its_pages() {
         "-1",
     ]);
     assert_fails(&o, "texel density", true);
+    let huge = [
+        "solve",
+        "cornell-box",
+        "--lightmap",
+        &target,
+        "--lightmap-density",
+        "1e6",
+    ];
+    assert_fails(&gcr(&huge), "lower the texel density", false);
     let o = gcr(&["solve", "flatland-corner", "--lightmap", &target]);
     assert_fails(&o, "3-D scene", true);
     assert!(entries(&bad).is_empty());

@@ -104,7 +104,36 @@ pub fn bake_lightmap(
         return Err(LightmapError::NotThreeD);
     };
     // ⟨The atlas and the texels' points⟩
+    // (the surface alone, at the density asked for, must fit the bound before anything is
+    // unwrapped: the unwrapper's packing allocates its pages)
+    if let Some(t) = settings.texels_per_unit {
+        let area: f64 = kernel.scene.faces.iter().map(|f| f.area).sum();
+        let texels = area * t * t;
+        if texels > settings::MAX_TEXELS as f64 {
+            let side = (texels.sqrt().ceil() as u64).min(u64::from(u32::MAX)) as u32;
+            return Err(LightmapError::TooLarge {
+                pages: 1,
+                width: side,
+                height: side,
+                texels: texels as u64,
+                max: settings::MAX_TEXELS,
+                gib: settings::bake_bytes(1, side, side) as f64 / (1u64 << 30) as f64,
+            });
+        }
+    }
     let atlas = Atlas::of_scene(kernel.scene, settings)?;
+    let texels = u64::from(atlas.pages) * u64::from(atlas.width) * u64::from(atlas.height);
+    if texels > settings::MAX_TEXELS {
+        return Err(LightmapError::TooLarge {
+            pages: atlas.pages,
+            width: atlas.width,
+            height: atlas.height,
+            texels,
+            max: settings::MAX_TEXELS,
+            gib: settings::bake_bytes(atlas.pages, atlas.width, atlas.height) as f64
+                / (1u64 << 30) as f64,
+        });
+    }
     let (texels, left_out) = texels::texels(kernel.scene, kernel.bvh, &atlas);
     // ⟨The estimate at every texel⟩
     let emitters = Emitters::new(domain);

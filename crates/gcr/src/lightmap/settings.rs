@@ -55,6 +55,18 @@ impl Default for LightmapSettings {
 /// The largest page side, in texels (16 384² RGB f32 texels are 3 GiB).
 pub const MAX_PAGE_SIZE: u32 = 16_384;
 
+/// The most texels a bake may hold over all its pages (2²⁸: 16 pages of 4096², about 13 GiB
+/// with the bake's per-texel state); more is refused before anything is estimated.
+pub const MAX_TEXELS: u64 = 1 << 28;
+
+/// The memory a bake of `pages` pages of `width × height` texels takes at most, in bytes: per
+/// page texel the value (12), the filled flag (1) and the rasterizer's candidate (32), and per
+/// covered texel its point (64) and its estimate (160).
+pub fn bake_bytes(pages: u32, width: u32, height: u32) -> u64 {
+    let texels = u64::from(pages) * u64::from(width) * u64::from(height);
+    texels * (12 + 1 + 32 + 64 + 160)
+}
+
 impl LightmapSettings {
     /// Checks the settings: a density finite and positive, a page of 16 to [`MAX_PAGE_SIZE`]
     /// texels, padding below a quarter of the page.
@@ -100,6 +112,25 @@ pub enum LightmapError {
     /// Lightmaps need a 3-D scene.
     #[error("lightmaps need a 3-D scene")]
     NotThreeD,
+    /// The atlas needs more texels than a bake may hold ([`MAX_TEXELS`]).
+    #[error(
+        "lightmap atlas: {pages} page(s) of {width} × {height} texels are {texels} texels, more \
+         than {max} (about {gib:.1} GiB to bake): lower the texel density"
+    )]
+    TooLarge {
+        /// Pages.
+        pages: u32,
+        /// Page width.
+        width: u32,
+        /// Page height.
+        height: u32,
+        /// Their texels.
+        texels: u64,
+        /// The limit.
+        max: u64,
+        /// The memory they would take.
+        gib: f64,
+    },
     /// The gather at the texels failed.
     #[error(transparent)]
     Gather(#[from] GatherError),

@@ -7,7 +7,9 @@
 //!   primitive per (part, page) with `POSITION`, `NORMAL` (the face's), `TEXCOORD_1` (the
 //!   lightmap coordinates; glTF's v = 0 is the image's top row, as the atlas has it; the same
 //!   accessor serves as `TEXCOORD_0`, which glTF requires before a `TEXCOORD_1`); materials
-//!   carry the part's mean albedo as `baseColorFactor` and the page as an 8-bit PNG through the
+//!   carry the part's mean albedo as `baseColorFactor`, its emitted radiance as `emissiveFactor`
+//!   × `KHR_materials_emissive_strength` (in the lightmap's linear units), and the page as an
+//!   8-bit PNG through the
 //!   **`MOZ_lightmap`** extension (Mozilla Hubs' convention: `{"index": texture, "texCoord": 1,
 //!   "intensity": s}`), sRGB-encoded like glTF's colour textures, scaled so that its 95th
 //!   percentile is 0.8 (`intensity` = 1 / that scale restores the linear value; `asset.extras`
@@ -133,6 +135,33 @@ impl Bin {
     }
 }
 
+/// A part's material: its mean albedo, its emitted radiance L = E/π (as `emissiveFactor` × the
+/// `KHR_materials_emissive_strength`, in the scene's units like the lightmap's linear values), and
+/// the lightmap page.
+fn material(rho: [f64; 3], emission: [f64; 3], page: u32, scale: f64) -> Value {
+    let mut m = json!({
+        "pbrMetallicRoughness": {"baseColorFactor": [rho[0], rho[1], rho[2], 1.0],
+            "metallicFactor": 0.0, "roughnessFactor": 1.0},
+        "extensions": {"MOZ_lightmap": {"index": page, "texCoord": 1, "intensity": 1.0 / scale}},
+    });
+    let radiance = emission.map(|e| e / std::f64::consts::PI);
+    let peak = radiance.iter().copied().fold(0.0, f64::max);
+    if peak > 0.0 {
+        m["emissiveFactor"] = json!(radiance.map(|l| l / peak));
+        m["extensions"]["KHR_materials_emissive_strength"] = json!({"emissiveStrength": peak});
+    }
+    m
+}
+
+/// The extensions the file uses: `MOZ_lightmap`, and the emissive strength when a face emits.
+fn extensions_used(scene: &Scene) -> Vec<&'static str> {
+    let mut used = vec!["MOZ_lightmap"];
+    if scene.faces.iter().any(|f| !f.emission.is_zero()) {
+        used.push("KHR_materials_emissive_strength");
+    }
+    used
+}
+
 /// The lightmapped scene as a .glb (module docs); `scale` is the PNG pages' ([`png_scale`]).
 pub fn to_lightmap_glb(lightmap: &Lightmap, scene: &Scene, scale: f64) -> std::io::Result<Vec<u8>> {
     let mut bin = Bin::default();
@@ -166,7 +195,7 @@ pub fn to_lightmap_glb(lightmap: &Lightmap, scene: &Scene, scale: f64) -> std::i
         let mut primitives = Vec::new();
         for (&(_, page), faces) in parts {
             let (mut pos, mut nrm, mut uv1) = (Vec::new(), Vec::new(), Vec::new());
-            let mut rho = [0.0f64; 3];
+            let (mut rho, mut emission) = ([0.0f64; 3], [0.0f64; 3]);
             for &f in faces {
                 let face = &scene.faces[f];
                 let uv = lightmap.atlas.faces[f].expect("grouped faces have a place");
@@ -175,8 +204,10 @@ pub fn to_lightmap_glb(lightmap: &Lightmap, scene: &Scene, scale: f64) -> std::i
                     nrm.push(face.normal.as_vec3().to_array());
                     uv1.push(uv.uv[c]);
                 }
-                for (k, r) in rho.iter_mut().enumerate() {
-                    *r += face.rho.0[k.min(face.rho.0.len() - 1)] / faces.len() as f64;
+                for k in 0..3 {
+                    let band = k.min(face.rho.0.len() - 1);
+                    rho[k] += face.rho.0[band] / faces.len() as f64;
+                    emission[k] += face.emission.0[band] / faces.len() as f64;
                 }
             }
             let uv = bin.floats(&uv1, "VEC2", false);
@@ -188,11 +219,7 @@ pub fn to_lightmap_glb(lightmap: &Lightmap, scene: &Scene, scale: f64) -> std::i
                 "TEXCOORD_0": uv,
                 "TEXCOORD_1": uv,
             });
-            materials.push(json!({
-                "pbrMetallicRoughness": {"baseColorFactor": [rho[0], rho[1], rho[2], 1.0],
-                    "metallicFactor": 0.0, "roughnessFactor": 1.0},
-                "extensions": {"MOZ_lightmap": {"index": page, "texCoord": 1, "intensity": 1.0 / scale}},
-            }));
+            materials.push(material(rho, emission, page, scale));
             primitives.push(
                 json!({"attributes": attributes, "material": materials.len() - 1, "mode": 4}),
             );
@@ -212,7 +239,7 @@ pub fn to_lightmap_glb(lightmap: &Lightmap, scene: &Scene, scale: f64) -> std::i
         "asset": {"version": "2.0", "generator": "gcr (Growing Cells Radiosity)",
             "extras": {"lightmap_quantity": quantity, "lightmap_png_scale": scale,
                 "lightmap": "MOZ_lightmap pages: sRGB PNG of value * lightmap_png_scale; intensity = 1 / scale; linear pages in the -lightmap-<k>.exr files"}},
-        "extensionsUsed": ["MOZ_lightmap"],
+        "extensionsUsed": extensions_used(scene),
         "scene": 0,
         "scenes": [{"nodes": (0..nodes.len()).collect::<Vec<_>>()}],
         "nodes": nodes,

@@ -26,6 +26,7 @@
 //! `KHR_materials_unlit` with a white base colour, so viewers show the vertex colours as they are
 //! instead of lighting them again. `asset.extras` records the exposure scale.
 
+use super::gltf_bin::Bin;
 use crate::mesh::ShadedMesh;
 use crate::output::tonemap::Exposure;
 use glam::{DMat4, DVec3};
@@ -44,58 +45,7 @@ struct Primitive {
     indices: usize,
 }
 
-/// The binary chunk and its bufferViews and accessors, one view per accessor.
-#[derive(Default)]
-struct Bin {
-    bytes: Vec<u8>,
-    views: Vec<Value>,
-    accessors: Vec<Value>,
-}
-
 impl Bin {
-    /// Appends one f32 VEC3 vertex attribute; returns its accessor.
-    fn vec3(&mut self, data: &[[f32; 3]], bounds: bool) -> usize {
-        let at = self.bytes.len();
-        for v in data {
-            for c in v {
-                self.bytes.extend_from_slice(&c.to_le_bytes());
-            }
-        }
-        self.views.push(json!({"buffer": 0, "byteOffset": at,
-            "byteLength": self.bytes.len() - at, "target": 34962}));
-        let mut acc = json!({"bufferView": self.views.len() - 1, "componentType": 5126,
-            "count": data.len(), "type": "VEC3"});
-        if bounds {
-            let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-            for v in data {
-                for k in 0..3 {
-                    lo[k] = lo[k].min(v[k]);
-                    hi[k] = hi[k].max(v[k]);
-                }
-            }
-            acc["min"] = json!(lo);
-            acc["max"] = json!(hi);
-        }
-        self.accessors.push(acc);
-        self.accessors.len() - 1
-    }
-
-    /// Appends u32 triangle indices; returns their accessor.
-    fn indices(&mut self, tris: &[[u32; 3]]) -> usize {
-        let at = self.bytes.len();
-        for t in tris {
-            for i in t {
-                self.bytes.extend_from_slice(&i.to_le_bytes());
-            }
-        }
-        self.views.push(json!({"buffer": 0, "byteOffset": at,
-            "byteLength": self.bytes.len() - at, "target": 34963}));
-        self.accessors
-            .push(json!({"bufferView": self.views.len() - 1,
-            "componentType": 5125, "count": tris.len() * 3, "type": "SCALAR"}));
-        self.accessors.len() - 1
-    }
-
     /// Writes the triangles `tris` of `mesh` as one primitive in the frame whose world transform
     /// is `world`; `None` when there are none.
     fn primitive(
@@ -138,10 +88,10 @@ impl Bin {
             });
         }
         let attributes = json!({
-            "POSITION": self.vec3(&pos, true),
-            "NORMAL": self.vec3(&nrm, false),
-            "COLOR_0": self.vec3(&col, false),
-            "_RADIOSITY": self.vec3(&rad, false),
+            "POSITION": self.floats(&pos, "VEC3", true),
+            "NORMAL": self.floats(&nrm, "VEC3", false),
+            "COLOR_0": self.floats(&col, "VEC3", false),
+            "_RADIOSITY": self.floats(&rad, "VEC3", false),
         });
         Some((attributes, self.indices(&out_tris)))
     }
@@ -253,38 +203,8 @@ pub fn to_glb(mesh: &ShadedMesh, scene: &Scene, exposure: &Exposure) -> Vec<u8> 
     });
     if !meshes.is_empty() {
         doc["meshes"] = json!(meshes);
-        doc["buffers"] = json!([{"byteLength": bin.bytes.len()}]);
-        doc["bufferViews"] = json!(bin.views);
-        doc["accessors"] = json!(bin.accessors);
     }
-    glb_bytes(&doc, bin.bytes)
-}
-
-/// The binary container: the JSON chunk padded with spaces, then the buffer's chunk (glTF 2.0 §4.4).
-pub(crate) fn glb_bytes(doc: &Value, data: Vec<u8>) -> Vec<u8> {
-    let mut json = serde_json::to_vec(doc).unwrap_or_default();
-    while json.len() % 4 != 0 {
-        json.push(b' ');
-    }
-    let mut data = data;
-    while data.len() % 4 != 0 {
-        data.push(0);
-    }
-    let with_bin = !data.is_empty();
-    let total = 12 + 8 + json.len() + if with_bin { 8 + data.len() } else { 0 };
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&json);
-    if with_bin {
-        out.extend_from_slice(&(data.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(&data);
-    }
-    out
+    bin.into_glb(doc)
 }
 
 /// [`to_glb`]'s tree for a scene loaded from glTF.

@@ -18,6 +18,7 @@
 //!   material. Each face is written as its own three corners (a triangle soup: the lightmap's
 //!   seams need split vertices anyway); back faces of two-sided materials are their own faces.
 
+use super::gltf_bin::Bin;
 use super::tonemap::srgb_encode;
 use crate::lightmap::{Lightmap, LightmapQuantity};
 use scene_sampler::Scene;
@@ -84,55 +85,6 @@ fn encode_page_png(lightmap: &Lightmap, k: usize, scale: f64) -> std::io::Result
     img.write_to(&mut out, image::ImageFormat::Png)
         .map_err(std::io::Error::other)?;
     Ok(out.into_inner())
-}
-
-/// The binary chunk under construction: the bufferViews and accessors, one view per accessor.
-#[derive(Default)]
-struct Bin {
-    bytes: Vec<u8>,
-    views: Vec<Value>,
-    accessors: Vec<Value>,
-}
-
-impl Bin {
-    /// Appends raw bytes as a bufferView (4-byte aligned); returns the view.
-    fn view(&mut self, data: &[u8], target: Option<u32>) -> usize {
-        while self.bytes.len() % 4 != 0 {
-            self.bytes.push(0);
-        }
-        let at = self.bytes.len();
-        self.bytes.extend_from_slice(data);
-        let mut v = json!({"buffer": 0, "byteOffset": at, "byteLength": data.len()});
-        if let Some(t) = target {
-            v["target"] = json!(t);
-        }
-        self.views.push(v);
-        self.views.len() - 1
-    }
-
-    /// Appends an f32 vertex attribute of `N` components; returns its accessor.
-    fn floats<const N: usize>(&mut self, data: &[[f32; N]], kind: &str, bounds: bool) -> usize {
-        let raw: Vec<u8> = data
-            .iter()
-            .flatten()
-            .flat_map(|c| c.to_le_bytes())
-            .collect();
-        let view = self.view(&raw, Some(34962));
-        let mut acc = json!({"bufferView": view, "componentType": 5126, "count": data.len(),
-            "type": kind});
-        if bounds {
-            let lo: Vec<f32> = (0..N)
-                .map(|k| data.iter().map(|v| v[k]).fold(f32::INFINITY, f32::min))
-                .collect();
-            let hi: Vec<f32> = (0..N)
-                .map(|k| data.iter().map(|v| v[k]).fold(f32::NEG_INFINITY, f32::max))
-                .collect();
-            acc["min"] = json!(lo);
-            acc["max"] = json!(hi);
-        }
-        self.accessors.push(acc);
-        self.accessors.len() - 1
-    }
 }
 
 /// A part's material: its mean albedo, its emitted radiance L = E/π (as `emissiveFactor` × the
@@ -251,8 +203,5 @@ pub fn to_lightmap_glb(lightmap: &Lightmap, scene: &Scene, scale: f64) -> std::i
     if !meshes.is_empty() {
         doc["meshes"] = json!(meshes);
     }
-    doc["buffers"] = json!([{"byteLength": bin.bytes.len()}]);
-    doc["bufferViews"] = json!(bin.views);
-    doc["accessors"] = json!(bin.accessors);
-    Ok(super::glb::glb_bytes(&doc, bin.bytes))
+    Ok(bin.into_glb(doc))
 }

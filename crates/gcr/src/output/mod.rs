@@ -8,6 +8,7 @@ mod autocam;
 mod camera;
 mod flatland;
 mod glb;
+mod gltf_bin;
 mod hdr;
 mod lightmap;
 mod mesh;

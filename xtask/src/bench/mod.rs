@@ -12,6 +12,7 @@ mod isgcs;
 mod isgcs_peers;
 mod lights;
 mod radiance;
+mod rays;
 mod scenes;
 
 use crate::ctx::Ctx;
@@ -36,6 +37,7 @@ const GROUPS: &[Group] = &[
     ("irradiance", irradiance::run),
     ("lights", lights::run),
     ("rtrace", radiance::run),
+    ("rays", rays::run),
 ];
 
 /// Runs every group whose name contains `only` (all when `None`).

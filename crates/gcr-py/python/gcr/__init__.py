@@ -16,6 +16,9 @@ calls release the GIL and report progress to an optional ``progress`` callback. 
 regressor is :class:`gcr.isgcs.IsgcsRegressor`, a scikit-learn estimator.
 """
 
+import importlib
+from typing import TYPE_CHECKING
+
 from gcr._gcr import (
     GcrError,
     GcrWarning,
@@ -25,7 +28,9 @@ from gcr._gcr import (
     builtin_scenes,
     solve,
 )
-from gcr import isgcs
+
+if TYPE_CHECKING:
+    from gcr import isgcs
 
 __all__ = [
     "GcrError",
@@ -37,3 +42,11 @@ __all__ = [
     "isgcs",
     "solve",
 ]
+
+
+def __getattr__(name: str):
+    """``gcr.isgcs`` is imported on first use: it imports scikit-learn (a second or more), which
+    a solve does not need."""
+    if name == "isgcs":
+        return importlib.import_module("gcr.isgcs")
+    raise AttributeError(f"module 'gcr' has no attribute {name!r}")

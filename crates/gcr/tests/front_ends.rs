@@ -104,14 +104,25 @@ fn images_as_numbers_are_the_exr_files() {
             ..OutputPaths::default()
         };
         let plan = OutputPlan::with_images(&domain, paths, settings).unwrap();
-        write_outputs(&domain, &trained, &config, &plan, "cornell-box", Instant::now()).unwrap();
+        write_outputs(
+            &domain,
+            &trained,
+            &config,
+            &plan,
+            "cornell-box",
+            Instant::now(),
+        )
+        .unwrap();
         let file = exr::prelude::read_first_rgba_layer_from_file(
             &path,
             |size, _| vec![[0f32; 3]; size.width() * size.height()],
             |px, pos, (r, g, b, _): (f32, f32, f32, f32)| px[pos.y() * 24 + pos.x()] = [r, g, b],
         )
         .unwrap();
-        assert_eq!(file.layer_data.channel_data.pixels, linear.radiance.radiance, "{mode:?}");
+        assert_eq!(
+            file.layer_data.channel_data.pixels, linear.radiance.radiance,
+            "{mode:?}"
+        );
         assert_eq!(linear.camera_source, "scene");
     }
     let _ = std::fs::remove_dir_all(&dir);

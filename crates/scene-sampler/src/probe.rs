@@ -294,7 +294,10 @@ mod tests {
     #[test]
     fn rows_in_memory_are_checked_as_a_files_lines() {
         let text = "1 2 3 0 0 2\n4 5 6 0 3 0\n";
-        let rows = [[1.0, 2.0, 3.0, 0.0, 0.0, 2.0], [4.0, 5.0, 6.0, 0.0, 3.0, 0.0]];
+        let rows = [
+            [1.0, 2.0, 3.0, 0.0, 0.0, 2.0],
+            [4.0, 5.0, 6.0, 0.0, 3.0, 0.0],
+        ];
         assert_eq!(
             probes_from_rows("p", &rows).unwrap(),
             parse_probes("p", text).unwrap()

@@ -6,8 +6,7 @@ use gcr::output::{
     CameraChoice, ImageMode, ImageSettings, OutputPaths, ProbeQuantity, ProbeSettings, View,
 };
 use gcr::{
-    GatherMode, GatherSamples, NetworkTarget, OutputFit, PathSettings, Quality, SolveConfig,
-    SurfaceClusters,
+    GatherMode, NetworkTarget, OutputFit, Quality, SolveConfig, SolveOptions, SurfaceClusters,
 };
 use scene_sampler::AnyScene;
 use scene_sampler::LoadOptions;
@@ -50,7 +49,7 @@ pub struct SolveArgs {
     /// Scene file or built-in name.
     pub scene: String,
     /// Kernel network cell budget ("links").
-    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value_t = SolveConfig::default().kernel_cells)]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value_t = SolveOptions::default().cells)]
     pub cells: usize,
     /// Shading network cell budget.
     #[arg(help_heading = RESEARCH, hide_short_help = true, long)]
@@ -61,7 +60,7 @@ pub struct SolveArgs {
     #[arg(help_heading = RESEARCH, hide_short_help = true, long)]
     pub time_budget: Option<f64>,
     /// Seed.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = SolveOptions::default().seed)]
     pub seed: u64,
     /// Output gather: paths (the default: the ray gather plus a path-traced correction of the
     /// networks' error at the first `--corrections` rays, unbiased, run until `--quality` or
@@ -105,7 +104,7 @@ pub struct SolveArgs {
     /// the points' density, facing alike) share each other's cosine rays and paths, each weighted
     /// for every member by the multi-sample balance heuristic (unbiased; docs/design/estimator.md).
     /// 1: every point alone.
-    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value_t = PathSettings::default().neighbours as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value_t = SolveOptions::default().share_paths as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub share_paths: u32,
     /// Train the shading network and build its base even when the gather does not read it
     /// (by default they are skipped: same result, less time).
@@ -123,10 +122,10 @@ pub struct SolveArgs {
     pub kernel_facing: bool,
     /// Surfaces with at least this many elements get a cluster tree for the FEM integrals
     /// (nodes stand in for their elements where a Gaussian cannot resolve them).
-    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value_t = SurfaceClusters::default().min_elements)]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value_t = SolveOptions::default().surface_clusters.min_elements)]
     pub cluster_min_elements: usize,
     /// Cluster criterion θ: a node replaces its elements when a·R² ≤ θ (0: exact).
-    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value_t = SurfaceClusters::default().theta)]
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value_t = SolveOptions::default().surface_clusters.theta)]
     pub cluster_theta: f64,
     /// Image: tone-mapped .png, .jpg/.jpeg, or linear radiance L = B/π as .exr (RGB float; 3-D
     /// scenes). From the --camera-* camera, else the scene's (a built-in's, a glTF camera
@@ -283,7 +282,7 @@ pub struct LightArgs {
     pub env: Option<scene_sampler::lights::lighting::EnvSpec>,
     /// The ground's reflectance below the horizon (Radiance's ground glow: ρ·(sky + sun
     /// horizontal illuminance)/π); 0 for a black ground.
-    #[arg(long, value_name = "RHO", default_value_t = 0.2, requires = "sky")]
+    #[arg(long, value_name = "RHO", default_value_t = scene_sampler::DEFAULT_GROUND_REFLECTANCE, requires = "sky")]
     pub ground_reflectance: f64,
     /// The zenith axis of --sun and --sky: y (glTF: north −Z, east +X) or z (Radiance: north +Y,
     /// east +X).
@@ -311,145 +310,89 @@ pub struct LightArgs {
 }
 
 impl LightArgs {
-    /// Lights `loaded` (a 3-D scene) with these options, its openings as portals with
-    /// `--auto-portals` (named on stderr unless `quiet`), and refuses a scene nothing lights;
-    /// errs for a Flatland scene given lights.
-    pub fn light(&self, loaded: AnyScene, quiet: bool) -> anyhow::Result<AnyScene> {
-        let mut lighting = self.lighting()?;
-        if self.auto_portals && lighting.sky.is_none() && lighting.env.is_none() {
-            anyhow::bail!(
-                "--auto-portals: portals are openings to a sky; give one (--sky or --env)"
-            );
-        }
-        match loaded {
-            AnyScene::ThreeD(mut s) => {
-                if self.auto_portals {
-                    let found = scene_sampler::openings::openings(&s);
-                    if !quiet {
-                        eprintln!("portals: {} opening(s) found", found.len());
-                        for c in &found {
-                            let v: Vec<String> =
-                                c.iter().flatten().map(|x| format!("{x:.6}")).collect();
-                            eprintln!("  --portal {}", v.join(","));
-                        }
-                    }
-                    lighting.portals.extend(found);
-                }
-                s.add_lights(lighting.lights()?);
-                s.check_lit()?;
-                Ok(AnyScene::ThreeD(s))
-            }
-            AnyScene::Flatland(_) if !lighting.is_empty() || self.auto_portals => {
-                anyhow::bail!(
-                    "lights (--sun, --sky, --env, --point-light, --spot-light, --lights) need a 3-D \
-                     scene; a Flatland scene is lit by its emitting segments"
-                )
-            }
-            flat => Ok(flat),
-        }
-    }
-
-    /// The outdoor horizontal illuminance of daylight factors: a CIE overcast sky's, when the
-    /// lighting is that sky and no sun (`None` otherwise, or when the lighting file is bad: its
-    /// error comes when the scene is lit).
-    pub fn outdoor_illuminance(&self) -> Option<f64> {
-        use scene_sampler::lights::lighting::SkyKind;
-        let l = self.lighting().ok()?;
-        match (&l.sky, &l.sun, &l.env) {
-            (Some(sky), None, None) if sky.model == SkyKind::CieOvercast => Some(sky.illuminance),
-            _ => None,
-        }
-    }
-
-    /// The lighting these options describe (the file's, then the options').
-    pub fn lighting(&self) -> scene_sampler::Result<scene_sampler::Lighting> {
+    /// The library's light options ([`scene_sampler::LightOptions`]) these arguments give.
+    pub fn options(&self) -> scene_sampler::LightOptions {
         use scene_sampler::lights::lighting::Up;
-        let mut l = match &self.lights {
-            Some(path) => scene_sampler::Lighting::read(path)?,
-            None => scene_sampler::Lighting::default(),
-        };
-        if self.up == "z" {
-            l.up = Up::Z;
+        scene_sampler::LightOptions {
+            sun: self.sun.clone(),
+            sky: self.sky.clone(),
+            env: self.env.clone(),
+            ground_reflectance: self.ground_reflectance,
+            // `--up y` is the default: it leaves a lighting file's axis alone
+            up: (self.up == "z").then_some(Up::Z),
+            portals: self.portal.clone(),
+            auto_portals: self.auto_portals,
+            point_lights: self.point_light.clone(),
+            spot_lights: self.spot_light.clone(),
+            file: self.lights.clone(),
         }
-        if let Some(sun) = &self.sun {
-            l.sun = Some(sun.clone());
+    }
+
+    /// Lights `loaded` (a 3-D scene) with these options ([`scene_sampler::LightOptions::light`]),
+    /// naming the openings `--auto-portals` found on stderr unless `quiet`.
+    pub fn light(&self, loaded: AnyScene, quiet: bool) -> anyhow::Result<AnyScene> {
+        let lit = self.options().light(loaded)?;
+        if self.auto_portals && !quiet {
+            eprintln!("portals: {} opening(s) found", lit.found_portals.len());
+            for c in &lit.found_portals {
+                let v: Vec<String> = c.iter().flatten().map(|x| format!("{x:.6}")).collect();
+                eprintln!("  --portal {}", v.join(","));
+            }
         }
-        if let Some(sky) = &self.sky {
-            l.sky = Some(scene_sampler::lights::lighting::SkySpec {
-                ground_reflectance: self.ground_reflectance,
-                ..sky.clone()
-            });
-        }
-        if let Some(env) = &self.env {
-            l.env = Some(env.clone());
-        }
-        l.portals.extend(self.portal.iter().cloned());
-        l.point_lights.extend(self.point_light.iter().cloned());
-        l.spot_lights.extend(self.spot_light.iter().cloned());
-        Ok(l)
+        Ok(lit.scene)
+    }
+
+    /// The outdoor horizontal illuminance of daylight factors
+    /// ([`scene_sampler::LightOptions::outdoor_illuminance`]).
+    pub fn outdoor_illuminance(&self) -> Option<f64> {
+        self.options().outdoor_illuminance()
     }
 }
 
 impl SolveArgs {
-    /// The solver settings (not yet validated: `SolveConfig::validate`): the library's
-    /// [`SolveConfig::preset`] at `--quality`, with the options given.
-    pub fn config(&self) -> SolveConfig {
-        let preset = SolveConfig::preset(self.quality.unwrap_or_default());
-        // The paths gather runs to a target unless --gather-rays alone fixes its rays (or another
-        // gather is asked for).
-        let target_error = self
-            .target_error
-            .or(match (self.quality, self.gather_rays) {
-                (Some(q), _) => Some(q.target_error()),
-                (None, None) if self.gather == GatherMode::Paths => preset.paths.target_error,
-                (None, _) => None,
-            });
-        let rays = self.gather_rays.unwrap_or(if target_error.is_some() {
-            preset.gather_samples.direct
-        } else {
-            GatherSamples::default().direct
-        });
-        SolveConfig {
-            kernel_cells: self.cells,
-            shading_cells: self.shading_cells.unwrap_or((self.cells / 2).max(3)),
-            time_budget: self.time_budget,
+    /// The settings given, as the library takes them ([`gcr::SolveOptions`]).
+    pub fn options(&self) -> SolveOptions {
+        SolveOptions {
+            quality: self.quality,
+            target_error: self.target_error,
             seed: self.seed,
+            cells: self.cells,
+            shading_cells: self.shading_cells,
+            time_budget: self.time_budget,
             gather: self.gather,
             output_fit: self.output_fit,
             network_target: self.network_target,
-            gather_samples: GatherSamples {
-                direct: rays,
-                indirect: rays,
-            },
-            paths: PathSettings {
-                corrections: self.corrections.unwrap_or(preset.paths.corrections),
-                target_error,
-                neighbours: self.share_paths as usize,
-                ..preset.paths
-            },
-            skip_unused_base: !self.keep_base,
+            gather_rays: self.gather_rays,
+            corrections: self.corrections,
+            share_paths: self.share_paths as usize,
+            keep_base: self.keep_base,
+            keep_networks: self.keep_networks,
             kernel_facing: self.kernel_facing,
             surface_clusters: SurfaceClusters {
                 min_elements: self.cluster_min_elements,
                 theta: self.cluster_theta,
             },
-            ..preset
         }
+    }
+
+    /// The solver settings (not yet validated: `SolveConfig::validate`):
+    /// [`SolveOptions::config`], the library's [`SolveConfig::preset`] at `--quality` with the
+    /// options given.
+    pub fn config(&self) -> SolveConfig {
+        self.options().config()
     }
 
     /// The image settings (not yet validated: `ImageSettings::validate`, through
     /// `OutputPlan::with_images`).
     pub fn images(&self) -> ImageSettings {
-        let camera = match (self.camera_eye, self.camera_target) {
-            (Some(eye), Some(target)) => CameraChoice::Given(PinholeCamera {
-                eye: eye.into(),
-                target: target.into(),
-                up: self.camera_up.into(),
-                fov_y_degrees: self.fov.unwrap_or(gcr::output::DEFAULT_FOV),
-            }),
-            _ if self.auto_camera => CameraChoice::Automatic { fov: self.fov },
-            _ => CameraChoice::Scene { fov: self.fov },
-        };
+        let eye_target = (self.camera_eye.zip(self.camera_target))
+            .map(|(eye, target)| (eye.into(), target.into()));
+        let camera = CameraChoice::from_options(
+            eye_target,
+            self.camera_up.into(),
+            self.fov,
+            self.auto_camera,
+        );
         ImageSettings {
             camera,
             width: self.resolution.0,

@@ -50,12 +50,13 @@ fn solve_and_write(
         .with_context(|| format!("checking the outputs for `{}`", args.scene))?;
     let mut progress = ProgressLine::new(args.quiet);
     // ⟨Train the networks only when something reads them⟩
-    let trained = if config.reads_networks() || plan.needs_networks() || args.keep_networks {
-        gcr::solve(domain, config, &mut |p| progress.update(p))?
-    } else {
-        config.validate()?;
-        gcr::Trained::without_networks(domain, config)
-    };
+    let trained = gcr::solve_for_outputs(
+        domain,
+        &args.options(),
+        config,
+        plan.needs_networks(),
+        &mut |p| progress.update(p),
+    )?;
     progress.solved();
     for w in &trained.metrics.warnings {
         eprintln!("warning: {w}");

@@ -6,7 +6,10 @@
 //!
 //! A solve in three calls: a [`Domain`] over a scene (from `scene_sampler`), [`solve`] with a
 //! [`SolveConfig`], then [`radiosity_at_points`] (B at any surface points), [`output_mesh`] (the
-//! re-triangulated scene with B at its vertices) or the writers of [`output`].
+//! re-triangulated scene with B at its vertices) or the writers of [`output`]. The front ends (the
+//! `gcr` program, the Python package) take a user's settings as [`SolveOptions`] (the program's
+//! defaults) and solve with [`solve_for_outputs`], which trains the networks only when something
+//! reads them.
 //!
 //! ```
 //! use gcr::{Domain, Emitters, SolveConfig, radiosity_at_points};
@@ -41,6 +44,7 @@ mod lightmap;
 mod mesh;
 mod metrics;
 mod network;
+mod options;
 pub mod output;
 mod progress;
 mod projection;
@@ -72,6 +76,7 @@ pub use lightmap::{
 pub use mesh::ShadedMesh;
 pub use metrics::{ImageRecord, LightmapRecord, Metrics, PhaseTimes, peak_memory_bytes};
 pub use network::GrowingNetwork;
+pub use options::{SolveOptions, solve_for_outputs};
 pub use output::{output_mesh, vertex_gather_point};
 pub use progress::{GatherProgress, observe_gathers};
 pub use retriangulate::RetriangulateLimits;

@@ -257,6 +257,10 @@ pub enum SceneError {
     /// A 3-D operation on a Flatland scene or vice versa.
     #[error("{0}")]
     WrongDimension(String),
+    /// Light options that do not fit the scene or each other (lights for a Flatland scene, sky
+    /// portals without a sky: [`crate::lights::LightOptions::light`]).
+    #[error("{0}")]
+    LightOptions(String),
 }
 
 /// Shorthand for results of this crate.

@@ -18,7 +18,8 @@
 //!   primitive of which node each face came from, and the glTF node tree, so that outputs can keep the
 //!   input's structure.
 //! * **Lights** — [`lights`]: one interface ([`Light`]) for the sun, skies, point and spot lights beside
-//!   the emitting faces ([`EmitterTable`]), and light selection ([`LightSet`]).
+//!   the emitting faces ([`EmitterTable`]), and light selection ([`LightSet`]); [`LightOptions`] lights a
+//!   loaded scene with the front ends' light options (the program's `--sun`, `--sky`, …; Python's).
 //! * **Probes** — [`read_probes`] / [`Scene::snap_probe`]: the points where all solvers report radiosity.
 //!
 //! # Units
@@ -48,6 +49,7 @@ mod gltf_emission;
 mod gltf_lights;
 mod gltf_resources;
 pub mod kernel;
+pub mod light_options;
 pub mod lights;
 pub mod load;
 pub mod mis;
@@ -72,6 +74,7 @@ pub use distribution::{Discrete, uniform_triangle};
 pub use error::{Result, SceneError};
 pub use flatland::{FlatView, FlatlandScene, Segment};
 pub use kernel::{FlatKernelSample, FlatKernelSampler, KernelSample, KernelSampler, Samples};
+pub use light_options::{DEFAULT_GROUND_REFLECTANCE, LightOptions, Lit, PortalCorners};
 pub use lights::{
     EmitterTable, EnvMap, Light, LightSample, LightSet, Lighting, Pick, PointLight, Portal,
     Portals, Receiver, ShadowTarget, Sky, SkyModel, Sun,
@@ -83,7 +86,8 @@ pub use load::{
 pub use mis::PowerHeuristic;
 pub use nearest::{Nearest, NearestFaces};
 pub use probe::{
-    FlatProbe, Probe, ProbeSnapper, parse_flat_probes, parse_probes, read_flat_probes, read_probes,
+    FlatProbe, Probe, ProbeSnapper, flat_probes_from_rows, parse_flat_probes, parse_probes,
+    probes_from_rows, read_flat_probes, read_probes,
 };
 pub use provenance::{GltfMaterial, GltfMesh, GltfNode, GltfSource, NodeTransform, Part};
 pub use sample::{FlatPoint, FlatSampler, NO_FACE, SurfacePoint, SurfaceSampler};

@@ -49,65 +49,94 @@ fn parse_numbers(source: &str, text: &str, n: usize) -> Result<Vec<(usize, Vec<f
                 line,
                 message: e.to_string(),
             })?;
-        if vals.len() != n {
-            return Err(SceneError::ProbeParse {
-                source_name: source.into(),
-                line,
-                message: format!("expected {n} numbers, found {}", vals.len()),
-            });
-        }
-        if !vals.iter().all(|v| v.is_finite()) {
-            return Err(SceneError::ProbeParse {
-                source_name: source.into(),
-                line,
-                message: "non-finite value".into(),
-            });
-        }
+        check_numbers(source, line, &vals, n)?;
         out.push((line, vals));
     }
     Ok(out)
 }
 
+/// Checks one probe's numbers: `n` of them, all finite.
+fn check_numbers(source: &str, line: usize, vals: &[f64], n: usize) -> Result<()> {
+    let message = if vals.len() != n {
+        format!("expected {n} numbers, found {}", vals.len())
+    } else if !vals.iter().all(|v| v.is_finite()) {
+        "non-finite value".into()
+    } else {
+        return Ok(());
+    };
+    Err(SceneError::ProbeParse {
+        source_name: source.into(),
+        line,
+        message,
+    })
+}
+
+/// The error of a probe whose normal is zero.
+fn zero_normal(source: &str, line: usize) -> SceneError {
+    SceneError::ProbeParse {
+        source_name: source.into(),
+        line,
+        message: "zero normal".into(),
+    }
+}
+
+/// A 3-D probe from its six numbers `x y z nx ny nz` (checked finite), normal normalized.
+fn probe_3d(source: &str, line: usize, v: &[f64]) -> Result<Probe> {
+    let n = DVec3::new(v[3], v[4], v[5]);
+    if n.length_squared() == 0.0 {
+        return Err(zero_normal(source, line));
+    }
+    Ok(Probe {
+        point: DVec3::new(v[0], v[1], v[2]),
+        normal: n.normalize(),
+        line,
+    })
+}
+
+/// A Flatland probe from its four numbers `x y nx ny` (checked finite), normal normalized.
+fn probe_flat(source: &str, line: usize, v: &[f64]) -> Result<FlatProbe> {
+    let n = DVec2::new(v[2], v[3]);
+    if n.length_squared() == 0.0 {
+        return Err(zero_normal(source, line));
+    }
+    Ok(FlatProbe {
+        point: DVec2::new(v[0], v[1]),
+        normal: n.normalize(),
+        line,
+    })
+}
+
 /// Parses 3-D probes (`x y z nx ny nz` per line). `source` names the file in messages.
 pub fn parse_probes(source: &str, text: &str) -> Result<Vec<Probe>> {
-    parse_numbers(source, text, 6)?
-        .into_iter()
-        .map(|(line, v)| {
-            let n = DVec3::new(v[3], v[4], v[5]);
-            if n.length_squared() == 0.0 {
-                return Err(SceneError::ProbeParse {
-                    source_name: source.into(),
-                    line,
-                    message: "zero normal".into(),
-                });
-            }
-            Ok(Probe {
-                point: DVec3::new(v[0], v[1], v[2]),
-                normal: n.normalize(),
-                line,
-            })
-        })
+    (parse_numbers(source, text, 6)?.into_iter())
+        .map(|(line, v)| probe_3d(source, line, &v))
         .collect()
 }
 
 /// Parses Flatland probes (`x y nx ny` per line).
 pub fn parse_flat_probes(source: &str, text: &str) -> Result<Vec<FlatProbe>> {
-    parse_numbers(source, text, 4)?
-        .into_iter()
-        .map(|(line, v)| {
-            let n = DVec2::new(v[2], v[3]);
-            if n.length_squared() == 0.0 {
-                return Err(SceneError::ProbeParse {
-                    source_name: source.into(),
-                    line,
-                    message: "zero normal".into(),
-                });
-            }
-            Ok(FlatProbe {
-                point: DVec2::new(v[0], v[1]),
-                normal: n.normalize(),
-                line,
-            })
+    (parse_numbers(source, text, 4)?.into_iter())
+        .map(|(line, v)| probe_flat(source, line, &v))
+        .collect()
+}
+
+/// 3-D probes from rows of `x y z nx ny nz` held in memory (a caller's arrays), checked as a
+/// probe file's lines are: row i is "line" i + 1 of `source` in messages.
+pub fn probes_from_rows(source: &str, rows: &[[f64; 6]]) -> Result<Vec<Probe>> {
+    (rows.iter().enumerate())
+        .map(|(i, v)| {
+            check_numbers(source, i + 1, v, 6)?;
+            probe_3d(source, i + 1, v)
+        })
+        .collect()
+}
+
+/// Flatland probes from rows of `x y nx ny` held in memory, as [`probes_from_rows`].
+pub fn flat_probes_from_rows(source: &str, rows: &[[f64; 4]]) -> Result<Vec<FlatProbe>> {
+    (rows.iter().enumerate())
+        .map(|(i, v)| {
+            check_numbers(source, i + 1, v, 4)?;
+            probe_flat(source, i + 1, v)
         })
         .collect()
 }
@@ -255,5 +284,31 @@ impl FlatlandScene {
             .iter()
             .map(|p| self.snap_probe(p, tol, source))
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_in_memory_are_checked_as_a_files_lines() {
+        let text = "1 2 3 0 0 2\n4 5 6 0 3 0\n";
+        let rows = [
+            [1.0, 2.0, 3.0, 0.0, 0.0, 2.0],
+            [4.0, 5.0, 6.0, 0.0, 3.0, 0.0],
+        ];
+        assert_eq!(
+            probes_from_rows("p", &rows).unwrap(),
+            parse_probes("p", text).unwrap()
+        );
+        let bad = [rows[0], [4.0, 5.0, 6.0, 0.0, 0.0, 0.0]];
+        let e = probes_from_rows("points", &bad).unwrap_err().to_string();
+        assert_eq!(e, "points:2: bad probe: zero normal");
+        let nan = [[f64::NAN, 0.0, 0.0, 0.0, 1.0, 0.0]];
+        let e = probes_from_rows("points", &nan).unwrap_err().to_string();
+        assert_eq!(e, "points:1: bad probe: non-finite value");
+        let flat = flat_probes_from_rows("f", &[[1.0, 2.0, 0.0, 5.0]]).unwrap();
+        assert_eq!(flat, parse_flat_probes("f", "1 2 0 5").unwrap());
     }
 }

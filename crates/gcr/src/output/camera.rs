@@ -212,6 +212,30 @@ impl Default for CameraChoice {
     }
 }
 
+impl CameraChoice {
+    /// The camera the front ends' options ask for (`--camera-eye`, `--camera-target`,
+    /// `--camera-up`, `--fov`, `--auto-camera`): the given one when both the eye and the target
+    /// are (field of view `fov`, default [`DEFAULT_FOV`]), else the automatic one when asked for,
+    /// else the scene's; `fov` replaces their field of view.
+    pub fn from_options(
+        eye_target: Option<(DVec3, DVec3)>,
+        up: DVec3,
+        fov: Option<f64>,
+        automatic: bool,
+    ) -> Self {
+        match eye_target {
+            Some((eye, target)) => CameraChoice::Given(PinholeCamera {
+                eye,
+                target,
+                up,
+                fov_y_degrees: fov.unwrap_or(DEFAULT_FOV),
+            }),
+            None if automatic => CameraChoice::Automatic { fov },
+            None => CameraChoice::Scene { fov },
+        }
+    }
+}
+
 impl Default for ImageSettings {
     fn default() -> Self {
         Self {

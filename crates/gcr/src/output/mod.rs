@@ -1,6 +1,8 @@
 //! Writers for a solved scene: PNG, JPEG and OpenEXR images, binary glTF, PLY, and the tone
 //! mapping they share; [`write`] is the output stage of a solve (all files at once, checked
-//! before the solve); [`camera`] the image settings and [`autocam`] the automatic camera.
+//! before the solve); [`camera`] the image settings and [`autocam`] the automatic camera;
+//! [`render_linear`] an image as numbers and [`place_probes`] / [`gather_probes`] the probes at a
+//! caller's points, as the files get them.
 
 use std::path::PathBuf;
 
@@ -11,6 +13,7 @@ mod glb;
 mod gltf_bin;
 mod hdr;
 mod lightmap;
+mod linear;
 mod mesh;
 mod pixel;
 mod ply;
@@ -24,13 +27,14 @@ pub use camera::DEFAULT_FOV;
 pub use camera::{CameraChoice, CameraError, ImageMode, ImageSettings, View};
 pub use glb::{to_glb, write_glb};
 pub use lightmap::{encode_page_exr, page_paths, png_scale, to_lightmap_glb};
+pub use linear::{LinearImage, render_linear};
 pub use mesh::{UNIFORM_MESH_TRIANGLES, output_mesh, vertex_gather_point};
 pub use pixel::{PixelImage, render_pixels};
-pub use probes::{ProbeQuantity, ProbeSettings};
-pub use raster::{Image, PinholeCamera, render_image};
+pub use probes::{ProbePoints, ProbeQuantity, ProbeSettings, gather_probes, place_probes};
+pub use raster::{Image, PinholeCamera, RadianceImage, render_image};
 pub use staged::{StagedFiles, check_target};
 pub use tonemap::Exposure;
-pub use write::{OutputPaths, OutputPlan, write_outputs};
+pub use write::{OutputPaths, OutputPlan, gather_warnings, write_outputs};
 
 /// Why outputs cannot be written (checked before the solve by [`OutputPlan::new`], or met
 /// while writing by [`write_outputs`]).

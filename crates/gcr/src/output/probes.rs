@@ -13,6 +13,7 @@ use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::emitters::Emitters;
 use crate::estimator::{GatherStats, irradiance_at_points, radiosity_at_points};
+use crate::gather::Gathered;
 use crate::solve::Trained;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -100,6 +101,17 @@ impl ProbeSettings {
     }
 }
 
+/// Probes as read from a file or given by a caller: 3-D (`x y z nx ny nz`) or Flatland
+/// (`x y nx ny`), normals normalized (`scene_sampler::probes_from_rows` checks a caller's rows as
+/// a file's lines are checked).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ProbePoints {
+    /// 3-D probes.
+    ThreeD(Vec<scene_sampler::Probe>),
+    /// Flatland probes.
+    Flat(Vec<scene_sampler::FlatProbe>),
+}
+
 /// Reads the probe file: radiosity probes snapped onto the domain's surfaces `(point, normal,
 /// face)`, irradiance probes as given with face [`NO_FACE`]; Flatland with z = 0.
 pub(super) fn read_probes(
@@ -108,78 +120,119 @@ pub(super) fn read_probes(
     settings: &ProbeSettings,
 ) -> Result<Vec<(DVec3, DVec3, u32)>, OutputError> {
     let source = path.display().to_string();
+    let probes = match domain {
+        Domain::ThreeD(_) => ProbePoints::ThreeD(scene_sampler::read_probes(path)?),
+        Domain::Flat(_) => ProbePoints::Flat(scene_sampler::read_flat_probes(path)?),
+    };
+    place_probes(domain, &probes, settings, &source)
+}
+
+/// Where the probes are computed, as for a probe file ([`OutputPlan`](super::OutputPlan) reads
+/// one): radiosity probes snapped onto the domain's surfaces `(point, normal, face)` within the
+/// tolerance (module docs), irradiance probes as given with face [`NO_FACE`]; Flatland with
+/// z = 0. `source` names the probes in messages (a file's name; errors give its line).
+pub fn place_probes(
+    domain: &Domain,
+    probes: &ProbePoints,
+    settings: &ProbeSettings,
+    source: &str,
+) -> Result<Vec<(DVec3, DVec3, u32)>, OutputError> {
     let snap = settings.quantity == ProbeQuantity::Radiosity;
     let tolerance = |diagonal: f64| {
         (settings.tolerance).unwrap_or_else(|| scene_sampler::probe::default_tolerance(diagonal))
     };
-    Ok(match domain {
-        Domain::ThreeD(k) => {
-            let probes = scene_sampler::read_probes(path)?;
-            if !snap {
-                return Ok(probes
-                    .iter()
-                    .map(|p| (p.point, p.normal, NO_FACE))
-                    .collect());
-            }
+    Ok(match (domain, probes) {
+        (Domain::ThreeD(_), ProbePoints::ThreeD(probes)) if !snap => probes
+            .iter()
+            .map(|p| (p.point, p.normal, NO_FACE))
+            .collect(),
+        (Domain::ThreeD(k), ProbePoints::ThreeD(probes)) => {
             let tol = tolerance(k.scene.diagonal());
             let snapper = scene_sampler::ProbeSnapper::new(k.scene);
             // in parallel, the first failing line reported (as a scan in file order would)
             let snapped: Vec<_> = probes
                 .par_iter()
-                .map(|p| snapper.snap(p, tol, &source))
+                .map(|p| snapper.snap(p, tol, source))
                 .collect();
             snapped
                 .into_iter()
                 .map(|s| s.map(|s| (s.point, s.normal, s.face)))
                 .collect::<Result<_, scene_sampler::SceneError>>()?
         }
-        Domain::Flat(k) => {
-            let probes = scene_sampler::read_flat_probes(path)?;
-            if !snap {
-                return Ok(probes
-                    .iter()
-                    .map(|p| (p.point.extend(0.0), p.normal.extend(0.0), NO_FACE))
-                    .collect());
-            }
+        (Domain::Flat(_), ProbePoints::Flat(probes)) if !snap => probes
+            .iter()
+            .map(|p| (p.point.extend(0.0), p.normal.extend(0.0), NO_FACE))
+            .collect(),
+        (Domain::Flat(k), ProbePoints::Flat(probes)) => {
             let tol = tolerance(k.scene.diagonal());
             probes
                 .iter()
                 .map(|p| {
-                    let s = k.scene.snap_probe(p, tol, &source)?;
+                    let s = k.scene.snap_probe(p, tol, source)?;
                     Ok((s.point.extend(0.0), s.normal.extend(0.0), s.segment))
                 })
                 .collect::<Result<_, scene_sampler::SceneError>>()?
         }
+        (Domain::ThreeD(_), ProbePoints::Flat(_)) => return Err(wrong_dimension(source, 3)),
+        (Domain::Flat(_), ProbePoints::ThreeD(_)) => return Err(wrong_dimension(source, 2)),
     })
 }
 
+/// Probes of the other dimension than the scene's.
+fn wrong_dimension(source: &str, dim: usize) -> OutputError {
+    let (scene, points) = match dim {
+        3 => ("a 3-D scene", "x y z nx ny nz"),
+        _ => ("a Flatland scene", "x y nx ny"),
+    };
+    OutputError::Probes(scene_sampler::SceneError::WrongDimension(format!(
+        "{source}: {scene} takes probes as {points}"
+    )))
+}
+
 /// The probes' values ([`radiosity_at_points`] or [`irradiance_at_points`]; daylight factors in
-/// percent), one line each: `r g b`, or one value for a grey Flatland scene.
-pub fn probe_values(
+/// percent, their standard errors too), in the probes' order, and what the gather measured.
+pub fn gather_probes(
     domain: &Domain,
     trained: &Trained,
     emitters: &Emitters,
     config: &SolveConfig,
     (probes, settings): (&[(DVec3, DVec3, u32)], &ProbeSettings),
-) -> Result<(String, GatherStats), OutputError> {
+) -> Result<(Vec<Gathered>, GatherStats), OutputError> {
     let (quantity, outdoor) = (settings.quantity, settings.outdoor_illuminance);
-    let grey = domain.bands() == 1 && domain.dim() == 2;
-    let gathered = match quantity {
+    let mut gathered = match quantity {
         ProbeQuantity::Radiosity => radiosity_at_points(domain, trained, emitters, config, probes)?,
         ProbeQuantity::Irradiance | ProbeQuantity::DaylightFactor => {
             let at: Vec<(DVec3, DVec3)> = probes.iter().map(|&(y, n, _)| (y, n)).collect();
             irradiance_at_points(domain, trained, emitters, config, &at)?
         }
     };
+    let stats = GatherStats::of(&gathered);
     // daylight factors in percent of the outdoor illuminance (checked positive by `validate`)
-    let scale = match (quantity, outdoor) {
-        (ProbeQuantity::DaylightFactor, Some(e)) => 100.0 / e,
-        _ => 1.0,
-    };
+    if let (ProbeQuantity::DaylightFactor, Some(e)) = (quantity, outdoor) {
+        let scale = 100.0 / e;
+        for g in &mut gathered {
+            g.radiosity = g.radiosity.map(|v| v * scale);
+            g.std_error = g.std_error.map(|v| v * scale);
+        }
+    }
+    Ok((gathered, stats))
+}
+
+/// The probes' values as the probe output holds them ([`gather_probes`]), one line each:
+/// `r g b`, or one value for a grey Flatland scene.
+pub fn probe_values(
+    domain: &Domain,
+    trained: &Trained,
+    emitters: &Emitters,
+    config: &SolveConfig,
+    probes: (&[(DVec3, DVec3, u32)], &ProbeSettings),
+) -> Result<(String, GatherStats), OutputError> {
+    let grey = domain.bands() == 1 && domain.dim() == 2;
+    let (gathered, stats) = gather_probes(domain, trained, emitters, config, probes)?;
     let text = gathered
         .iter()
         .map(|g| {
-            let b = g.radiosity.map(|v| v * scale);
+            let b = g.radiosity;
             if grey {
                 format!("{}\n", b[0])
             } else {
@@ -187,5 +240,5 @@ pub fn probe_values(
             }
         })
         .collect();
-    Ok((text, GatherStats::of(&gathered)))
+    Ok((text, stats))
 }

@@ -32,7 +32,7 @@ use std::time::Instant;
 /// and JPEG, linear OpenEXR (3-D only).
 pub const IMAGE_EXTENSIONS: &str = "png|jpg|jpeg|exr";
 /// Anti-aliasing of the 3-D camera image: sub-samples per pixel side.
-const IMAGE_SUPERSAMPLING: u32 = 2;
+pub(super) const IMAGE_SUPERSAMPLING: u32 = 2;
 
 /// Where the outputs of a solve go; `None` skips an output.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -105,12 +105,7 @@ impl OutputPlan {
     fn needs_mesh(&self) -> bool {
         let p = &self.paths;
         let images = p.image.is_some() || !self.images.views.is_empty();
-        let automatic = p.image.is_some()
-            && match self.images.camera {
-                CameraChoice::Given(_) => false,
-                CameraChoice::Automatic { .. } => true,
-                CameraChoice::Scene { .. } => !self.scene_camera,
-            };
+        let automatic = p.image.is_some() && is_automatic(self.images.camera, self.scene_camera);
         p.mesh.is_some()
             || p.ply.is_some()
             || (images && (self.images.mode == ImageMode::Mesh || automatic || self.flatland))
@@ -250,6 +245,16 @@ impl OutputPlan {
     /// The probes snapped onto the scene: `(point, normal, face)`, Flatland with z = 0.
     pub fn probes(&self) -> &[(DVec3, DVec3, u32)] {
         &self.probes
+    }
+}
+
+/// Whether `choice` is placed automatically (from the output mesh's brightness) for a scene
+/// with or without a camera of its own.
+pub(super) fn is_automatic(choice: CameraChoice, scene_camera: bool) -> bool {
+    match choice {
+        CameraChoice::Given(_) => false,
+        CameraChoice::Automatic { .. } => true,
+        CameraChoice::Scene { .. } => !scene_camera,
     }
 }
 
@@ -470,7 +475,7 @@ fn write_lightmap(
 }
 
 /// The automatic exposure of a mesh's outputs: from the radiosity of its faces that do not emit.
-fn exposure_of_mesh(mesh: &ShadedMesh, scene: &scene_sampler::Scene) -> Exposure {
+pub(super) fn exposure_of_mesh(mesh: &ShadedMesh, scene: &scene_sampler::Scene) -> Exposure {
     let lit = (mesh.triangles.iter())
         .zip(&mesh.face_of_triangle)
         .filter(|(_, f)| scene.faces[**f as usize].emission.is_zero())
@@ -490,15 +495,21 @@ fn solid_cutouts(scene: &scene_sampler::Scene, path: &Path) -> Option<String> {
 }
 
 /// Records what the output gather measured (the last output set wins: the mesh after the
-/// probes) and the target it ran to.
+/// probes) and the target it ran to, with its warnings ([`gather_warnings`]).
 fn record_gather(metrics: &mut Metrics, stats: &GatherStats, config: &SolveConfig) {
     metrics.network_share = stats.network_share;
     metrics.relative_std_error = stats.relative_std_error;
     metrics.gather_rays = stats.rays;
     metrics.target_error = config.paths.target_error;
-    // ⟨Say what the numbers cannot: no light at all, a target the ray cap kept out of reach⟩
+    metrics.warnings.extend(gather_warnings(stats, config));
+}
+
+/// What the numbers of a gather cannot say: no light at all, a target the ray cap kept out of
+/// reach (the warnings of the metrics and of `gcr solve`).
+pub fn gather_warnings(stats: &GatherStats, config: &SolveConfig) -> Vec<String> {
+    let mut warnings = Vec::new();
     if stats.dark {
-        metrics.warnings.push(
+        warnings.push(
             "every output point got 0: no light reaches them (a light inside closed geometry or \
              behind the surfaces, a sun below the horizon, or reflectance 0 everywhere?)"
                 .into(),
@@ -506,7 +517,7 @@ fn record_gather(metrics: &mut Metrics, stats: &GatherStats, config: &SolveConfi
     }
     if let (Some(target), Some(error)) = (config.paths.target_error, stats.relative_std_error) {
         if error > target && stats.rays >= config.paths.max_rays {
-            metrics.warnings.push(format!(
+            warnings.push(format!(
                 "the target error {:.3} % was not met: {:.3} % at the cap of {} rays per point",
                 100.0 * target,
                 100.0 * error,
@@ -514,6 +525,7 @@ fn record_gather(metrics: &mut Metrics, stats: &GatherStats, config: &SolveConfi
             ));
         }
     }
+    warnings
 }
 
 /// Records the exposure of the tone-mapped outputs and where it came from.
@@ -536,24 +548,37 @@ fn image_cameras<'a>(
     mesh: Option<(&ShadedMesh, &Exposure)>,
     settings: &ImageSettings,
 ) -> Vec<(&'a Path, (PinholeCamera, &'static str))> {
-    let mut jobs = Vec::new();
-    for &(path, choice, source) in images {
-        let camera = match choice {
-            CameraChoice::Given(c) => (c, source),
-            CameraChoice::Scene { fov } if scene.camera_given => {
-                let mut c = PinholeCamera::of_scene(scene);
-                c.fov_y_degrees = fov.unwrap_or(c.fov_y_degrees);
-                (c, "scene")
-            }
-            CameraChoice::Scene { fov } | CameraChoice::Automatic { fov } => {
-                let (mesh, exposure) =
-                    mesh.expect("the automatic camera's outputs build the mesh (needs_mesh)");
-                automatic(domain, mesh, exposure, settings, fov)
-            }
-        };
-        jobs.push((path, camera));
+    (images.iter())
+        .map(|&(path, choice, source)| {
+            let camera = camera_of(domain, scene, (choice, source), mesh, settings);
+            (path, camera)
+        })
+        .collect()
+}
+
+/// One image's camera with its source name (`source` for a given camera): the given one, the
+/// scene's, or the automatic one (from `mesh` at its exposure: present whenever
+/// [`is_automatic`]).
+pub(super) fn camera_of(
+    domain: &Domain,
+    scene: &Scene,
+    (choice, source): (CameraChoice, &'static str),
+    mesh: Option<(&ShadedMesh, &Exposure)>,
+    settings: &ImageSettings,
+) -> (PinholeCamera, &'static str) {
+    match choice {
+        CameraChoice::Given(c) => (c, source),
+        CameraChoice::Scene { fov } if scene.camera_given => {
+            let mut c = PinholeCamera::of_scene(scene);
+            c.fov_y_degrees = fov.unwrap_or(c.fov_y_degrees);
+            (c, "scene")
+        }
+        CameraChoice::Scene { fov } | CameraChoice::Automatic { fov } => {
+            let (mesh, exposure) =
+                mesh.expect("the automatic camera's outputs build the mesh (needs_mesh)");
+            automatic(domain, mesh, exposure, settings, fov)
+        }
     }
-    jobs
 }
 
 /// Writes a per-pixel image: linear radiance for .exr, tone-mapped for PNG and JPEG.

@@ -1,0 +1,96 @@
+"""Python gives exactly the program's numbers: the README's main job (files) and its probes."""
+
+from __future__ import annotations
+
+import json
+import re
+import shlex
+from pathlib import Path
+
+import numpy as np
+
+import gcr
+from conftest import run_gcr
+
+# fields of the metrics that measure the run, not the result
+TIMINGS = {"seconds", "peak_memory_bytes"}
+
+
+def readme_python_block(root: Path) -> str:
+    """The README's first ```python block."""
+    text = (root / "README.md").read_text()
+    match = re.search(r"```python\n(.*?)```", text, re.S)
+    assert match, "README.md has a ```python block"
+    return match.group(1)
+
+
+def readme_main_command(root: Path) -> list[str]:
+    """The README's main command as `gcr` arguments."""
+    text = (root / "README.md").read_text()
+    line = next(l for l in text.splitlines() if l.startswith("cargo run --release -p gcr-cli -- solve "))
+    return shlex.split(line.split(" -- ", 1)[1])
+
+
+def without_timings(metrics: dict) -> dict:
+    return {k: v for k, v in metrics.items() if k not in TIMINGS}
+
+
+def test_readme_python_block_is_five_lines(root):
+    assert len(readme_python_block(root).strip().splitlines()) == 5
+
+
+def test_readme_python_block_reproduces_the_main_command(root, gcr_bin, tmp_path, monkeypatch):
+    program, python = tmp_path / "program", tmp_path / "python"
+    program.mkdir()
+    python.mkdir()
+    args = readme_main_command(root)
+    run_gcr(gcr_bin, *args, "--quiet", cwd=program)
+    monkeypatch.chdir(python)
+    exec(compile(readme_python_block(root), "README.md", "exec"), {})
+    outputs = [args[i + 1] for i, a in enumerate(args) if a in ("--image", "--mesh", "--metrics")]
+    assert sorted(p.name for p in python.iterdir()) == sorted(outputs)
+    for name in outputs:
+        a, b = (program / name).read_bytes(), (python / name).read_bytes()
+        if name.endswith(".json"):
+            assert without_timings(json.loads(a)) == without_timings(json.loads(b))
+        else:
+            assert a == b, f"{name} differs"
+
+
+def test_probes_give_the_programs_numbers_bit_for_bit(root, gcr_bin, tmp_path, probes):
+    probe_file = root / "scenes" / "cornell-box.probes.txt"
+    out = tmp_path / "x.txt"
+    run_gcr(gcr_bin, "solve", "cornell-box", "--probes", str(probe_file), "--probe-out", str(out), "--quiet")
+    program = np.array([[float(v) for v in line.split()] for line in out.read_text().splitlines()])
+    solution = gcr.solve(gcr.Scene.load("cornell-box"))
+    values, std_errors = solution.radiosity(*probes)
+    assert values.dtype == np.float64 and values.shape == (len(probe_file.read_text().splitlines()), 3)
+    assert std_errors.shape == values.shape and np.all(std_errors >= 0) and std_errors.max() > 0
+    assert np.array_equal(values, program)
+    # the program's writer through Python: the same bytes
+    written = tmp_path / "y.txt"
+    solution.write(probes=probe_file, probe_out=written)
+    assert written.read_bytes() == out.read_bytes()
+
+
+def test_irradiance_gives_the_programs_numbers(root, gcr_bin, tmp_path, probes):
+    probe_file = root / "scenes" / "cornell-box.probes.txt"
+    out = tmp_path / "e.txt"
+    run_gcr(gcr_bin, "solve", "cornell-box", "--quality", "draft", "--probes", str(probe_file),
+            "--probe-out", str(out), "--probe-quantity", "irradiance", "--quiet")
+    program = np.loadtxt(out)
+    values, _ = gcr.solve(gcr.Scene.load("cornell-box"), quality="draft").irradiance(*probes)
+    assert np.array_equal(values, program)
+
+
+def test_lights_are_the_programs(root, gcr_bin, tmp_path):
+    """A daylit room: the sky, the sun and the daylight factors as the program's options."""
+    pts = np.loadtxt(root / "scenes" / "side-lit-room.pts")
+    out = tmp_path / "df.txt"
+    scene_file = root / "scenes" / "side-lit-room.obj"
+    run_gcr(gcr_bin, "solve", str(scene_file), "--sky", "cie-overcast:10000", "--quality", "draft",
+            "--probes", str(root / "scenes" / "side-lit-room.pts"), "--probe-out", str(out),
+            "--probe-quantity", "daylight-factor", "--quiet")
+    scene = gcr.Scene.load(scene_file, sky="cie-overcast:10000")
+    values, _ = gcr.solve(scene, quality="draft").daylight_factor(pts[:, :3], pts[:, 3:])
+    assert np.array_equal(values, np.loadtxt(out).reshape(values.shape))

@@ -1,0 +1,90 @@
+//! A 3-D image as numbers: the linear radiance L = B/π per pixel that an `.exr` image output
+//! holds, in memory (the Python package's `Solution.image`), made as [`super::write_outputs`]
+//! makes that file: the same camera choice, the same output mesh (mesh mode) or the same
+//! per-pixel gather (pixel mode).
+
+use super::OutputError;
+use super::camera::{ImageMode, ImageSettings};
+use super::mesh::output_mesh;
+use super::pixel::render_pixels;
+use super::raster::{PinholeCamera, RadianceImage, render_radiance};
+use super::tonemap::Exposure;
+use super::write::{IMAGE_SUPERSAMPLING, camera_of, exposure_of_mesh, is_automatic};
+use crate::config::SolveConfig;
+use crate::domain::Domain;
+use crate::estimator::GatherStats;
+use crate::retriangulate::RetriangulateLimits;
+use crate::solve::Trained;
+
+/// A linear radiance image and how it was made.
+#[derive(Clone, Debug)]
+pub struct LinearImage {
+    /// L = B/π per pixel (RGB, f32, rows from the top), as an `.exr` output holds it.
+    pub radiance: RadianceImage,
+    /// The camera used.
+    pub camera: PinholeCamera,
+    /// Where the camera came from: `given`, `scene`, `automatic-inside` or `automatic-outside`.
+    pub camera_source: &'static str,
+    /// What the gather measured: the output mesh's (mesh mode) or the pixels' (pixel mode).
+    pub stats: GatherStats,
+}
+
+/// The main image of `settings` (its camera, resolution and mode; not its views or exposure,
+/// which tone-mapped outputs alone use, but for placing the automatic camera) as linear radiance.
+/// Errs for a Flatland domain (its images are tone-mapped PNGs only) and for settings that
+/// [`ImageSettings::validate`] refuses.
+pub fn render_linear(
+    domain: &Domain,
+    trained: &Trained,
+    config: &SolveConfig,
+    settings: &ImageSettings,
+) -> Result<LinearImage, OutputError> {
+    settings.validate()?;
+    let Some(scene) = domain.scene_3d() else {
+        return Err(OutputError::ImageNeeds3d("an image as numbers"));
+    };
+    // ⟨The output mesh, when the image or its camera needs it⟩
+    let needs_mesh =
+        settings.mode == ImageMode::Mesh || is_automatic(settings.camera, scene.camera_given);
+    let mesh = match needs_mesh {
+        true => Some(output_mesh(
+            domain,
+            trained,
+            config,
+            RetriangulateLimits::default(),
+        )?),
+        false => None,
+    };
+    let exposure = mesh.as_ref().map(|(m, _)| match settings.exposure {
+        Some(scale) => Exposure { scale },
+        None => exposure_of_mesh(m, scene),
+    });
+    let with_exposure = mesh.as_ref().map(|(m, _)| m).zip(exposure.as_ref());
+    let choice = (settings.camera, "given");
+    let (camera, camera_source) = camera_of(domain, scene, choice, with_exposure, settings);
+    let (w, h) = (settings.width, settings.height);
+    // ⟨Per pixel, or the mesh rasterized⟩
+    let (radiance, stats) = match (settings.mode, mesh) {
+        (ImageMode::Pixel, _) => {
+            let img = render_pixels(
+                domain,
+                trained,
+                config,
+                &camera,
+                (w, h, settings.pixel_samples),
+            )?;
+            (img.radiance(), img.stats)
+        }
+        (ImageMode::Mesh, Some((mesh, stats))) => (
+            render_radiance(&mesh, &camera, w, h, IMAGE_SUPERSAMPLING),
+            stats,
+        ),
+        (ImageMode::Mesh, None) => unreachable!("mesh-mode images build the mesh"),
+    };
+    Ok(LinearImage {
+        radiance,
+        camera,
+        camera_source,
+        stats,
+    })
+}

@@ -1,0 +1,129 @@
+//! What the front ends (the `gcr` program, the Python package) share: the settings and their
+//! defaults ([`SolveOptions`]), probes at a caller's points placed as a probe file's
+//! ([`place_probes`]), and images as numbers equal to the `.exr` files
+//! ([`render_linear`] against [`write_outputs`]).
+
+use gcr::output::{
+    ImageMode, ImageSettings, OutputPaths, OutputPlan, ProbePoints, ProbeSettings, place_probes,
+    render_linear, write_outputs,
+};
+use gcr::{Domain, Quality, SolveConfig, SolveOptions};
+use scene_sampler::{KernelSampler, SceneBvh};
+use std::path::Path;
+use std::time::Instant;
+
+fn workspace(relative: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(relative)
+}
+
+#[test]
+fn the_default_options_are_the_programs_preset() {
+    let options = SolveOptions::default();
+    let preset = SolveConfig::preset(Quality::Good);
+    assert_eq!(format!("{:?}", options.config()), format!("{preset:?}"));
+    // the default gather reads no network: nothing is trained unless an output reads them
+    assert!(!options.trains_networks(&options.config(), false));
+    assert!(options.trains_networks(&options.config(), true));
+    let rays = SolveOptions {
+        gather: gcr::GatherMode::Rays,
+        ..options
+    };
+    assert!(rays.trains_networks(&rays.config(), false));
+    let draft = SolveOptions {
+        quality: Some(Quality::Draft),
+        ..SolveOptions::default()
+    };
+    assert_eq!(draft.config().paths.target_error, Some(0.05));
+}
+
+#[test]
+fn points_are_placed_as_a_probe_files_lines() {
+    let scene = scene_sampler::builtin("cornell-box")
+        .unwrap()
+        .into_3d()
+        .unwrap();
+    let bvh = SceneBvh::new(&scene);
+    let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+    let file = workspace("scenes/cornell-box.probes.txt");
+    let dir = std::env::temp_dir().join(format!("gcr-front-ends-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let paths = OutputPaths {
+        probes_in: Some(file.clone()),
+        probe_out: Some(dir.join("out.txt")),
+        ..OutputPaths::default()
+    };
+    let plan = OutputPlan::new(&domain, paths).unwrap();
+    let rows: Vec<[f64; 6]> = (std::fs::read_to_string(&file).unwrap().lines())
+        .map(|l| {
+            let v: Vec<f64> = l.split_whitespace().map(|w| w.parse().unwrap()).collect();
+            v.try_into().unwrap()
+        })
+        .collect();
+    let probes = ProbePoints::ThreeD(scene_sampler::probes_from_rows("points", &rows).unwrap());
+    let placed = place_probes(&domain, &probes, &ProbeSettings::default(), "points").unwrap();
+    assert_eq!(placed, plan.probes());
+    // a point off the surfaces is named by its row
+    let mut off = rows.clone();
+    off[1][1] += 0.05;
+    let probes = ProbePoints::ThreeD(scene_sampler::probes_from_rows("points", &off).unwrap());
+    let e = place_probes(&domain, &probes, &ProbeSettings::default(), "points").unwrap_err();
+    assert!(e.to_string().starts_with("points:2: probe is"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The linear image of both modes equals the `.exr` file the output stage writes.
+#[test]
+fn images_as_numbers_are_the_exr_files() {
+    let scene = scene_sampler::builtin("cornell-box")
+        .unwrap()
+        .into_3d()
+        .unwrap();
+    let bvh = SceneBvh::new(&scene);
+    let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+    let options = SolveOptions {
+        quality: Some(Quality::Draft),
+        ..SolveOptions::default()
+    };
+    let config = options.config();
+    let trained = gcr::solve_for_outputs(&domain, &options, &config, false, &mut |_| {}).unwrap();
+    let dir = std::env::temp_dir().join(format!("gcr-front-ends-exr-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for mode in [ImageMode::Mesh, ImageMode::Pixel] {
+        let settings = ImageSettings {
+            width: 24,
+            height: 16,
+            mode,
+            ..ImageSettings::default()
+        };
+        let linear = render_linear(&domain, &trained, &config, &settings).unwrap();
+        let path = dir.join(format!("{mode:?}.exr"));
+        let paths = OutputPaths {
+            image: Some(path.clone()),
+            ..OutputPaths::default()
+        };
+        let plan = OutputPlan::with_images(&domain, paths, settings).unwrap();
+        write_outputs(
+            &domain,
+            &trained,
+            &config,
+            &plan,
+            "cornell-box",
+            Instant::now(),
+        )
+        .unwrap();
+        let file = exr::prelude::read_first_rgba_layer_from_file(
+            &path,
+            |size, _| vec![[0f32; 3]; size.width() * size.height()],
+            |px, pos, (r, g, b, _): (f32, f32, f32, f32)| px[pos.y() * 24 + pos.x()] = [r, g, b],
+        )
+        .unwrap();
+        assert_eq!(
+            file.layer_data.channel_data.pixels, linear.radiance.radiance,
+            "{mode:?}"
+        );
+        assert_eq!(linear.camera_source, "scene");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

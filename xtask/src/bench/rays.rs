@@ -177,6 +177,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         )
     };
     let dir = std::env::temp_dir().join(format!("gcr-rays-{}", std::process::id()));
+    let mut builds = String::new();
     std::fs::create_dir_all(&dir)?;
     let mut md = String::from(
         "# Ray throughput: our BVH against Embree\n\n\
@@ -251,9 +252,11 @@ pub fn run(ctx: &Ctx) -> Result<()> {
                 println!("rays {name} {} {threads}: {row}", set.name);
             }
         }
-        writeln!(md, "\n{name}: our BVH built in {build:.2} s.")?;
+        writeln!(builds, "- {name}: our BVH built in {build:.2} s.")?;
     }
     std::fs::remove_dir_all(&dir).ok();
+    md.push('\n');
+    md.push_str(&builds);
     std::fs::write(ctx.out.join("benchmarks-rays.md"), md)?;
     Ok(())
 }

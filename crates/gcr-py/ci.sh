@@ -1,12 +1,9 @@
 #!/usr/bin/env bash
 # CI for the Python package, run by .ci/run from the workspace root after `cargo test`: builds
-# the wheel with maturin, installs it with what the tests need in a fresh virtual environment,
-# and runs the pytest suite against the `gcr` program that `cargo test` built.
-#
-# The wheel is built with the `test` profile, whose artifacts `cargo test` has just made (a
-# released wheel, `pip install crates/gcr-py`, uses `release`); the numbers are the same in
-# every profile (no fast-math: IEEE results do not depend on the optimisation level), which the
-# tests check against the program bit for bit.
+# the wheel with maturin (release, as `pip install crates/gcr-py` builds it), installs it with
+# what the tests need in a fresh virtual environment, and runs the pytest suite against the `gcr`
+# program that `cargo test` built (its profile differs from the wheel's: the numbers must not,
+# and the tests compare them bit for bit).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 target="$(realpath -m "${CARGO_TARGET_DIR:-target}")"
@@ -19,18 +16,18 @@ if ! python3 -m venv --clear "$venv"; then
     python3 -m pip install --user --break-system-packages -q virtualenv
     python3 -m virtualenv --clear "$venv"
 fi
-"$venv/bin/python" -m pip install -q --upgrade pip
 # pandas and SCIPY_ARRAY_API let scikit-learn run its pandas and array-API estimator checks
 # instead of skipping them
 "$venv/bin/python" -m pip install -q maturin numpy pytest scikit-learn pandas
 
 rm -rf "$target/wheels"
-"$venv/bin/maturin" build --profile test -m crates/gcr-py/Cargo.toml -o "$target/wheels" \
+"$venv/bin/maturin" build --release -m crates/gcr-py/Cargo.toml -o "$target/wheels" \
     --interpreter "$venv/bin/python"
 "$venv/bin/python" -m pip install -q --force-reinstall --no-deps "$target"/wheels/gcr-*.whl
 
-# the program the numbers are compared with: `cargo test` built it (gcr-cli's tests run it)
-cargo build --profile test -p gcr-cli --bin gcr
+# the program the numbers are compared with: `cargo test --workspace --all-features` built it
+# (gcr-cli's tests run it); with the same packages and features this build is up to date
+cargo build --workspace --all-features --bin gcr
 export GCR_BIN="$target/debug/gcr"
 # run from outside the sources, so that `import gcr` is the installed wheel
 tests="$PWD/crates/gcr-py/tests"

@@ -94,3 +94,21 @@ def test_lights_are_the_programs(root, gcr_bin, tmp_path):
     scene = gcr.Scene.load(scene_file, sky="cie-overcast:10000")
     values, _ = gcr.solve(scene, quality="draft").daylight_factor(pts[:, :3], pts[:, 3:])
     assert np.array_equal(values, np.loadtxt(out).reshape(values.shape))
+
+
+def test_flatland_points_and_kernel_image_are_the_programs(root, gcr_bin, tmp_path):
+    """A Flatland scene: N×2 points give the program's probe values; a kernel image (which reads
+    the networks the default solve skips) is trained for the write, as the program trains for it."""
+    probe_file = root / "scenes" / "flatland-corner.probes.txt"
+    out, kernel = tmp_path / "b.txt", tmp_path / "k.png"
+    run_gcr(gcr_bin, "solve", "flatland-corner", "--probes", str(probe_file), "--probe-out", str(out),
+            "--kernel-image", str(kernel), "--quiet")
+    rows = np.loadtxt(probe_file)
+    solution = gcr.solve(gcr.Scene.load("flatland-corner"))
+    assert not solution.networks_trained
+    values, _ = solution.radiosity(rows[:, :2], rows[:, 2:])
+    program = np.loadtxt(out).reshape(len(rows), -1)
+    assert values.shape == program.shape and np.array_equal(values, program)
+    mine = tmp_path / "mine.png"
+    solution.write(kernel_image=mine)
+    assert mine.read_bytes() == kernel.read_bytes()

@@ -7,6 +7,11 @@
 * sun-patch-room.obj/.mtl, sun-patch-room.pts, sun-patch-room.lights.json — a 6 x 3 x 8 m room whose
   one small window (1.2 x 1.0 m, south wall) lets in a low sun and nothing else: a sun patch on the
   floor lights the rest of the room by reflection alone (hard indirect light).
+* door-gap.obj/.mtl, door-gap.pts, door-gap.lights.json — two 4 x 2.5 x 3 m rooms side by side, a
+  0.2 m door gap in the 0.1 m partition, a 100 cd lamp under the ceiling of the west room; the work
+  plane (0.8 m) is in the east room, lit only through the gap (hard indirect light).
+* uplight-room.obj/.mtl, uplight-room.pts, uplight-room.lights.json — a 6 x 3 x 6 m room with a
+  spot light near the floor aimed at the ceiling (60 deg cone): the ceiling patch lights the room.
 * grille-lamp.gltf — a 6 x 3 x 6 m room split by a floor-to-ceiling grille (alphaMode MASK stripes,
   doubleSided), a KHR_lights_punctual point light on one side and a spot on the other.
 
@@ -142,6 +147,42 @@ def sun_patch_room():
               open("scenes/sun-patch-room.lights.json", "w"), indent=1)
 
 
+def door_gap():
+    o = Obj()
+    o.box_rect("floor", 1, 0.0, (0, 0), (8.1, 3), (0, 1, 0))
+    o.box_rect("ceiling", 1, 2.5, (0, 0), (8.1, 3), (0, -1, 0))
+    o.box_rect("wall", 0, 0.0, (0, 0), (2.5, 3), (1, 0, 0))
+    o.box_rect("wall", 0, 8.1, (0, 0), (2.5, 3), (-1, 0, 0))
+    o.box_rect("wall", 2, 0.0, (0, 0), (8.1, 2.5), (0, 0, 1))
+    o.box_rect("wall", 2, 3.0, (0, 0), (8.1, 2.5), (0, 0, -1))
+    # the partition x 4.0..4.1 on both sides, around a door gap z 2.2..2.4, y 0..2
+    for x, n in ((4.0, (-1, 0, 0)), (4.1, (1, 0, 0))):
+        for lo, hi in (((0, 0), (2.5, 2.2)), ((0, 2.4), (2.5, 3)), ((2.0, 2.2), (2.5, 2.4))):
+            o.box_rect("wall", 0, x, lo, hi, n)
+    # the gap's jambs and lintel
+    o.box_rect("wall", 2, 2.2, (4.0, 0), (4.1, 2.0), (0, 0, 1))
+    o.box_rect("wall", 2, 2.4, (4.0, 0), (4.1, 2.0), (0, 0, -1))
+    o.box_rect("wall", 1, 2.0, (4.0, 2.2), (4.1, 2.4), (0, -1, 0))
+    o.write("door-gap", "two 4 x 2.5 x 3 rooms (y up), a 0.2 m door gap in the partition at x = 4",
+            {"floor": 0.4, "wall": 0.7, "ceiling": 0.8})
+    pts("door-gap", [(0.8, [4.35 + 0.5 * i for i in range(8)], [0.25 + 0.5 * i for i in range(6)])])
+    json.dump({"up": "y", "point_lights": [{"position": [2.0, 2.2, 1.0], "intensity": 100}]},
+              open("scenes/door-gap.lights.json", "w"), indent=1)
+
+
+def uplight_room():
+    o = Obj()
+    o.box_rect("floor", 1, 0.0, (0, 0), (6, 6), (0, 1, 0))
+    o.box_rect("ceiling", 1, 3.0, (0, 0), (6, 6), (0, -1, 0))
+    walls(o, "wall", (0, 6), (0, 3), (0, 6))
+    o.write("uplight-room", "a 6 x 3 x 6 room (y up) lit by a spot aimed at the ceiling",
+            {"floor": 0.3, "wall": 0.6, "ceiling": 0.8})
+    pts("uplight-room", [(0.8, [0.5 + i for i in range(6)], [0.5 + i for i in range(6)])])
+    json.dump({"up": "y", "spot_lights": [{"position": [1.5, 0.3, 1.5], "direction": [0, 1, 0],
+                                           "intensity": 500, "inner_angle": 25, "outer_angle": 30}]},
+              open("scenes/uplight-room.lights.json", "w"), indent=1)
+
+
 def png(width, height, rgba_rows):
     raw = b"".join(b"\x00" + bytes(r) for r in rgba_rows)
 
@@ -244,3 +285,5 @@ def grille_lamp():
 atrium()
 sun_patch_room()
 grille_lamp()
+door_gap()
+uplight_room()

@@ -93,6 +93,7 @@ pub(crate) fn solve<'py>(
         gather_rays,
         corrections,
         share_paths: share_paths.unwrap_or(defaults.share_paths),
+        guiding: defaults.guiding,
         keep_base,
         keep_networks,
         kernel_facing,

@@ -594,6 +594,9 @@ pub struct PathSettings {
     /// share each other's cosine rays and paths (`--share-paths`; 1 = every point alone; the
     /// estimator and the grouping in `estimator/neighbours.rs`).
     pub neighbours: usize,
+    /// With a target error: each group's cosine rays drawn from a guide learned from its earlier
+    /// rounds (`--guiding`; `estimator/guide.rs`), a defensive mixture with the cosine density.
+    pub guiding: bool,
 }
 
 impl Default for PathSettings {
@@ -604,6 +607,7 @@ impl Default for PathSettings {
             target_error: None,
             max_rays: 1 << 16,
             neighbours: 16,
+            guiding: false,
         }
     }
 }

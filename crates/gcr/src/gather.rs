@@ -35,7 +35,8 @@ use glam::{DVec2, DVec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use scene_sampler::{
-    Light, Pick, PowerHeuristic, Receiver, cosine_halfplane, cosine_hemisphere, uniform_triangle,
+    Light, Pick, PowerHeuristic, Receiver, ShadowTarget, cosine_halfplane, cosine_hemisphere,
+    uniform_triangle,
 };
 use std::f64::consts::PI;
 
@@ -126,16 +127,22 @@ pub fn gather(
 }
 
 /// The direct light per unit ρ that one shadow ray to the point `u` of emitter `ef` brings to the
-/// receiver (y, n, face), weighted by [`Mis::light`]; None when they do not see each other.
-pub(crate) fn shadow_ray(
+/// receiver (y, n, face), weighted by [`Mis::light`] with `mis.n_c·q(x − y)` cosine rays toward
+/// the emitter point x (q = 1 but for a guided bounce); None when they do not see each other.
+fn shadow_ray(
     domain: &Domain,
     mis: &Mis,
     ef: u32,
     u: [f64; 2],
     (y, n, face): (DVec3, DVec3, u32),
+    q: impl Fn(DVec3) -> f64,
 ) -> Option<Bands> {
-    let (_, g) = emitter_geometry(domain, ef, u, y, n, face)?;
-    let (w, e) = (mis.light(g, ef), domain.emission(ef));
+    let (x, g) = emitter_geometry(domain, ef, u, y, n, face)?;
+    let guided = Mis {
+        n_c: mis.n_c * q(x - y),
+        ..*mis
+    };
+    let (w, e) = (guided.light(g, ef), domain.emission(ef));
     Some(e.map(|e| w * e))
 }
 
@@ -150,10 +157,24 @@ pub(crate) fn light_ray(
     u: [f64; 2],
     receiver: (DVec3, DVec3, u32),
 ) -> Option<Bands> {
+    light_ray_scaled(domain, mis, pick, u, receiver, |_| 1.0)
+}
+
+/// [`light_ray`] where the cosine technique's density toward the light's sample is
+/// `q(direction)` times cos θ/π (a guided bounce, `estimator::guide`): the MIS weight counts
+/// `mis.n_c · q` cosine rays there.
+pub(crate) fn light_ray_scaled(
+    domain: &Domain,
+    mis: &Mis,
+    pick: Pick,
+    u: [f64; 2],
+    receiver: (DVec3, DVec3, u32),
+    q: impl Fn(DVec3) -> f64,
+) -> Option<Bands> {
     match pick {
-        Pick::Face(ef) => shadow_ray(domain, mis, ef, u, receiver),
+        Pick::Face(ef) => shadow_ray(domain, mis, ef, u, receiver, q),
         Pick::Light(light, probability) => {
-            other_light_ray(domain, mis, light, probability, u, receiver)
+            other_light_ray(domain, mis, light, probability, u, receiver, q)
         }
     }
 }
@@ -168,6 +189,7 @@ fn other_light_ray(
     probability: f64,
     u: [f64; 2],
     (y, n, face): (DVec3, DVec3, u32),
+    q: impl Fn(DVec3) -> f64,
 ) -> Option<Bands> {
     let Domain::ThreeD(k) = domain else {
         return None;
@@ -182,7 +204,15 @@ fn other_light_ray(
     let w = if light.is_delta() {
         mis.delta(s.g, p)
     } else {
-        mis.light_density(s.g, p)
+        let dir = match s.target {
+            ShadowTarget::Direction(d) => d,
+            ShadowTarget::Point { point, .. } => point - y,
+        };
+        let guided = Mis {
+            n_c: mis.n_c * q(dir),
+            ..*mis
+        };
+        guided.light_density(s.g, p)
     };
     Some(s.emission.map(|e| w * e))
 }

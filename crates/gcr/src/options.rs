@@ -41,6 +41,8 @@ pub struct SolveOptions {
     pub corrections: Option<usize>,
     /// `--share-paths`: at most this many neighbouring points share their paths (1: alone).
     pub share_paths: usize,
+    /// `--guiding on`: guided first bounces ([`PathSettings::guiding`]).
+    pub guiding: bool,
     /// `--keep-base`: train the shading network and its base even when nothing reads them.
     pub keep_base: bool,
     /// `--keep-networks`: train the networks even when nothing reads them.
@@ -67,6 +69,7 @@ impl Default for SolveOptions {
             gather_rays: None,
             corrections: None,
             share_paths: PathSettings::default().neighbours,
+            guiding: PathSettings::default().guiding,
             keep_base: false,
             keep_networks: false,
             kernel_facing: false,
@@ -110,6 +113,7 @@ impl SolveOptions {
                 corrections: self.corrections.unwrap_or(preset.paths.corrections),
                 target_error,
                 neighbours: self.share_paths,
+                guiding: self.guiding,
                 ..preset.paths
             },
             skip_unused_base: !self.keep_base,

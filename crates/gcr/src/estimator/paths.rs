@@ -29,11 +29,12 @@
 //! few hundred 6-D Gaussians does not follow K's 1/r² and cosines pointwise, and Ψ/p is large where
 //! the cosine density p is small.
 
+use super::guide::{RECORDS_PER_ROUND, Record, SpatialGuides, to_square};
 use crate::config::{GatherSamples, PathSettings};
 use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
 use crate::emitters::Emitters;
-use crate::gather::{Cosine, Gathered, Mis, cosine_ray, light_ray};
+use crate::gather::{Cosine, Gathered, Mis, cosine_ray, light_ray_scaled};
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -118,6 +119,10 @@ pub(crate) enum FirstHit {
     /// The back of a face.
     Back,
 }
+
+/// A guided bounce of [`PathGather::reflected`], to learn from once its path ends: the vertex,
+/// its square point, q·q_g, q_g, its hit's light, `out` after it, β after it.
+type Bounce = (Vertex, [f64; 2], f64, f64, Bands, Bands, Bands);
 
 /// A surface point: position, unit normal, face ([`NO_FACE`] for a point in the air).
 #[derive(Clone, Copy)]
@@ -326,7 +331,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             if i < corrected {
                 if let Some(x) = hit {
                     let first = SobolRay::path_vertex(b, u.set(2));
-                    let l = self.reflected(&x, Some(first), &mut rng);
+                    let l = self.reflected(&x, Some(first), &mut rng, None);
                     let t: Bands = std::array::from_fn(|k| l[k] - c[k]);
                     add(i, t, 1.0 / corrected as f64);
                 }
@@ -395,7 +400,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
                 let l = match hit {
                     Some(x) => {
                         let first = SobolRay::path_vertex(s1, pixel);
-                        self.reflected(&x, Some(first), &mut rng)
+                        self.reflected(&x, Some(first), &mut rng, None)
                     }
                     None => [0.0; BANDS],
                 };
@@ -428,14 +433,21 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
     ///
     /// `L̂(x) = Σ_v β_v ρ_v (NEE_v + emitter hit_v)`, `β` the product of ρ/q over the earlier
     /// vertices: the recursion `L̂(x) = ρ·(NEE + hit + L̂(next)/q)` unrolled.
+    ///
+    /// `guiding`: the spatial guides of the round and the group's records
+    /// ([`super::guide`]): each bounce's square point is warped by its cell's guide (density
+    /// q_g, the throughput divided by it, the MIS weights counting q_g cosine rays), and each
+    /// bounce is recorded with the light it brought (its hit's emission and L̂ beyond it).
     pub(crate) fn reflected(
         &self,
         x: &Vertex,
         first: Option<[f64; 5]>,
         rng: &mut ChaCha8Rng,
+        mut guiding: Option<(&SpatialGuides, &mut Vec<Record>)>,
     ) -> Bands {
         let (mut out, mut beta) = ([0.0; BANDS], [1.0; BANDS]);
         let (mut x, mut first) = (*x, first);
+        let mut bounces: Vec<Bounce> = Vec::new();
         for depth in 1..=MAX_DEPTH {
             let rho = self.domain.reflectance_at(x.face, x.p);
             let top = rho.iter().fold(0.0f64, |m, r| m.max(*r));
@@ -458,13 +470,28 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             let u = first
                 .take()
                 .unwrap_or_else(|| std::array::from_fn(|_| rng.random()));
-            let mut light = self.next_event(&x, &mis, (u[0], [u[1], u[2]]));
+            let guide = guiding.as_ref().and_then(|(g, _)| g.at(x.p, x.n));
+            let mut light = match guide {
+                None => self.next_event(&x, &mis, (u[0], [u[1], u[2]])),
+                Some(g) => {
+                    let q = |d: DVec3| g.density(to_square(x.n, d.normalize()));
+                    self.next_event_scaled(&x, &mis, (u[0], [u[1], u[2]]), q)
+                }
+            };
             let mut next = None;
+            // ⟨The bounce, warped by the cell's guide (density q_g; 1 unguided)⟩
+            let (v, q_g) = guide.map_or(([u[3], u[4]], 1.0), |g| g.sample([u[3], u[4]]));
+            let mut hit_light = [0.0; BANDS];
             if q > 0.0 && (q >= 1.0 || rng.random::<f64>() < q) {
-                let (_, d, hit) = self.cosine_ray(&x, &mis, false, [u[3], u[4]]);
+                let bounce = Mis {
+                    n_c: q * q_g,
+                    ..mis
+                };
+                let (_, d, hit) = self.cosine_ray(&x, &bounce, false, v);
                 for k in 0..BANDS {
                     light[k] += d[k];
                 }
+                hit_light = d;
                 next = hit;
             }
             for k in 0..BANDS {
@@ -472,9 +499,29 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             }
             let Some(n) = next else { break };
             for k in 0..BANDS {
-                beta[k] *= rho[k] / q;
+                beta[k] *= rho[k] / (q * q_g);
+            }
+            if guiding.is_some() {
+                bounces.push((x, v, q * q_g, q_g, hit_light, out, beta));
             }
             x = n;
+        }
+        // ⟨What each bounce brought: its hit's emission (d·q·q_g undoes the 1/(q·q_g) in d) and
+        // L̂ beyond it ((out − out after the bounce)/β after it)⟩
+        if let Some((guides, records)) = guiding.as_mut() {
+            for (v, u, qq, q_g, d, after, b) in bounces {
+                if records.len() >= RECORDS_PER_ROUND {
+                    break;
+                }
+                let mut l = 0.0;
+                for k in 0..BANDS {
+                    l += d[k] * qq;
+                    if b[k] > 0.0 {
+                        l += (out[k] - after[k]) / b[k];
+                    }
+                }
+                records.push(guides.record((v.p, v.n), u, q_g, l / BANDS as f64));
+            }
         }
         out
     }
@@ -482,11 +529,22 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
     /// One shadow ray from z to a light drawn by power from `u0` and sampled from `u`: its
     /// direct light per unit ρ, MIS-weighted ([`light_ray`]).
     pub(crate) fn next_event(&self, z: &Vertex, mis: &Mis, (u0, u): (f64, [f64; 2])) -> Bands {
+        self.next_event_scaled(z, mis, (u0, u), |_| 1.0)
+    }
+
+    /// [`PathGather::next_event`] where the cosine technique's density toward direction d is
+    /// `q(d)`·cos θ/π (a guided bounce, [`light_ray_scaled`]).
+    pub(crate) fn next_event_scaled(
+        &self,
+        z: &Vertex,
+        mis: &Mis,
+        (u0, u): (f64, [f64; 2]),
+        q: impl Fn(DVec3) -> f64,
+    ) -> Bands {
         match self.emitters.lights().pick(u0) {
             Some(Pick::Face(ef)) if ef == z.face => [0.0; BANDS],
-            Some(pick) => {
-                light_ray(self.domain, mis, pick, u, (z.p, z.n, z.face)).unwrap_or_default()
-            }
+            Some(pick) => light_ray_scaled(self.domain, mis, pick, u, (z.p, z.n, z.face), q)
+                .unwrap_or_default(),
             None => [0.0; BANDS],
         }
     }

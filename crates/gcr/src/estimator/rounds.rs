@@ -2,6 +2,7 @@
 //! confidence bound of the estimated relative error meets the target (or the ray cap), over
 //! groups of neighbouring points that share paths; the error estimate and its χ² bound.
 
+use super::guide::{GroupGuide, SpatialGuides, SpatialLearner};
 use super::paths::{PathGather, PointEstimate, REPLICATES};
 use crate::config::{GatherSamples, SolveConfig};
 use crate::domain::Domain;
@@ -9,6 +10,7 @@ use crate::element::{BANDS, Bands};
 use crate::gather::Gathered;
 use glam::DVec3;
 use rayon::prelude::*;
+use std::sync::{Arc, Mutex};
 
 /// The paths gather in rounds until the points' estimated relative error ([`relative_std_error`])
 /// is at most `target`: a pilot round with the configured rays, then each round continues every
@@ -48,6 +50,36 @@ pub(super) fn grouped_rounds(
     config: &SolveConfig,
 ) -> Vec<Gathered> {
     let groups = super::neighbours::groups(domain, points, config.paths.neighbours);
+    // ⟨Guiding: each group's guide, learned from its earlier rounds (estimator/guide.rs)⟩
+    let guides: Vec<Mutex<GroupGuide>> = if config.paths.guiding {
+        groups.iter().map(|_| Mutex::default()).collect()
+    } else {
+        Vec::new()
+    };
+    // the spatial guides of the paths' bounces: learned from every group's records of the
+    // earlier rounds, merged in the groups' order when a round's first group starts
+    let spatial = Mutex::new((
+        usize::MAX,
+        SpatialLearner::new(domain.frame()),
+        Arc::default(),
+    ));
+    let frozen = |first: usize| -> Arc<SpatialGuides> {
+        let mut s = spatial.lock().expect("the spatial guides");
+        if s.0 != first {
+            for g in &guides {
+                let mut g = g.lock().expect("a group's guide");
+                s.1.learn(&g.records);
+                g.records.clear();
+            }
+            s.2 = Arc::new(s.1.guides());
+            s.0 = first;
+        }
+        Arc::clone(&s.2)
+    };
+    let mut owner = vec![0; points.len()];
+    for (gi, g) in groups.iter().enumerate() {
+        g.iter().for_each(|&i| owner[i] = gi);
+    }
     rounds_to_target(
         points.len(),
         &groups,
@@ -55,7 +87,17 @@ pub(super) fn grouped_rounds(
             let members: Vec<_> = group.iter().map(|&i| points[i]).collect();
             let materials: Vec<_> = members.iter().map(|&p| material(p)).collect();
             let member_seeds: Vec<u64> = group.iter().map(|&i| seeds[i]).collect();
-            paths.estimate_group(&members, &materials, &member_seeds, first, samples)
+            let spatial = config.paths.guiding.then(|| frozen(first));
+            let mut guide = guides
+                .get(owner[group[0]])
+                .map(|m| m.lock().expect("a group's guide"));
+            let guiding = guide.as_deref_mut().zip(spatial.as_deref());
+            let round = (first, samples);
+            let e = paths.estimate_group(&members, &materials, &member_seeds, round, guiding);
+            if let Some(g) = guide.as_mut() {
+                g.next_round();
+            }
+            e
         },
         (config.gather_samples, None),
         (target, &error_bound),

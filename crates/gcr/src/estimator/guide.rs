@@ -1,0 +1,333 @@
+//! Guided first bounces (`--guiding`; issue "The networks earn their place"): the cosine rays of a
+//! group of neighbouring points drawn from a learned distribution instead of cos θ/π alone.
+//!
+//! The cosine warp ([`scene_sampler::cosine_hemisphere`]) maps the unit square to the hemisphere,
+//! (u₀, u₁) ↦ (sin²θ = u₀, φ = 2πu₁), with density cos θ/π: the reflected-light integral
+//! ∫ L(ω) cos θ/π dω is ∫_□ L(ω(u)) du over the square. Guiding warps the square first by a
+//! piecewise-constant density q on an `RES` × `RES` grid (mean 1), so a ray's solid-angle density
+//! is q(u)·cos θ/π and its weight L/q (docs/design/estimator.md, "Guiding"):
+//!
+//! ```text
+//! q(u) = α + (1 − α)·RES²·h(bin(u)),   h = the learned share of ∫ L over each bin,
+//! ```
+//!
+//! a defensive mixture (α = [`DEFENSIVE`]): no ray's weight exceeds 1/α of the cosine ray's, so a
+//! poor guide costs at most a bounded factor, and q > 0 wherever cos θ is, so the estimate stays
+//! unbiased whatever was learned. q is sampled by inversion (the bin's row from the marginal, its
+//! column from the row, the point within the bin linearly), so the Sobol points' stratification
+//! carries through the warp.
+//!
+//! What is learned ([`Learner`]): each ray of the group's earlier rounds adds its contribution's
+//! luminance divided by its density q to its bin, an unbiased estimate of ∫_bin L du; h is those
+//! sums normalized. A round's guide is fixed before it starts and built from earlier rounds only,
+//! so each replicate of the round is unbiased given the guide and the replicates stay uncorrelated
+//! (the standard error remains honest).
+
+use glam::DVec3;
+use scene_sampler::orthonormal_basis;
+
+/// Bins per side of the guide's grid on the cosine square.
+pub(crate) const RES: usize = 16;
+/// The cosine density's least share α of the guided density (module docs).
+pub(crate) const DEFENSIVE: f64 = 0.3;
+/// Rays learned from at which the learned part gets half of its share 1 − α: a guide from a
+/// handful of rays is noise, and a confident guide from noise makes the weights of the directions
+/// it neglects 1/α (measured on the door-gap room: fireflies of 20× the brightest point).
+const CONFIDENCE: f64 = 256.0;
+
+/// The square coordinates (sin²θ, φ/2π) of the unit direction `dir` about the unit normal `n`:
+/// the inverse of [`scene_sampler::cosine_hemisphere`] (same tangent frame).
+pub(crate) fn to_square(n: DVec3, dir: DVec3) -> [f64; 2] {
+    let (t, b) = orthonormal_basis(n);
+    let (x, y) = (dir.dot(t), dir.dot(b));
+    let s = (x * x + y * y).clamp(0.0, 1.0);
+    let phi = y.atan2(x) / std::f64::consts::TAU;
+    [
+        s,
+        if phi < 0.0 { phi + 1.0 } else { phi }.min(1.0 - f64::EPSILON),
+    ]
+}
+
+fn bin(u: f64) -> usize {
+    ((u * RES as f64) as usize).min(RES - 1)
+}
+
+/// A piecewise-constant density q on the unit square (module docs), mean 1.
+#[derive(Clone, Debug)]
+pub(crate) struct Guide {
+    /// q per bin, row-major: row = bin of u₀, column = bin of u₁.
+    density: Vec<f64>,
+    /// Cumulative row masses (RES + 1 entries, 0 … 1).
+    rows: Vec<f64>,
+    /// Per row, the cumulative masses of its columns (RES + 1 entries each, 0 … 1).
+    columns: Vec<f64>,
+}
+
+impl Guide {
+    /// The guide from per-bin sums of ∫ L (row-major, RES² entries, non-negative) over `rays`
+    /// rays: the learned part's share is (1 − α)·rays/(rays + [`CONFIDENCE`]). `None` when nothing
+    /// was learned (every sum 0 or not finite).
+    pub(crate) fn from_sums(sums: &[f64], rays: f64) -> Option<Self> {
+        let total: f64 = sums.iter().sum();
+        if !(total > 0.0 && total.is_finite()) {
+            return None;
+        }
+        let cells = (RES * RES) as f64;
+        let learned = (1.0 - DEFENSIVE) * rays / (rays + CONFIDENCE);
+        let density: Vec<f64> = (sums.iter())
+            .map(|s| (1.0 - learned) + learned * cells * s.max(0.0) / total)
+            .collect();
+        let mut rows = vec![0.0; RES + 1];
+        let mut columns = vec![0.0; RES * (RES + 1)];
+        for r in 0..RES {
+            let row = &density[r * RES..(r + 1) * RES];
+            let col = &mut columns[r * (RES + 1)..(r + 1) * (RES + 1)];
+            for c in 0..RES {
+                col[c + 1] = col[c] + row[c];
+            }
+            let mass = col[RES];
+            col.iter_mut().for_each(|v| *v /= mass);
+            rows[r + 1] = rows[r] + mass;
+        }
+        let mass = rows[RES];
+        rows.iter_mut().for_each(|v| *v /= mass);
+        Some(Self {
+            density,
+            rows,
+            columns,
+        })
+    }
+
+    /// q at the square point `u`.
+    pub(crate) fn density(&self, u: [f64; 2]) -> f64 {
+        self.density[bin(u[0]) * RES + bin(u[1])]
+    }
+
+    /// The point of the square that `u` maps to under q's inversion, and q there.
+    pub(crate) fn sample(&self, u: [f64; 2]) -> ([f64; 2], f64) {
+        let (r, a) = invert(&self.rows, u[0]);
+        let (c, b) = invert(&self.columns[r * (RES + 1)..(r + 1) * (RES + 1)], u[1]);
+        let to = |i: usize, f: f64| ((i as f64 + f) / RES as f64).min(1.0 - f64::EPSILON);
+        ([to(r, a), to(c, b)], self.density[r * RES + c])
+    }
+}
+
+/// The bin of the cumulative table `cdf` (RES + 1 entries from 0 to 1) holding `u`, and u's
+/// fraction within it.
+fn invert(cdf: &[f64], u: f64) -> (usize, f64) {
+    let i = cdf[1..RES].partition_point(|&c| c <= u);
+    let width = cdf[i + 1] - cdf[i];
+    let f = if width > 0.0 {
+        ((u - cdf[i]) / width).clamp(0.0, 1.0)
+    } else {
+        0.5
+    };
+    (i, f)
+}
+
+/// What a group has learned so far: per bin, Σ luminance(L)/q of the rays that fell in it, and
+/// how many rays (those that brought nothing too).
+#[derive(Clone, Debug)]
+pub(crate) struct Learner {
+    sums: Vec<f64>,
+    rays: f64,
+}
+
+impl Default for Learner {
+    fn default() -> Self {
+        Self {
+            sums: vec![0.0; RES * RES],
+            rays: 0.0,
+        }
+    }
+}
+
+impl Learner {
+    /// Records one ray at square point `u`, drawn with density `q`, that brought `value`.
+    pub(crate) fn add(&mut self, u: [f64; 2], q: f64, value: f64) {
+        self.rays += 1.0;
+        if value > 0.0 && value.is_finite() && q > 0.0 {
+            self.sums[bin(u[0]) * RES + bin(u[1])] += value / q;
+        }
+    }
+
+    /// The guide for the next round (`None` while nothing was found).
+    pub(crate) fn guide(&self) -> Option<Guide> {
+        Guide::from_sums(&self.sums, self.rays)
+    }
+}
+
+/// A group's guiding state across its rounds: the guide of the current round and what the
+/// rounds so far have learned.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct GroupGuide {
+    /// This round's guide (`None`: cosine rays, as in a pilot round).
+    pub(crate) guide: Option<Guide>,
+    /// Every earlier round's rays.
+    pub(crate) learner: Learner,
+    /// This round's path vertices for the spatial guides (at most [`RECORDS_PER_ROUND`]).
+    pub(crate) records: Vec<Record>,
+}
+
+/// Path vertices a group records per round for the spatial guides: a bound on the memory
+/// (about 10 bytes each per group), not on what is learned (every group records).
+pub(crate) const RECORDS_PER_ROUND: usize = 512;
+/// Spatial cells per side of the scene's bounding cube (its diagonal).
+const CELLS: f64 = 32.0;
+
+/// One bounce of a path for the spatial guides: its cell, the bin of its square point, and the
+/// light it brought divided by its density (an unbiased estimate of ∫_bin L du).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Record {
+    key: u32,
+    bin: u16,
+    value: f32,
+}
+
+/// The key of a path vertex's cell: its position on a grid of [`CELLS`] per diagonal of the
+/// scene's frame and the dominant axis of its normal (6 directions), so that a floor and the
+/// ceiling above it, or the two sides of a thin wall, learn apart.
+fn cell_key((origin, diagonal): (DVec3, f64), p: DVec3, n: DVec3) -> u32 {
+    let q = ((p - origin) / diagonal.max(f64::MIN_POSITIVE) * CELLS)
+        .clamp(DVec3::ZERO, DVec3::splat(255.0));
+    let a = n.abs();
+    let axis = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    let side = u32::from(n[axis] < 0.0);
+    (q.x as u32) | (q.y as u32) << 8 | (q.z as u32) << 16 | (2 * axis as u32 + side) << 24
+}
+
+/// The guides of the continuation bounces (path vertices beyond the output points): one per
+/// spatial cell ([`cell_key`]) that earlier rounds learned in, frozen during a round.
+#[derive(Debug, Default)]
+pub(crate) struct SpatialGuides {
+    frame: (DVec3, f64),
+    guides: std::collections::HashMap<u32, Guide>,
+}
+
+impl SpatialGuides {
+    /// The guide at a path vertex (p, n), if its cell has one.
+    pub(crate) fn at(&self, p: DVec3, n: DVec3) -> Option<&Guide> {
+        if self.guides.is_empty() {
+            return None;
+        }
+        self.guides.get(&cell_key(self.frame, p, n))
+    }
+
+    /// The record of a bounce at (p, n) through square point `u` with density `q` that brought
+    /// `light`.
+    pub(crate) fn record(&self, (p, n): (DVec3, DVec3), u: [f64; 2], q: f64, light: f64) -> Record {
+        Record {
+            key: cell_key(self.frame, p, n),
+            bin: (bin(u[0]) * RES + bin(u[1])) as u16,
+            value: (light / q) as f32,
+        }
+    }
+}
+
+/// Everything the rounds so far have learned for the spatial guides: per cell, per bin, Σ L/q.
+#[derive(Debug)]
+pub(crate) struct SpatialLearner {
+    frame: (DVec3, f64),
+    /// Per cell: per bin Σ L/q, and (the last entry) the count of records.
+    sums: std::collections::HashMap<u32, Vec<f64>>,
+}
+
+impl SpatialLearner {
+    /// Nothing learned yet, in the scene's frame (`Domain::frame`).
+    pub(crate) fn new(frame: (DVec3, f64)) -> Self {
+        Self {
+            frame,
+            sums: Default::default(),
+        }
+    }
+
+    /// Adds a group's records (call in a fixed order of the groups: the sums, and so the guides,
+    /// do not depend on the thread count).
+    pub(crate) fn learn(&mut self, records: &[Record]) {
+        for r in records {
+            let sums = (self.sums.entry(r.key)).or_insert_with(|| vec![0.0; RES * RES + 1]);
+            sums[RES * RES] += 1.0;
+            if r.value > 0.0 && r.value.is_finite() {
+                sums[r.bin as usize] += f64::from(r.value);
+            }
+        }
+    }
+
+    /// The guides of everything learned so far.
+    pub(crate) fn guides(&self) -> SpatialGuides {
+        SpatialGuides {
+            frame: self.frame,
+            guides: (self.sums.iter())
+                .filter_map(|(k, s)| {
+                    Guide::from_sums(&s[..RES * RES], s[RES * RES]).map(|g| (*k, g))
+                })
+                .collect(),
+        }
+    }
+}
+
+impl GroupGuide {
+    /// Ends a round: the next one is guided by everything learned so far.
+    pub(crate) fn next_round(&mut self) {
+        self.guide = self.learner.guide();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use scene_sampler::cosine_hemisphere;
+
+    /// `to_square` inverts the cosine warp.
+    #[test]
+    fn the_square_inverts_the_cosine_warp() {
+        for n in [DVec3::Y, DVec3::new(0.3, -0.5, 0.8).normalize(), -DVec3::Z] {
+            for i in 0..50 {
+                let u = [(i as f64 * 0.618_034) % 1.0, (i as f64 * 0.754_878) % 1.0];
+                let v = to_square(n, cosine_hemisphere(n, u));
+                assert!(
+                    (u[0] - v[0]).abs() < 1e-9 && (u[1] - v[1]).abs() < 1e-9,
+                    "{u:?} {v:?}"
+                );
+            }
+        }
+    }
+
+    /// A guide's density integrates to 1 over the square, is at least α everywhere, and its
+    /// sampling draws each bin with its mass (a histogram of 2¹⁶ stratified points).
+    #[test]
+    fn the_guide_samples_its_density() {
+        let mut sums = vec![0.0; RES * RES];
+        sums[3 * RES + 5] = 10.0;
+        sums[7 * RES + 15] = 1.0;
+        sums[0] = 0.5;
+        let g = Guide::from_sums(&sums, 1e300).unwrap();
+        let mean: f64 = g.density.iter().sum::<f64>() / (RES * RES) as f64;
+        assert!((mean - 1.0).abs() < 1e-12, "{mean}");
+        assert!(g.density.iter().all(|&q| q >= DEFENSIVE - 1e-12));
+        let n = 256;
+        let mut counts = vec![0usize; RES * RES];
+        for i in 0..n {
+            for j in 0..n {
+                let u = [(i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64];
+                let (v, q) = g.sample(u);
+                assert_eq!(q, g.density(v));
+                counts[bin(v[0]) * RES + bin(v[1])] += 1;
+            }
+        }
+        for (b, &c) in counts.iter().enumerate() {
+            let expected = g.density[b] / (RES * RES) as f64 * (n * n) as f64;
+            assert!(
+                (c as f64 - expected).abs() <= 2.0 + 0.02 * expected,
+                "bin {b}: {c} vs {expected}"
+            );
+        }
+        assert!(Guide::from_sums(&vec![0.0; RES * RES], 1e3).is_none());
+    }
+}

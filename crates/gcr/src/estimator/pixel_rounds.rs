@@ -98,7 +98,7 @@ pub(crate) fn allocated_rounds(
             (target, &move |g: &[Gathered], _| {
                 pixel_error_bound(g, floor)
             }),
-            max_rays,
+            (max_rays, false),
         );
     }
     // Neyman's level over all pixels (shares of mean 1 over all of them): the uniform rays

@@ -101,7 +101,7 @@ pub(super) fn grouped_rounds(
         },
         (config.gather_samples, None),
         (target, &error_bound),
-        config.paths.max_rays,
+        (config.paths.max_rays, config.paths.guiding),
     )
 }
 
@@ -109,14 +109,16 @@ pub(super) fn grouped_rounds(
 /// exactly one), `estimate(group, first, samples)` being the group's round with `samples` rays per
 /// member from Sobol index `first` on, one estimate per member (a point's gather, a group of
 /// neighbours sharing paths, [`PathGather::estimate_group`], a pixel's footprint). `piloted`:
-/// the pilot round's estimates when the caller has run it (`estimator::pixel_rounds`).
+/// the pilot round's estimates when the caller has run it (`estimator::pixel_rounds`). `fresh`:
+/// each round takes its own scrambling from index 0 (guided rounds, `estimator::guide`) and a
+/// power of two of points per replicate, instead of continuing one sequence.
 pub(crate) fn rounds_to_target(
     count: usize,
     groups: &[Vec<usize>],
     estimate: impl Fn(&[usize], usize, GatherSamples) -> Vec<PointEstimate> + Sync,
     (pilot, piloted): (GatherSamples, Option<Vec<PointEstimate>>),
     (target, bound_of): (f64, &ErrorBound<'_>),
-    max_rays: usize,
+    (max_rays, fresh): (usize, bool),
 ) -> Vec<Gathered> {
     let pilot_rays = pilot.direct.max(pilot.indirect).min(max_rays);
     let reporter = crate::progress::Reporter::new(count, pilot_rays, target);
@@ -166,10 +168,16 @@ pub(crate) fn rounds_to_target(
         let want = (needed.div_ceil(REPLICATES))
             .clamp(per + 1, 4 * per)
             .next_power_of_two();
-        let more = (want * REPLICATES)
+        let mut more = (want * REPLICATES)
             .min(max_rays)
             .saturating_sub(rays)
             .max(REPLICATES);
+        if fresh {
+            // each round its own scrambling from index 0 (guided rounds): a power of two per
+            // replicate, a balanced net of its own (but at the ray cap)
+            let per_round = (more / REPLICATES).next_power_of_two() * REPLICATES;
+            more = per_round.min(max_rays.saturating_sub(rays).max(REPLICATES));
+        }
         reporter.round(bound, rays + more, needed.min(max_rays));
         // Each replicate has used ⌈rays / REPLICATES⌉ Sobol points of its sequence so far.
         let samples = GatherSamples {

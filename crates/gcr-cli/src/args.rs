@@ -106,10 +106,11 @@ pub struct SolveArgs {
     /// 1: every point alone.
     #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value_t = SolveOptions::default().share_paths as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub share_paths: u32,
-    /// `--gather paths` to a target error: draw each group's cosine rays from a guide learned from
-    /// its earlier rounds (a defensive mixture with the cosine density: unbiased, at most a bounded
-    /// loss where the guide is poor; docs/design/estimator.md, "Guiding").
-    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value = "off", value_parser = ["on", "off"])]
+    /// `--gather paths` to a target error: draw the cosine rays of the points and of their paths'
+    /// bounces from guides learned from earlier rounds (a defensive mixture with the cosine
+    /// density: unbiased). auto: when the pilot round predicts hard light (at least 16 384 rays per
+    /// point to the target); docs/design/estimator.md, "Guiding".
+    #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value = "auto", value_parser = ["auto", "on", "off"])]
     pub guiding: String,
     /// Train the shading network and build its base even when the gather does not read it
     /// (by default they are skipped: same result, less time).
@@ -370,7 +371,7 @@ impl SolveArgs {
             gather_rays: self.gather_rays,
             corrections: self.corrections,
             share_paths: self.share_paths as usize,
-            guiding: self.guiding == "on",
+            guiding: self.guiding.parse().expect("clap checked the value"),
             keep_base: self.keep_base,
             keep_networks: self.keep_networks,
             kernel_facing: self.kernel_facing,

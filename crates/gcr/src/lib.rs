@@ -58,8 +58,9 @@ mod spatial;
 mod weld;
 
 pub use config::{
-    BaseDomain, Breaking, ConfigError, GatherMode, GatherSamples, NetworkTarget, OutputFit,
-    PILOT_RAYS, PathSettings, Quality, SolveConfig, StrengthFrom, SurfaceClusters, Transfer,
+    BaseDomain, Breaking, ConfigError, GUIDING_FROM, GatherMode, GatherSamples, Guiding,
+    NetworkTarget, OutputFit, PILOT_RAYS, PathSettings, Quality, SolveConfig, StrengthFrom,
+    SurfaceClusters, Transfer,
 };
 pub use domain::{Domain, Ray};
 pub use element::{BANDS, Bands};

@@ -41,8 +41,8 @@ pub struct SolveOptions {
     pub corrections: Option<usize>,
     /// `--share-paths`: at most this many neighbouring points share their paths (1: alone).
     pub share_paths: usize,
-    /// `--guiding on`: guided first bounces ([`PathSettings::guiding`]).
-    pub guiding: bool,
+    /// `--guiding`: guided bounces ([`PathSettings::guiding`]).
+    pub guiding: crate::Guiding,
     /// `--keep-base`: train the shading network and its base even when nothing reads them.
     pub keep_base: bool,
     /// `--keep-networks`: train the networks even when nothing reads them.

@@ -2,12 +2,12 @@
 //! answer: in the furnace (B = E/(1 − ρ) exactly, every bounce guided by what the rounds learned)
 //! and in the Cornell box (against the unguided gather), with honest standard errors.
 
-use gcr::{Domain, Emitters, GatherMode, Gathered, PathSettings, SolveConfig, Trained};
+use gcr::{Domain, Emitters, GatherMode, Gathered, Guiding, PathSettings, SolveConfig, Trained};
 use glam::DVec3;
 use scene_sampler::{KernelSampler, Scene, SceneBvh, SurfaceSampler, builtin};
 
 /// B at `n` area-spread points of `scene` by the paths gather to `target`, guided or not.
-fn gather(scene: &Scene, n: usize, target: f64, (guiding, seed): (bool, u64)) -> Vec<Gathered> {
+fn gather(scene: &Scene, n: usize, target: f64, (guiding, seed): (Guiding, u64)) -> Vec<Gathered> {
     let bvh = SceneBvh::new(scene);
     let domain = Domain::ThreeD(KernelSampler::new(scene, &bvh));
     let points: Vec<(DVec3, DVec3, u32)> = SurfaceSampler::new(scene)
@@ -37,7 +37,7 @@ fn guided_bounces_are_unbiased_in_the_furnace() {
     let scene = builtin("furnace").unwrap().into_3d().unwrap();
     let (e, rho) = (scene.faces[0].emission.0[0], scene.faces[0].rho.0[0]);
     let exact = e / (1.0 - rho);
-    let g = gather(&scene, 300, 0.005, (true, 1));
+    let g = gather(&scene, 300, 0.005, (Guiding::On, 1));
     let (mut sum, mut var, mut sq) = (0.0, 0.0, 0.0);
     for p in &g {
         let (b, s) = (p.radiosity[0], p.std_error[0]);
@@ -66,8 +66,8 @@ fn guided_bounces_are_unbiased_in_the_furnace() {
 fn guided_and_unguided_agree_in_the_cornell_box() {
     let scene = builtin("cornell-box").unwrap().into_3d().unwrap();
     let (a, b) = (
-        gather(&scene, 300, 0.01, (true, 1)),
-        gather(&scene, 300, 0.01, (false, 2)),
+        gather(&scene, 300, 0.01, (Guiding::On, 1)),
+        gather(&scene, 300, 0.01, (Guiding::Off, 2)),
     );
     for k in 0..3 {
         let (mut d, mut sq, mut var) = (0.0, 0.0, 0.0);
@@ -87,4 +87,16 @@ fn guided_and_unguided_agree_in_the_cornell_box() {
             "band {k}: Σ (a − b)² / Σ σ² = {ratio}"
         );
     }
+}
+
+/// `Guiding::Auto` on a scene the pilot round finds easy (the Cornell box to 2 %, far below
+/// `GUIDING_FROM` rays per point) is exactly `Off`: the same bits.
+#[test]
+fn automatic_guiding_leaves_an_easy_scene_alone() {
+    let scene = builtin("cornell-box").unwrap().into_3d().unwrap();
+    let (a, b) = (
+        gather(&scene, 200, 0.02, (Guiding::Auto, 1)),
+        gather(&scene, 200, 0.02, (Guiding::Off, 1)),
+    );
+    assert!(a.iter().zip(&b).all(|(p, q)| p.radiosity == q.radiosity));
 }

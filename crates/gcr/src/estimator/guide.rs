@@ -174,7 +174,7 @@ pub(crate) struct GroupGuide {
 
 /// Path vertices a group records per round for the spatial guides: a bound on the memory
 /// (12 bytes each per group and round), not on what is learned (every group records).
-pub(crate) const RECORDS_PER_ROUND: usize = 2048;
+pub(crate) const RECORDS_PER_ROUND: usize = 8192;
 /// Spatial cells per diagonal of the scene (16; 32 left too few rays per cell).
 const CELLS: f64 = 16.0;
 

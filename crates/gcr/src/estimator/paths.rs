@@ -162,6 +162,13 @@ impl PointEstimate {
     pub fn merge(&mut self, other: &PointEstimate) {
         let total = (self.rays + other.rays) as f64;
         let (w, v) = (self.rays as f64 / total, other.rays as f64 / total);
+        self.merge_weighted(other, (w, v));
+    }
+
+    /// Combines two independent rounds at the same point with weights `(w, v)` (w + v = 1, the
+    /// same for every point: then each replicate's combination is unbiased and their spread
+    /// still gives the standard error).
+    pub(crate) fn merge_weighted(&mut self, other: &PointEstimate, (w, v): (f64, f64)) {
         for (a, b) in self.share.iter_mut().zip(&other.share) {
             for k in 0..BANDS {
                 a[k] = w * a[k] + v * b[k];

@@ -91,14 +91,14 @@ pub(crate) fn allocated_rounds(
         return rounds_to_target(
             n,
             &singletons(n),
-            |g: &[usize], first, samples: GatherSamples| {
+            |g: &[usize], first, samples: GatherSamples, _guided| {
                 vec![estimate(g[0], first, samples.direct)]
             },
             (samples, Some(pilot_estimates)),
             (target, &move |g: &[Gathered], _| {
                 pixel_error_bound(g, floor)
             }),
-            (max_rays, false),
+            (max_rays, crate::config::Guiding::Off),
         );
     }
     // Neyman's level over all pixels (shares of mean 1 over all of them): the uniform rays

@@ -6,6 +6,7 @@ mod fem;
 mod field;
 mod gauss;
 mod gcr;
+mod guiding;
 mod images;
 mod irradiance;
 mod isgcs;
@@ -38,6 +39,7 @@ const GROUPS: &[Group] = &[
     ("lights", lights::run),
     ("rtrace", radiance::run),
     ("rays", rays::run),
+    ("guiding", guiding::run_group),
 ];
 
 /// Runs every group whose name contains `only` (all when `None`).

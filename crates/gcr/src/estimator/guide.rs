@@ -168,13 +168,15 @@ pub(crate) struct GroupGuide {
     pub(crate) guide: Option<Guide>,
     /// Every earlier round's rays.
     pub(crate) learner: Learner,
-    /// This round's path vertices for the spatial guides (at most [`RECORDS_PER_ROUND`]).
+    /// This round's path vertices for the spatial guides (at most [`SpatialGuides::cap`]).
     pub(crate) records: Vec<Record>,
 }
 
-/// Path vertices a group records per round for the spatial guides: a bound on the memory
-/// (12 bytes each per group and round), not on what is learned (every group records).
-pub(crate) const RECORDS_PER_ROUND: usize = 8192;
+/// Path vertices a group records per round for the spatial guides, at most: all groups' records
+/// are held until the round ends (12 bytes each), so the groups share [`RECORDS_PER_ROUND`].
+const RECORDS_PER_GROUP: usize = 8192;
+/// Path vertices all groups record per round, at most (48 MB), but at least 256 per group.
+const RECORDS_PER_ROUND: usize = 1 << 22;
 /// Spatial cells per diagonal of the scene (16; 32 left too few rays per cell).
 const CELLS: f64 = 16.0;
 
@@ -210,10 +212,16 @@ fn cell_key((origin, diagonal): (DVec3, f64), p: DVec3, n: DVec3) -> u32 {
 #[derive(Debug, Default)]
 pub(crate) struct SpatialGuides {
     frame: (DVec3, f64),
+    cap: usize,
     guides: std::collections::HashMap<u32, Guide>,
 }
 
 impl SpatialGuides {
+    /// The most bounces a group records per round.
+    pub(crate) fn cap(&self) -> usize {
+        self.cap
+    }
+
     /// The guide at a path vertex (p, n), if its cell has one.
     pub(crate) fn at(&self, p: DVec3, n: DVec3) -> Option<&Guide> {
         if self.guides.is_empty() {
@@ -237,15 +245,17 @@ impl SpatialGuides {
 #[derive(Debug)]
 pub(crate) struct SpatialLearner {
     frame: (DVec3, f64),
+    cap: usize,
     /// Per cell: per bin Σ L/q, and (the last entry) the count of records.
     sums: std::collections::HashMap<u32, Vec<f64>>,
 }
 
 impl SpatialLearner {
-    /// Nothing learned yet, in the scene's frame (`Domain::frame`).
-    pub(crate) fn new(frame: (DVec3, f64)) -> Self {
+    /// Nothing learned yet, in the scene's frame (`Domain::frame`), for `groups` groups.
+    pub(crate) fn new(frame: (DVec3, f64), groups: usize) -> Self {
         Self {
             frame,
+            cap: (RECORDS_PER_ROUND / groups.max(1)).clamp(256, RECORDS_PER_GROUP),
             sums: Default::default(),
         }
     }
@@ -266,6 +276,7 @@ impl SpatialLearner {
     pub(crate) fn guides(&self) -> SpatialGuides {
         SpatialGuides {
             frame: self.frame,
+            cap: self.cap,
             guides: (self.sums.iter())
                 .filter_map(|(k, s)| {
                     Guide::from_sums(&s[..RES * RES], s[RES * RES]).map(|g| (*k, g))

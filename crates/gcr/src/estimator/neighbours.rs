@@ -37,6 +37,10 @@
 //! `PathSettings::neighbours` per group, deterministically from the point set (not from the input
 //! order). Irradiance probes in the air share as surface points do; Flatland and points that do not
 //! reflect are gathered alone.
+//!
+//! Guided rounds ([`super::guide`]): a member's cosine rays have density q_a·cos θ/π (q_a its
+//! group's guide toward the direction), so the mixture's density at x is Σ_a G(y_a, x)·V·q_a(x)
+//! and the MIS weights count q_a cosine rays; a group of one takes the same road.
 
 use super::guide::{GroupGuide, Guide, Learner, Record, SpatialGuides, to_square};
 use super::paths::{PathGather, PointEstimate, REPLICATES, SobolRay, Vertex};

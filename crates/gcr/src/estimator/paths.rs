@@ -29,7 +29,7 @@
 //! few hundred 6-D Gaussians does not follow K's 1/r² and cosines pointwise, and Ψ/p is large where
 //! the cosine density p is small.
 
-use super::guide::{RECORDS_PER_ROUND, Record, SpatialGuides, to_square};
+use super::guide::{Record, SpatialGuides, to_square};
 use crate::config::{GatherSamples, PathSettings};
 use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
@@ -162,13 +162,6 @@ impl PointEstimate {
     pub fn merge(&mut self, other: &PointEstimate) {
         let total = (self.rays + other.rays) as f64;
         let (w, v) = (self.rays as f64 / total, other.rays as f64 / total);
-        self.merge_weighted(other, (w, v));
-    }
-
-    /// Combines two independent rounds at the same point with weights `(w, v)` (w + v = 1, the
-    /// same for every point: then each replicate's combination is unbiased and their spread
-    /// still gives the standard error).
-    pub(crate) fn merge_weighted(&mut self, other: &PointEstimate, (w, v): (f64, f64)) {
         for (a, b) in self.share.iter_mut().zip(&other.share) {
             for k in 0..BANDS {
                 a[k] = w * a[k] + v * b[k];
@@ -517,7 +510,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         // L̂ beyond it ((out − out after the bounce)/β after it)⟩
         if let Some((guides, records)) = guiding.as_mut() {
             for (v, u, qq, q_g, d, after, b) in bounces {
-                if records.len() >= RECORDS_PER_ROUND {
+                if records.len() >= guides.cap() {
                     break;
                 }
                 let mut l = 0.0;
@@ -804,12 +797,12 @@ mod guide_diagnostics {
             .map(|_| g.reflected(&x, None, &mut rng, None)[0])
             .collect();
         // learn from unguided paths (guides that are empty), in batches as the rounds do
-        let mut learner = SpatialLearner::new(d.frame());
-        let empty = SpatialLearner::new(d.frame()).guides();
+        let mut learner = SpatialLearner::new(d.frame(), 1);
+        let empty = SpatialLearner::new(d.frame(), 1).guides();
         let mut records = Vec::new();
         for _ in 0..2 * n {
             g.reflected(&x, None, &mut rng, Some((&empty, &mut records)));
-            if records.len() >= RECORDS_PER_ROUND {
+            if records.len() >= empty.cap() {
                 learner.learn(&records);
                 records.clear();
             }

@@ -60,7 +60,7 @@ pub(super) fn grouped_rounds(
     // earlier rounds, merged in the groups' order when a round's first group starts
     let spatial = Mutex::new((
         usize::MAX,
-        SpatialLearner::new(domain.frame()),
+        SpatialLearner::new(domain.frame(), groups.len()),
         Arc::default(),
     ));
     let frozen = |first: usize| -> Arc<SpatialGuides> {
@@ -201,24 +201,8 @@ pub(crate) fn rounds_to_target(
             indirect: more,
         };
         let next = round(rays.div_ceil(REPLICATES), samples, fresh);
-        // ⟨Combine: by ray counts; guided rounds by the inverse of their relative variances
-        // (all points alike), since a later round's better guides make its rays worth more —
-        // by ray counts the door gap's early rounds kept the error at 7.4 % after 37 456 rays
-        // whose last round alone had about 2 %⟩
-        let weights = fresh
-            .then(|| {
-                let so_far = relative_std_error(&gathered)?;
-                let new: Vec<Gathered> = next.iter().map(PointEstimate::gathered).collect();
-                let this = relative_std_error(&new)?;
-                let (a, b) = (so_far.powi(-2), this.powi(-2));
-                (a.is_finite() && b.is_finite()).then(|| (a / (a + b), b / (a + b)))
-            })
-            .flatten();
         for (e, n) in estimates.iter_mut().zip(&next) {
-            match weights {
-                Some(w) => e.merge_weighted(n, w),
-                None => e.merge(n),
-            }
+            e.merge(n);
         }
         rays += more;
     }

@@ -97,7 +97,8 @@ impl ProgressLine {
                 format!(", estimated error {:.2} % (standard error)", 100.0 * e)
             });
             let rays = if m.gather_rays > 0 {
-                format!(", {} rays per point", m.gather_rays)
+                let guided = if m.guided { " guided" } else { "" };
+                format!(",{guided} {} rays per point", m.gather_rays)
             } else {
                 String::new()
             };

@@ -35,7 +35,7 @@ pub(crate) struct Solved {
 /// both). ``seed`` seeds every random choice (the same seed gives the same numbers as the
 /// program). The research options (``cells``, ``shading_cells``, ``time_budget``, ``gather``,
 /// ``output_fit``, ``network_target``, ``gather_rays``, ``corrections``, ``share_paths``,
-/// ``keep_base``, ``keep_networks``, ``kernel_facing``, ``cluster_min_elements``,
+/// ``guiding`` (``"auto"``, ``"on"`` or ``"off"``), ``keep_base``, ``keep_networks``, ``kernel_facing``, ``cluster_min_elements``,
 /// ``cluster_theta``) are the program's; ``None`` is its default. The networks are trained
 /// only when the gather reads them or ``keep_networks`` is set (the default gather reads none).
 ///
@@ -48,7 +48,7 @@ pub(crate) struct Solved {
 #[pyo3(signature = (
     scene, *, quality=None, target_error=None, seed=None, cells=None, shading_cells=None,
     time_budget=None, gather=None, output_fit=None, network_target=None, gather_rays=None,
-    corrections=None, share_paths=None, keep_base=false, keep_networks=false,
+    corrections=None, share_paths=None, guiding=None, keep_base=false, keep_networks=false,
     kernel_facing=false, cluster_min_elements=None, cluster_theta=None, progress=None
 ))]
 #[allow(clippy::too_many_arguments)]
@@ -67,6 +67,7 @@ pub(crate) fn solve<'py>(
     gather_rays: Option<usize>,
     corrections: Option<usize>,
     share_paths: Option<usize>,
+    guiding: Option<&str>,
     keep_base: bool,
     keep_networks: bool,
     kernel_facing: bool,
@@ -93,7 +94,7 @@ pub(crate) fn solve<'py>(
         gather_rays,
         corrections,
         share_paths: share_paths.unwrap_or(defaults.share_paths),
-        guiding: defaults.guiding,
+        guiding: guiding.map_or(Ok(defaults.guiding), choice)?,
         keep_base,
         keep_networks,
         kernel_facing,

@@ -52,6 +52,8 @@ def test_bad_arguments_raise_value_errors(draft):
         gcr.solve(scene, quality="best")
     with pytest.raises(ValueError, match="cannot be used together"):
         gcr.solve(scene, quality="good", target_error=0.02)
+    with pytest.raises(ValueError, match="unknown guiding"):
+        gcr.solve(scene, guiding="sometimes")
     with pytest.raises(ValueError, match="invalid sun"):
         gcr.Scene.load("cornell-box", sun="north")
     with pytest.raises(ValueError, match="N×3"):

@@ -52,6 +52,8 @@ pub struct Gathered {
     /// Shadow rays and cosine rays (each: the larger count) per point behind the value (`rays`,
     /// `paths`); 0 for the gathers that cast none.
     pub rays: usize,
+    /// Whether the paths gather's rounds were guided (`--guiding`, `estimator/guide.rs`).
+    pub guided: bool,
 }
 
 /// Gathers B at the surface point (y, n, face) of `domain`. `b_refl(x, n_x, face_x)` returns the

@@ -9,9 +9,9 @@
 
 use crate::ctx::Ctx;
 use anyhow::Result;
-use gcr::{Domain, Emitters, GatherMode, Gathered, Guiding, PathSettings, SolveConfig, Trained};
+use gcr::{Gathered, Guiding};
 use glam::DVec3;
-use scene_sampler::{KernelSampler, Scene, SceneBvh};
+use scene_sampler::Scene;
 use std::fmt::Write;
 use std::time::Instant;
 
@@ -94,19 +94,7 @@ fn run(
     guiding: Guiding,
 ) -> Result<(Vec<Gathered>, f64)> {
     let t = Instant::now();
-    let bvh = SceneBvh::new(scene);
-    let domain = Domain::ThreeD(KernelSampler::new(scene, &bvh));
-    let config = SolveConfig {
-        gather: GatherMode::Paths,
-        paths: PathSettings {
-            target_error: Some(target),
-            guiding,
-            ..PathSettings::default()
-        },
-        ..SolveConfig::default()
-    };
-    let trained = Trained::without_networks(&domain, &config);
-    let g = gcr::irradiance_at_points(&domain, &trained, &Emitters::new(&domain), &config, points)?;
+    let g = super::irradiance::gcr_gathered(scene, points, target, guiding)?;
     Ok((g, t.elapsed().as_secs_f64()))
 }
 

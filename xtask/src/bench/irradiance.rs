@@ -19,7 +19,7 @@ use super::field::{mitsuba_runs, run_mitsuba, write_mitsuba_faces};
 use crate::ctx::Ctx;
 use anyhow::{Result, bail};
 use baselines::Adaptive;
-use gcr::{Domain, Emitters, GatherMode, PathSettings, SolveConfig, Trained};
+use gcr::{Domain, Emitters, GatherMode, Gathered, Guiding, PathSettings, SolveConfig, Trained};
 use glam::DVec3;
 use scene_sampler::{KernelSampler, Scene, SceneBvh};
 use std::fmt::Write;
@@ -88,23 +88,36 @@ pub(super) fn gcr_irradiance(
     points: &[(DVec3, DVec3)],
     target: f64,
 ) -> Result<Estimates> {
+    let g = gcr_gathered(scene, points, target, Guiding::default())?;
+    Ok(Estimates {
+        mean: g.iter().map(|x| x.radiosity).collect(),
+        se: g.iter().map(|x| x.std_error).collect(),
+    })
+}
+
+/// Irradiance at `points` by the default paths gather to `target`, guided as `guiding`.
+pub(super) fn gcr_gathered(
+    scene: &Scene,
+    points: &[(DVec3, DVec3)],
+    target: f64,
+    guiding: Guiding,
+) -> Result<Vec<Gathered>> {
     let bvh = SceneBvh::new(scene);
     let domain = Domain::ThreeD(KernelSampler::new(scene, &bvh));
     let config = SolveConfig {
         gather: GatherMode::Paths,
         paths: PathSettings {
             target_error: Some(target),
+            guiding,
             ..PathSettings::default()
         },
         ..SolveConfig::default()
     };
     let trained = Trained::without_networks(&domain, &config);
     let emitters = Emitters::new(&domain);
-    let g = gcr::irradiance_at_points(&domain, &trained, &emitters, &config, points)?;
-    Ok(Estimates {
-        mean: g.iter().map(|x| x.radiosity).collect(),
-        se: g.iter().map(|x| x.std_error).collect(),
-    })
+    Ok(gcr::irradiance_at_points(
+        &domain, &trained, &emitters, &config, points,
+    )?)
 }
 
 /// One Mitsuba run: samples per point, seconds, estimates.

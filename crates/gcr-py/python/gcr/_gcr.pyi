@@ -95,6 +95,7 @@ def solve(
     gather_rays: int | None = None,
     corrections: int | None = None,
     share_paths: int | None = None,
+    guiding: str | None = None,
     keep_base: bool = False,
     keep_networks: bool = False,
     kernel_facing: bool = False,

@@ -147,7 +147,12 @@ pub(crate) fn rounds_to_target(
     let mut estimates = piloted.unwrap_or_else(|| round(0, pilot, fresh));
     let mut rays = pilot_rays;
     loop {
-        let gathered: Vec<Gathered> = estimates.iter().map(PointEstimate::gathered).collect();
+        let gathered: Vec<Gathered> = (estimates.iter())
+            .map(|e| Gathered {
+                guided: fresh,
+                ..e.gathered()
+            })
+            .collect();
         // ⟨Stop at the target (its upper confidence bound) or the ray cap⟩
         // one degree of freedom per group with a reflecting point: a group's members share
         // their paths, so their standard errors come from the same two replicates
@@ -251,6 +256,8 @@ pub struct GatherStats {
     pub rays: usize,
     /// Every value is 0 in every band (and there is at least one): no light reached the points.
     pub dark: bool,
+    /// Whether the rounds were guided ([`Gathered::guided`]; `--guiding auto` decides).
+    pub guided: bool,
 }
 
 impl GatherStats {
@@ -264,6 +271,7 @@ impl GatherStats {
         Self {
             network_share: if total > 0.0 { net / total } else { 0.0 },
             relative_std_error: relative_std_error(gathered),
+            guided: gathered.iter().any(|g| g.guided),
             rays: gathered.iter().map(|g| g.rays).max().unwrap_or(0),
             dark: !gathered.is_empty()
                 && gathered

@@ -500,6 +500,7 @@ fn record_gather(metrics: &mut Metrics, stats: &GatherStats, config: &SolveConfi
     metrics.network_share = stats.network_share;
     metrics.relative_std_error = stats.relative_std_error;
     metrics.gather_rays = stats.rays;
+    metrics.guided = stats.guided;
     metrics.target_error = config.paths.target_error;
     metrics.warnings.extend(gather_warnings(stats, config));
 }

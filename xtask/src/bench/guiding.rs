@@ -12,14 +12,17 @@ use anyhow::Result;
 use gcr::{Gathered, Guiding};
 use glam::DVec3;
 use scene_sampler::Scene;
+use scene_sampler::lights::lighting::Up;
 use std::fmt::Write;
 use std::time::Instant;
 
-/// A case: its name, the scene, and the points (position, normal).
+/// A case: its name, the scene, the points (position, normal), and the scene's lights as
+/// Mitsuba 3 emitters (`None`: not compared with Mitsuba).
 struct Case {
     name: &'static str,
     scene: Scene,
     points: Vec<(DVec3, DVec3)>,
+    mitsuba: Option<serde_json::Value>,
 }
 
 /// A `nx` × `nz` grid over x0..x1 × z0..z1 at height y, facing `n`.
@@ -57,31 +60,43 @@ fn cases(quick: bool) -> Result<Vec<Case>> {
             name: "door gap: work plane in the unlit room",
             scene: shipped("door-gap")?,
             points: grid((4.15, 8.05, a), (0.05, 2.95, b), 0.8, DVec3::Y),
+            mitsuba: Some(
+                serde_json::json!({"type": "point", "position": [2.0, 2.2, 1.0],
+                                             "intensity": 100.0}),
+            ),
         },
         Case {
             name: "sun patch room: under the ceiling, facing down",
             scene: shipped("sun-patch-room")?,
             points: grid((0.05, 5.95, b), (0.05, 7.95, a), 2.95, -DVec3::Y),
+            // the lighting file's sun (azimuth 180°, elevation 30°, 80 000 lux) as a delta
+            // direction (ours is a 0.53° disc: the same irradiance but at shadow edges)
+            mitsuba: Some(serde_json::json!({"type": "directional",
+                "direction": (-Up::Y.direction(180.0, 30.0)).to_array(), "irradiance": 80_000.0})),
         },
         Case {
             name: "sun patch room: work plane",
             scene: shipped("sun-patch-room")?,
             points: grid((0.05, 5.95, b), (0.05, 7.95, a), 0.8, DVec3::Y),
+            mitsuba: None,
         },
         Case {
             name: "uplight room: work plane",
             scene: shipped("uplight-room")?,
             points: grid((0.05, 5.95, a), (0.05, 5.95, b), 0.8, DVec3::Y),
+            mitsuba: None,
         },
         Case {
             name: "cornell-box: above the blocks",
             scene: builtin("cornell-box")?,
             points: grid((0.01, 0.54, a), (0.01, 0.55, b), 0.4, DVec3::Y),
+            mitsuba: None,
         },
         Case {
             name: "closed-room: above the block",
             scene: builtin("closed-room")?,
             points: grid((0.05, 3.95, a), (0.05, 2.95, b), 1.6, DVec3::Y),
+            mitsuba: None,
         },
     ])
 }
@@ -113,6 +128,7 @@ fn agreement(a: &[Gathered], b: &[Gathered]) -> f64 {
 /// Runs this group and writes `benchmarks-guiding.md` into `ctx.out`.
 pub fn run_group(ctx: &Ctx) -> Result<()> {
     let targets: &[f64] = if ctx.quick { &[0.05] } else { &[0.02, 0.01] };
+    let mut skipped = None;
     let mut md = String::from(
         "| scene, points | target | unguided: s, rays/point, est. error | guided (auto): s, rays/point, est. error | time guided / unguided | Σd²/Σσ² |\n|---|---:|---|---|---:|---:|\n",
     );
@@ -138,6 +154,12 @@ pub fn run_group(ctx: &Ctx) -> Result<()> {
             )?;
             println!("guiding: {} at {:.0} % done", case.name, 100.0 * target);
         }
+        if let Some(emitter) = &case.mitsuba {
+            match mitsuba(&case, emitter, ctx.quick)? {
+                Ok(rows) => md += &rows,
+                Err(why) => skipped = Some(why),
+            }
+        }
     }
     let out = format!(
         "# Guided bounces against unguided (issue 32)\n\n\
@@ -152,10 +174,57 @@ pub fn run_group(ctx: &Ctx) -> Result<()> {
          point got (65 536 is the cap: the target was not met); `est. error` is the gather's own \
          estimate (relative L2 over the points, standard error). Σd²/Σσ²: the squared \
          differences between the two runs over the variances they claim (≈ 1: they agree). \
-         Design and what was tried: docs/design/estimator.md, \"Guiding\".\n\n{md}",
+         Mitsuba 3 rows (the hard rooms): `scalar_rgb`, `path`, `multijitter`, the same lights as \
+         its own emitters, two seeds per run (σ from their difference, seconds for both: \
+         `xtask/py/mitsuba_irradiance.py`); its own relative error at that time, and the time \
+         it would take to 2 % and 1 % if its error falls as 1/√spp (extrapolated, not run). \
+         Design and what was tried: docs/design/estimator.md, \"Guiding\".\n\n{md}{note}",
         quick = if ctx.quick { " --quick" } else { "" },
         threads = rayon::current_num_threads(),
+        note = skipped.map_or(String::new(), |why| format!("\nMitsuba skipped: {why}.\n")),
     );
     std::fs::write(ctx.out.join("benchmarks-guiding.md"), out)?;
     Ok(())
+}
+
+/// Mitsuba 3 at the case's points with `emitter`: a table row per run (or why it was skipped).
+fn mitsuba(
+    case: &Case,
+    emitter: &serde_json::Value,
+    quick: bool,
+) -> Result<std::result::Result<String, String>> {
+    let dir = std::env::temp_dir().join(format!("gcr-guiding-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let file = dir.join("emitters.json");
+    std::fs::write(&file, serde_json::to_string(&[emitter])?)?;
+    let spp: &[usize] = if quick { &[16] } else { &[256, 2048] };
+    let runs =
+        super::irradiance::mitsuba_lit(&case.scene, &case.points, spp, "multijitter", Some(&file))?;
+    let _ = std::fs::remove_dir_all(&dir);
+    let runs = match runs {
+        Ok(r) => r,
+        Err(why) => return Ok(Err(why)),
+    };
+    let mut rows = String::new();
+    for (spp, seconds, est) in runs {
+        let (mut v, mut b) = (0.0, 0.0);
+        for (m, s) in est.mean.iter().zip(&est.se) {
+            for k in 0..3 {
+                v += s[k] * s[k];
+                b += m[k] * m[k];
+            }
+        }
+        let e = (v / b).sqrt();
+        let at = |target: f64| seconds * (e / target).powi(2);
+        writeln!(
+            rows,
+            "| {}, {}: Mitsuba 3, 2 × {spp} spp | - | {seconds:.1} s, {:.2} % | to 2 %: {:.0} s, to 1 %: {:.0} s (extrapolated) | - | - |",
+            case.name,
+            case.points.len(),
+            100.0 * e,
+            at(0.02),
+            at(0.01),
+        )?;
+    }
+    Ok(Ok(rows))
 }

@@ -1,27 +1,29 @@
-//! Guided first bounces (`--guiding`; issue "The networks earn their place"): the cosine rays of a
-//! group of neighbouring points drawn from a learned distribution instead of cos θ/π alone.
+//! Guided bounces (`--guiding`; issue "The networks earn their place"): the cosine rays of a group
+//! of neighbouring points, and of their paths' later bounces, drawn from learned distributions
+//! instead of cos θ/π alone (docs/design/estimator.md, "Guiding").
 //!
 //! The cosine warp ([`scene_sampler::cosine_hemisphere`]) maps the unit square to the hemisphere,
 //! (u₀, u₁) ↦ (sin²θ = u₀, φ = 2πu₁), with density cos θ/π: the reflected-light integral
 //! ∫ L(ω) cos θ/π dω is ∫_□ L(ω(u)) du over the square. Guiding warps the square first by a
 //! piecewise-constant density q on an `RES` × `RES` grid (mean 1), so a ray's solid-angle density
-//! is q(u)·cos θ/π and its weight L/q (docs/design/estimator.md, "Guiding"):
+//! is q(u)·cos θ/π and its weight L/q:
 //!
 //! ```text
-//! q(u) = α + (1 − α)·RES²·h(bin(u)),   h = the learned share of ∫ L over each bin,
+//! q(u) = (1 − λ) + λ·RES²·h(bin(u)),   λ = (1 − α)·n/(n + CONFIDENCE),
 //! ```
 //!
-//! a defensive mixture (α = [`DEFENSIVE`]): no ray's weight exceeds 1/α of the cosine ray's, so a
-//! poor guide costs at most a bounded factor, and q > 0 wherever cos θ is, so the estimate stays
-//! unbiased whatever was learned. q is sampled by inversion (the bin's row from the marginal, its
-//! column from the row, the point within the bin linearly), so the Sobol points' stratification
-//! carries through the warp.
+//! h the learned share of ∫ L over each bin from n rays: a defensive mixture (α = [`DEFENSIVE`]):
+//! no ray's weight exceeds 1/α of the cosine ray's, so a poor guide costs at most a bounded factor
+//! per bounce, and q > 0 wherever cos θ is, so the estimate stays unbiased whatever was learned. q
+//! is sampled by inversion (the bin's row from the marginal, its column from the row, the point
+//! within the bin linearly), so the Sobol points' stratification carries through the warp.
 //!
-//! What is learned ([`Learner`]): each ray of the group's earlier rounds adds its contribution's
-//! luminance divided by its density q to its bin, an unbiased estimate of ∫_bin L du; h is those
-//! sums normalized. A round's guide is fixed before it starts and built from earlier rounds only,
-//! so each replicate of the round is unbiased given the guide and the replicates stay uncorrelated
-//! (the standard error remains honest).
+//! What is learned: each ray adds the luminance of the light it brought divided by its density q
+//! to its bin, an unbiased estimate of ∫_bin L du; h is those sums normalized. A group's first
+//! bounces learn in a [`Learner`] of their own ([`GroupGuide`]); the paths' later bounces in
+//! spatial cells shared by all groups ([`SpatialLearner`], [`SpatialGuides`]). A round's guides
+//! are fixed before it starts and built from earlier rounds only, so each replicate of the round
+//! is unbiased given them and the replicates stay uncorrelated (the standard error remains honest).
 
 use glam::DVec3;
 use scene_sampler::orthonormal_basis;

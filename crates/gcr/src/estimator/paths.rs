@@ -527,7 +527,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
     }
 
     /// One shadow ray from z to a light drawn by power from `u0` and sampled from `u`: its
-    /// direct light per unit ρ, MIS-weighted ([`light_ray`]).
+    /// direct light per unit ρ, MIS-weighted ([`crate::gather::light_ray`]).
     pub(crate) fn next_event(&self, z: &Vertex, mis: &Mis, (u0, u): (f64, [f64; 2])) -> Bands {
         self.next_event_scaled(z, mis, (u0, u), |_| 1.0)
     }

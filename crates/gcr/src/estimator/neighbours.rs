@@ -250,7 +250,7 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
         let (n_e, n_c) = (samples.direct, samples.indirect);
         let replicates = REPLICATES.min(n_e.max(n_c)).max(1);
         // ⟨Each member's cosine rays: fewer as the group grows (module docs)⟩
-        let (mut c, mut first_c) = cosine_share(members.len(), n_c, first, replicates);
+        let (c, mut first_c) = cosine_share(members.len(), n_c, first, replicates);
         // ⟨Guided rounds: each round its own scrambling, from index 0. A round's guide was
         // learned from the earlier rounds' points, and later points of one scrambled sequence
         // fill the gaps the earlier ones left: not independent of the guide (measured: +1 % in
@@ -261,7 +261,6 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
             let round = (first as u64 + 1).wrapping_mul(0xA076_1D64_78BD_642F);
             round_seeds = seeds.iter().map(|s| s ^ round).collect();
             (first, first_c) = (0, 0);
-            c = cosine_share(members.len(), n_c, 0, replicates).0;
             &round_seeds[..]
         } else {
             seeds

@@ -32,16 +32,27 @@ fn gltf_document(
 ) -> Result<(gltf::Document, Vec<Vec<u8>>, Folder)> {
     let bytes = crate::confine::read_regular_file(path, options.max_file_bytes)?;
     let folder = Folder::of(path, options)?;
-    let parse = |message: String| SceneError::Parse {
+    // gltf is third-party parsing of user input: a panic inside it becomes a parse error, never an
+    // abort. What it reads without a check is checked first.
+    let gltf::Gltf { document, blob } =
+        guarded(source, || gltf::Gltf::from_slice_without_validation(&bytes))?;
+    crate::gltf_accessors::parser_prechecks(document.as_json(), source)?;
+    let json = document.into_json();
+    let document = guarded(source, || gltf::Document::from_json(json))?;
+    let buffers = crate::gltf_resources::read_buffers(&document, blob, source, &folder)?;
+    Ok((document, buffers, folder))
+}
+
+/// `parse()`, the gltf crate parsing user input, with its errors and panics as parse errors of
+/// the file `source`.
+fn guarded<T>(source: &str, parse: impl FnOnce() -> gltf::Result<T>) -> Result<T> {
+    let error = |message: String| SceneError::Parse {
         source_name: source.into(),
         message,
     };
-    // gltf is third-party parsing of user input: a panic inside it becomes a parse error, never an abort.
-    let gltf::Gltf { document, blob } = std::panic::catch_unwind(|| gltf::Gltf::from_slice(&bytes))
-        .map_err(|_| parse("the glTF parser failed on this file".into()))?
-        .map_err(|e| parse(e.to_string()))?;
-    let buffers = crate::gltf_resources::read_buffers(&document, blob, source, &folder)?;
-    Ok((document, buffers, folder))
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(parse))
+        .map_err(|_| error("the glTF parser failed on this file".into()))?
+        .map_err(|e| error(e.to_string()))
 }
 
 /// Loads a glTF 2.0 file (`.gltf` with its buffers, or `.glb`).
@@ -102,7 +113,7 @@ pub(crate) fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
             });
         }
         // node transforms are composed in f64: only the mesh-local positions are f32 (glTF spec)
-        let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
+        let local = node_matrix(&node, &source, &mut found.warnings)?;
         let world = parent * local;
         for child in node.children() {
             stack.push((child, world, depth + 1));
@@ -111,6 +122,41 @@ pub(crate) fn gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
     }
     // ⟨The scene⟩
     found.into_scene(path, &source, options)
+}
+
+/// The local transform of `node`, its matrix or its translation, rotation and scale composed
+/// (glTF 2.0 §3.5.3). The rotation must be a unit quaternion: one within 10⁻⁵ of unit length is
+/// used as it is, a longer or shorter one normalised with a warning naming the node (unnormalised,
+/// it would scale and shear the mesh), and a zero one is an error.
+fn node_matrix(node: &gltf::Node, source: &str, warnings: &mut Vec<String>) -> Result<DMat4> {
+    let mut transform = node.transform();
+    if let gltf::scene::Transform::Decomposed { rotation, .. } = &mut transform {
+        let length = rotation
+            .iter()
+            .map(|q| f64::from(*q).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        if !(length > 0.0 && length.is_finite()) {
+            return Err(SceneError::Parse {
+                source_name: source.into(),
+                message: format!(
+                    "node {}: rotation {rotation:?} is not a rotation (a unit quaternion)",
+                    node.index()
+                ),
+            });
+        }
+        if (length - 1.0).abs() > 1e-5 {
+            warnings.push(format!(
+                "{source}: node {}: rotation {rotation:?} has length {length:.6}, not 1: \
+                 normalised",
+                node.index()
+            ));
+            *rotation = rotation.map(|q| (f64::from(q) / length) as f32);
+        }
+    }
+    Ok(DMat4::from_cols_array_2d(
+        &transform.matrix().map(|c| c.map(f64::from)),
+    ))
 }
 
 /// A mesh instance of the node walk: the node and its mesh, the object it makes, and its world
@@ -299,6 +345,7 @@ impl GltfFaces {
             self.skipped.push(format!("`{}` ({mode:?})", at.name));
             return Ok(());
         }
+        crate::gltf_accessors::check_primitive(prim, &at.name, buffers, source)?;
         let part = self.parts.len() as u32;
         self.two_sided.push(prim.material().double_sided());
         self.parts.push(Part {

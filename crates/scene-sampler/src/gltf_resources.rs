@@ -205,14 +205,9 @@ pub(crate) fn read_image(
         _ => None,
     };
     let what = format!("image {}", image.index());
-    // the gltf crate panics on an image with neither a `uri` nor a `bufferView` and `mimeType`
-    // (its validation lets them through)
-    let image_source = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| image.source()))
-        .map_err(|_| SceneError::Parse {
-            source_name: source.into(),
-            message: format!("{what}: neither a `uri` nor a `bufferView` with a `mimeType`"),
-        })?;
-    let (bytes, format) = match image_source {
+    // (an image without a source, on which `source()` panics, was refused before:
+    // `gltf_accessors::parser_prechecks`)
+    let (bytes, format) = match image.source() {
         gltf::image::Source::View { view, mime_type } => {
             let data = buffers.get(view.buffer().index());
             let end = view.offset().checked_add(view.length());

@@ -44,6 +44,7 @@ pub mod distribution;
 pub mod error;
 pub mod flatland;
 mod gltf;
+mod gltf_accessors;
 mod gltf_cutouts;
 mod gltf_emission;
 mod gltf_lights;

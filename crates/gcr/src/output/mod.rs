@@ -14,6 +14,7 @@ mod gltf_bin;
 mod hdr;
 mod lightmap;
 mod linear;
+pub mod memory;
 mod mesh;
 mod pixel;
 mod ply;
@@ -58,6 +59,9 @@ pub enum OutputError {
          --sky cie-overcast:LUX (its LUX is the outdoor illuminance) and no --sun or --env"
     )]
     DaylightWithoutOvercast,
+    /// An image that would take more memory than the machine has ([`memory`]).
+    #[error(transparent)]
+    ImageMemory(#[from] memory::ImageTooLarge),
     /// Probes without a probe output, or the other way round.
     #[error("probes and a probe output go together: give both or neither")]
     ProbesWithoutOutput,

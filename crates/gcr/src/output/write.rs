@@ -216,11 +216,19 @@ impl OutputPlan {
     }
 
     /// Checks that `config` can compute the planned outputs (irradiance probes need the paths
-    /// gather): call it before the solve.
+    /// gather) and that the machine can hold the images ([`super::memory`]): call it before the
+    /// solve.
     pub fn check_config(&self, config: &SolveConfig) -> Result<(), OutputError> {
         let irradiance = self.probe_settings.quantity.is_irradiance();
         if irradiance && !self.probes.is_empty() && config.gather != GatherMode::Paths {
             return Err(GatherError::IrradianceNeedsPaths(config.gather.name()).into());
+        }
+        // ⟨An image the machine cannot hold is refused now, not after the solve⟩
+        let images = self.paths.image.is_some() || !self.images.views.is_empty();
+        if images && !self.flatland {
+            let footprints = config.gather == GatherMode::Paths && !config.reads_networks();
+            let available = super::memory::available_memory();
+            super::memory::check_image_memory(&self.images, footprints, available)?;
         }
         Ok(())
     }

@@ -1,0 +1,169 @@
+//! What an image output takes in memory, estimated before the solve, against what the machine
+//! has: a `--resolution 16384x16384` image used to abort on a 24 GiB allocation after the whole
+//! solve; now it is refused before, with the largest resolution of its aspect that fits.
+//!
+//! The estimate is per pixel and per view (views are rendered one after the other):
+//!
+//! - **mesh images** ([`super::raster`]): `ss² = 4` sub-samples of B (3 × f64), depth (f64) and
+//!   what was seen (1 byte): 132 bytes; their reduction to pixels (B, depth: 32 bytes); the
+//!   8-bit pixels and depth kept for overlays (11 bytes), or the f32 radiance of an EXR (12):
+//!   176 bytes; [`MESH_BYTES_PER_PIXEL`] = 192 leaves room for the allocator. Measured: 171–173
+//!   bytes a pixel (peak RSS, Cornell box, 1024² − 512² and 640² − 256², PNG and EXR).
+//! - **pixel images** of the default paths gather ([`super::pixel`]): the footprint gather keeps
+//!   per pixel its centre's hit, the running sums of its rounds and its sample points:
+//!   [`PIXEL_BYTES_PER_PIXEL`] = 800, over the 736 bytes a pixel measured the same way (Cornell
+//!   box, `--quality draft`, 1024² − 512²). With a gather that reads the networks, every
+//!   sub-sample (`--pixel-samples`) is a point of its own: that times the sub-samples.
+//!
+//! The machine's memory is Linux's `MemAvailable`, lowered to a cgroup v2 limit when one is set
+//! (containers, CI runners); elsewhere nothing is checked.
+
+use super::camera::{ImageMode, ImageSettings};
+
+/// An image that would take more memory than is available.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "image {width}x{height}: about {} at its peak, more than the {} available: choose a \
+     smaller --resolution ({}x{} fits)",
+    gib(*needed),
+    gib(*available),
+    fits.0,
+    fits.1
+)]
+pub struct ImageTooLarge {
+    /// The image's width.
+    pub width: u32,
+    /// The image's height.
+    pub height: u32,
+    /// Bytes it would take ([`image_bytes`]).
+    pub needed: u64,
+    /// Bytes available ([`available_memory`]).
+    pub available: u64,
+    /// The largest resolution of its aspect that takes at most 80 % of `available`.
+    pub fits: (u32, u32),
+}
+
+/// Bytes a pixel of a mesh image takes at its peak (module docs).
+pub const MESH_BYTES_PER_PIXEL: u64 = 192;
+
+/// Bytes a pixel of a per-pixel image takes at its peak with the default paths gather (module
+/// docs).
+pub const PIXEL_BYTES_PER_PIXEL: u64 = 800;
+
+/// The peak bytes one image of `settings` takes (`footprints`: a pixel image is gathered over
+/// pixel footprints by the paths gather, not point by point per sub-sample).
+pub fn image_bytes(settings: &ImageSettings, footprints: bool) -> u64 {
+    let pixels = u64::from(settings.width) * u64::from(settings.height);
+    let per_pixel = match settings.mode {
+        ImageMode::Mesh => MESH_BYTES_PER_PIXEL,
+        ImageMode::Pixel if footprints => PIXEL_BYTES_PER_PIXEL,
+        ImageMode::Pixel => PIXEL_BYTES_PER_PIXEL * u64::from(settings.pixel_samples.max(1)),
+    };
+    pixels.saturating_mul(per_pixel)
+}
+
+/// The memory this process may still take: `MemAvailable`, at most what a cgroup v2 limit
+/// leaves; `None` where neither can be read.
+pub fn available_memory() -> Option<u64> {
+    let meminfo = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let kib = |key: &str| -> Option<u64> {
+        let line = meminfo.lines().find(|l| l.starts_with(key))?;
+        line.split_whitespace().nth(1)?.parse::<u64>().ok()
+    };
+    let available = kib("MemAvailable:")?.saturating_mul(1024);
+    let read = |p: &str| -> Option<u64> { std::fs::read_to_string(p).ok()?.trim().parse().ok() };
+    let cgroup = match (
+        read("/sys/fs/cgroup/memory.max"),
+        read("/sys/fs/cgroup/memory.current"),
+    ) {
+        (Some(max), Some(current)) => Some(max.saturating_sub(current)),
+        _ => None,
+    };
+    Some(cgroup.map_or(available, |c| c.min(available)))
+}
+
+/// Refuses an image of `settings` that would take more than `available` bytes (none: no check),
+/// naming the memory it needs and the largest resolution of its aspect that takes at most 80 %
+/// of what is available (the rest is room for the solve).
+pub(crate) fn check_image_memory(
+    settings: &ImageSettings,
+    footprints: bool,
+    available: Option<u64>,
+) -> Result<(), ImageTooLarge> {
+    let (Some(available), needed) = (available, image_bytes(settings, footprints)) else {
+        return Ok(());
+    };
+    if needed <= available {
+        return Ok(());
+    }
+    // the same aspect, scaled to take at most 80 % (room for the solve), rounded down to whole
+    // multiples of 16 pixels
+    let scale = (0.8 * available as f64 / needed as f64).sqrt();
+    let fit = |side: u32| ((f64::from(side) * scale) as u32 / 16 * 16).max(1);
+    Err(ImageTooLarge {
+        width: settings.width,
+        height: settings.height,
+        needed,
+        available,
+        fits: (fit(settings.width), fit(settings.height)),
+    })
+}
+
+/// `bytes` in GiB, for messages.
+fn gib(bytes: u64) -> String {
+    format!("{:.1} GiB", bytes as f64 / f64::from(1u32 << 30))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings(width: u32, height: u32, mode: ImageMode) -> ImageSettings {
+        ImageSettings {
+            width,
+            height,
+            mode,
+            ..ImageSettings::default()
+        }
+    }
+
+    #[test]
+    fn the_largest_resolution_is_refused_with_one_that_fits() {
+        let big = settings(16384, 16384, ImageMode::Mesh);
+        assert_eq!(image_bytes(&big, true), 16384 * 16384 * 192);
+        let fits = check_image_memory(&big, true, Some(8 << 30))
+            .unwrap_err()
+            .fits;
+        let fitted = settings(fits.0, fits.1, ImageMode::Mesh);
+        assert!(image_bytes(&fitted, true) as f64 <= 0.8 * (8u64 << 30) as f64);
+        assert!(fits.0 > 5500, "{fits:?}: not the largest that fits");
+        let message = check_image_memory(&big, true, Some(8 << 30))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.contains("16384x16384")
+                && message.contains("48.0 GiB")
+                && message.contains("8.0 GiB available")
+                && message.contains(&format!("{}x{}", fits.0, fits.1)),
+            "{message}"
+        );
+        assert!(check_image_memory(&fitted, true, Some(8 << 30)).is_ok());
+        assert!(check_image_memory(&big, true, None).is_ok());
+    }
+
+    #[test]
+    fn pixel_images_count_their_sub_samples_unless_gathered_over_footprints() {
+        let mut s = settings(100, 50, ImageMode::Pixel);
+        s.pixel_samples = 4;
+        assert_eq!(image_bytes(&s, true), 5000 * PIXEL_BYTES_PER_PIXEL);
+        assert_eq!(image_bytes(&s, false), 4 * 5000 * PIXEL_BYTES_PER_PIXEL);
+    }
+
+    #[test]
+    fn available_memory_is_read_on_linux() {
+        if cfg!(target_os = "linux") {
+            let m = available_memory().unwrap();
+            assert!(m > 1 << 20, "{m}");
+        }
+    }
+}

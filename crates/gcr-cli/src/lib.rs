@@ -17,6 +17,25 @@ pub const EXIT_ERROR: i32 = 1;
 /// Exit code of a command line that does not parse (clap's).
 pub const EXIT_USAGE: i32 = 2;
 
+/// Exit code of a run stopped by SIGINT, SIGTERM or SIGHUP (128 + SIGINT, as shells report
+/// Ctrl-C).
+pub const EXIT_INTERRUPTED: i32 = 130;
+
+/// Makes SIGINT (Ctrl-C), SIGTERM and SIGHUP stop the program cleanly: the temporary files of
+/// outputs not yet committed are removed (a commit in progress finishes first), a line says so,
+/// and the exit code is [`EXIT_INTERRUPTED`]. Without it they stayed behind as hidden
+/// `.NAME.gcr-PID-N.tmp` files. Called by `main` (not by [`run`], which tests call in-process).
+pub fn stop_cleanly_on_signals() {
+    let installed = ctrlc::set_handler(|| {
+        gcr::output::remove_temporary_files();
+        eprintln!("\ninterrupted: temporary files removed, no target half written");
+        std::process::exit(EXIT_INTERRUPTED);
+    });
+    if let Err(e) = installed {
+        eprintln!("warning: signals will not clean up temporary files: {e}");
+    }
+}
+
 /// Runs `gcr` with `args` (the first is the program name, as in `std::env::args_os`).
 /// A command line that does not parse (and `--help`, `--version`) is returned as a
 /// [`clap::Error`] inside the error; [`report`] prints it.

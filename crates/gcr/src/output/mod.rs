@@ -33,7 +33,7 @@ pub use mesh::{UNIFORM_MESH_TRIANGLES, output_mesh, vertex_gather_point};
 pub use pixel::{PixelImage, render_pixels};
 pub use probes::{ProbePoints, ProbeQuantity, ProbeSettings, gather_probes, place_probes};
 pub use raster::{Image, PinholeCamera, RadianceImage, render_image};
-pub use staged::{StagedFiles, check_target};
+pub use staged::{StagedFiles, check_target, remove_temporary_files};
 pub use tonemap::Exposure;
 pub use write::{OutputPaths, OutputPlan, gather_warnings, write_outputs};
 

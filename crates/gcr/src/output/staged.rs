@@ -5,15 +5,74 @@
 //!
 //! Targets that exist and are not regular files (`/dev/stdout`, a FIFO) cannot be replaced by a
 //! rename; they are written directly at commit time, before the renames.
+//!
+//! Interrupted runs leave nothing behind: every temporary file of the process is registered
+//! until it is renamed or removed, and [`remove_temporary_files`] (the `gcr` program calls it on
+//! SIGINT, SIGTERM and SIGHUP) removes them all; a commit in progress finishes first, so targets
+//! are never half replaced. A run killed outright (SIGKILL, a power cut) cannot clean up: the
+//! next run that writes the same target removes the temporary files of processes that no longer
+//! exist ([`check_target`]).
 
 use super::OutputError;
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Distinguishes temporary files of one process (with the process id in the name).
 static NEXT_TEMP: AtomicU64 = AtomicU64::new(0);
+
+/// The temporary files of this process not yet renamed onto their targets or removed.
+static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// The registry of live temporary files (a panic while holding it cannot leave it inconsistent:
+/// it is only pushed to and removed from).
+fn live() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    LIVE.lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// Removes `temp` and forgets it.
+fn remove_temp(temp: &Path) {
+    let mut live = live();
+    let _ = std::fs::remove_file(temp);
+    live.retain(|p| p != temp);
+}
+
+/// Removes every temporary file of this process, waiting for a commit in progress to finish:
+/// for an interrupted run (module docs). Outputs staged afterwards are not affected.
+pub fn remove_temporary_files() {
+    for temp in live().drain(..) {
+        let _ = std::fs::remove_file(temp);
+    }
+}
+
+/// The temporary files beside `target` left by processes that no longer exist (killed outright):
+/// `.NAME.gcr-PID-N.tmp` for the target's NAME. Empty where processes cannot be listed (outside
+/// Linux's `/proc`).
+fn orphans(target: &Path) -> Vec<PathBuf> {
+    let (Some(name), true) = (target.file_name(), Path::new("/proc/self").exists()) else {
+        return Vec::new();
+    };
+    let prefix = format!(".{}.gcr-", name.to_string_lossy());
+    let Ok(entries) = std::fs::read_dir(parent_dir(target)) else {
+        return Vec::new();
+    };
+    entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            let file = p.file_name().map(|f| f.to_string_lossy().into_owned());
+            let pid = file.as_deref().and_then(|f| {
+                let rest = f.strip_prefix(&prefix)?.strip_suffix(".tmp")?;
+                let (pid, n) = rest.split_once('-')?;
+                n.parse::<u64>().ok()?;
+                pid.parse::<u32>().ok()
+            });
+            pid.is_some_and(|pid| !Path::new(&format!("/proc/{pid}")).exists())
+        })
+        .collect()
+}
 
 /// Whether `path` exists and is something other than a regular file or a directory (a device,
 /// a FIFO, a socket): written directly, never renamed onto.
@@ -37,8 +96,12 @@ fn create_temp(target: &Path) -> std::io::Result<(PathBuf, File)> {
     loop {
         let n = NEXT_TEMP.fetch_add(1, Ordering::Relaxed);
         let temp = parent_dir(target).join(format!(".{name}.gcr-{}-{n}.tmp", std::process::id()));
+        let mut live = live();
         match OpenOptions::new().write(true).create_new(true).open(&temp) {
-            Ok(f) => return Ok((temp, f)),
+            Ok(f) => {
+                live.push(temp.clone());
+                return Ok((temp, f));
+            }
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
             Err(e) => return Err(e),
         }
@@ -49,7 +112,8 @@ fn create_temp(target: &Path) -> std::io::Result<(PathBuf, File)> {
 /// regular file with the `extension` (case-insensitive, when given; `png|exr` accepts either) in
 /// an existing, writable
 /// directory, or an existing special file (then the extension is not checked). Writability is
-/// tested by creating and removing a temporary file beside the target.
+/// tested by creating and removing a temporary file beside the target; temporary files of the
+/// same target left by processes that no longer exist are removed.
 pub fn check_target(
     target: &Path,
     what: &'static str,
@@ -93,7 +157,10 @@ pub fn check_target(
         source,
     })?;
     drop(file);
-    let _ = std::fs::remove_file(temp);
+    remove_temp(&temp);
+    for orphan in orphans(target) {
+        let _ = std::fs::remove_file(orphan);
+    }
     Ok(())
 }
 
@@ -171,10 +238,14 @@ impl StagedFiles {
         }
         let files = std::mem::take(&mut self.files);
         let mut rest = files.into_iter();
+        // the registry held through the renames: an interrupt waits for them (module docs)
+        let mut live = live();
         while let Some(f) = rest.next() {
             if let Staged::Temp { temp, target } = f {
+                live.retain(|p| *p != temp);
                 if let Err(source) = std::fs::rename(&temp, &target) {
                     let _ = std::fs::remove_file(&temp);
+                    drop(live);
                     self.files = rest.collect();
                     return Err(OutputError::Write {
                         path: target,
@@ -191,7 +262,7 @@ impl Drop for StagedFiles {
     fn drop(&mut self) {
         for f in &self.files {
             if let Staged::Temp { temp, .. } = f {
-                let _ = std::fs::remove_file(temp);
+                remove_temp(temp);
             }
         }
     }

@@ -41,6 +41,20 @@ pub enum Command {
     /// The pointwise path-traced reference (`baselines`) at probe points: B per probe with its
     /// standard error on stderr.
     Reference(Box<ReferenceArgs>),
+    /// Join the partial probe outputs of `gcr solve --shard I/N` into the single run's probe
+    /// output (byte for byte): every shard once, all of one run.
+    Merge(MergeArgs),
+}
+
+/// `gcr merge`.
+#[derive(Args)]
+pub struct MergeArgs {
+    /// The partial probe outputs, one per shard, in any order.
+    #[arg(required = true)]
+    pub parts: Vec<PathBuf>,
+    /// Where to write the merged probe output.
+    #[arg(long)]
+    pub probe_out: PathBuf,
 }
 
 /// `gcr solve`.
@@ -236,6 +250,23 @@ pub struct SolveArgs {
     /// Where to write the probes' values (`r g b` per line, in the probe file's order).
     #[arg(help_heading = "Probes and work planes", long, requires = "probes")]
     pub probe_out: Option<PathBuf>,
+    /// Estimate only shard INDEX of COUNT of the probes (0 <= INDEX < COUNT; e.g. a Slurm array
+    /// or Kubernetes indexed job's index) and write them with their indices to --probe-out;
+    /// `gcr merge` joins the shards into the single run's probe output, byte for byte
+    /// (docs/guide/probes.md, "Sharded runs").
+    #[arg(
+        help_heading = "Probes and work planes",
+        long,
+        value_name = "INDEX/COUNT",
+        requires = "probes"
+    )]
+    pub shard: Option<gcr::Shard>,
+    /// The paths gather runs its rounds in blocks of at least this many points, each to the
+    /// target on its own (a point's value then depends only on its block); blocks are what
+    /// --shard splits, so a sharded run needs them, the same in every shard and in any single
+    /// run compared with it [default: one block, every point to the target together].
+    #[arg(help_heading = "Probes and work planes", long, value_name = "N", value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
+    pub block_points: Option<usize>,
     /// What the probes get: `radiosity` (B at surface points: each probe snaps onto the nearest
     /// face its normal faces, within --probe-tolerance) or `irradiance` (E = ∫ L cos dω for the
     /// hemisphere about the probe's normal, at the point as given: on a surface or in the air,
@@ -371,6 +402,8 @@ impl SolveArgs {
             gather_rays: self.gather_rays,
             corrections: self.corrections,
             share_paths: self.share_paths as usize,
+            block_points: self.block_points.unwrap_or(usize::MAX),
+            shard: self.shard,
             guiding: self.guiding.parse().expect("clap checked the value"),
             keep_base: self.keep_base,
             keep_networks: self.keep_networks,

@@ -1,8 +1,9 @@
 //! The `gcr` command-line program as a library: [`run`] parses the arguments and dispatches to one
-//! function per subcommand ([`scenes`], [`solve`], [`reference`]). `main.rs` only calls it, and
+//! function per subcommand ([`scenes`], [`solve`], [`reference`], [`merge`]). `main.rs` only calls it, and
 //! tests can run the program in-process.
 
 pub mod args;
+pub mod merge;
 pub mod progress;
 pub mod reference;
 pub mod scenes;
@@ -45,6 +46,7 @@ pub fn run(args: impl IntoIterator<Item = impl Into<OsString> + Clone>) -> anyho
         Command::Scenes => scenes::run(),
         Command::Solve(a) => solve::run(&a),
         Command::Reference(a) => reference::run(&a),
+        Command::Merge(a) => merge::run(&a),
     }
 }
 

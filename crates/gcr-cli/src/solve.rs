@@ -47,6 +47,7 @@ fn solve_and_write(
     let plan = OutputPlan::with_options(domain, outputs.0, outputs.1, outputs.2)
         .and_then(|plan| plan.with_lightmap(args.lightmap_settings()))
         .and_then(|plan| plan.check_config(config).map(|()| plan))
+        .and_then(|plan| plan.check_shard(domain, config).map(|()| plan))
         .with_context(|| format!("checking the outputs for `{}`", args.scene))?;
     let mut progress = ProgressLine::new(args.quiet);
     // ⟨Train the networks only when something reads them⟩

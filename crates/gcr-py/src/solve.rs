@@ -35,7 +35,7 @@ pub(crate) struct Solved {
 /// both). ``seed`` seeds every random choice (the same seed gives the same numbers as the
 /// program). The research options (``cells``, ``shading_cells``, ``time_budget``, ``gather``,
 /// ``output_fit``, ``network_target``, ``gather_rays``, ``corrections``, ``share_paths``,
-/// ``guiding`` (``"auto"``, ``"on"`` or ``"off"``), ``keep_base``, ``keep_networks``, ``kernel_facing``, ``cluster_min_elements``,
+/// ``guiding`` (``"auto"``, ``"on"`` or ``"off"``), ``block_points`` (``--block-points``), ``keep_base``, ``keep_networks``, ``kernel_facing``, ``cluster_min_elements``,
 /// ``cluster_theta``) are the program's; ``None`` is its default. The networks are trained
 /// only when the gather reads them or ``keep_networks`` is set (the default gather reads none).
 ///
@@ -48,7 +48,8 @@ pub(crate) struct Solved {
 #[pyo3(signature = (
     scene, *, quality=None, target_error=None, seed=None, cells=None, shading_cells=None,
     time_budget=None, gather=None, output_fit=None, network_target=None, gather_rays=None,
-    corrections=None, share_paths=None, guiding=None, keep_base=false, keep_networks=false,
+    corrections=None, share_paths=None, guiding=None, block_points=None, keep_base=false,
+    keep_networks=false,
     kernel_facing=false, cluster_min_elements=None, cluster_theta=None, progress=None
 ))]
 #[allow(clippy::too_many_arguments)]
@@ -68,6 +69,7 @@ pub(crate) fn solve<'py>(
     corrections: Option<usize>,
     share_paths: Option<usize>,
     guiding: Option<&str>,
+    block_points: Option<usize>,
     keep_base: bool,
     keep_networks: bool,
     kernel_facing: bool,
@@ -95,6 +97,8 @@ pub(crate) fn solve<'py>(
         corrections,
         share_paths: share_paths.unwrap_or(defaults.share_paths),
         guiding: guiding.map_or(Ok(defaults.guiding), choice)?,
+        block_points: block_points.unwrap_or(defaults.block_points),
+        shard: None,
         keep_base,
         keep_networks,
         kernel_facing,
@@ -103,6 +107,9 @@ pub(crate) fn solve<'py>(
             theta: cluster_theta.unwrap_or(defaults.surface_clusters.theta),
         },
     };
+    if options.block_points == 0 {
+        return Err(value_error("block_points 0: at least 1"));
+    }
     if !(1..=64).contains(&options.share_paths) {
         return Err(value_error(format!(
             "share_paths {} is not in 1..=64",

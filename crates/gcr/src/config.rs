@@ -121,6 +121,44 @@ impl std::str::FromStr for Guiding {
     }
 }
 
+/// One of `count` shards of a run's output points (`gcr solve --shard index/count`, 0 ≤ index <
+/// count): the points of the blocks [`PathSettings::block_points`] assigns to it
+/// ([`crate::shard_points`]). Each shard's values are bit-identical to the same points' in a
+/// single run; `gcr merge` joins the shards' partial outputs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// This shard, from 0.
+    pub index: usize,
+    /// How many shards the points are split into.
+    pub count: usize,
+}
+
+impl std::str::FromStr for Shard {
+    type Err = ConfigError;
+    fn from_str(s: &str) -> Result<Self, ConfigError> {
+        let bad = || {
+            ConfigError::Invalid(format!(
+                "shard `{s}`: expected INDEX/COUNT with 0 <= INDEX < COUNT, e.g. 0/4"
+            ))
+        };
+        let (i, n) = s.split_once('/').ok_or_else(bad)?;
+        let (index, count) = (
+            i.trim().parse().map_err(|_| bad())?,
+            n.trim().parse().map_err(|_| bad())?,
+        );
+        if index >= count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+impl std::fmt::Display for Shard {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
 /// The paths gather's first round with a target error, in rays per point (each of shadow and
 /// cosine rays): enough points for a first estimate of the error, few enough that an easy target
 /// is not overshot.
@@ -517,6 +555,14 @@ impl SolveConfig {
         {
             return bad("the paths gather needs at least 1 ray per point".into());
         }
+        if self.paths.block_points == 0 {
+            return bad("block points 0 (expected at least 1)".into());
+        }
+        if let Some(shard) = self.paths.shard {
+            if shard.index >= shard.count {
+                return bad(format!("shard {shard}: the index must be below the count"));
+            }
+        }
         if self.gather == GatherMode::Rays && self.gather_samples.indirect == 0 {
             // Without cosine rays there is no indirect light, and no direct light either when
             // there are no shadow rays: B would silently be E (or E + direct).
@@ -632,6 +678,15 @@ pub struct PathSettings {
     /// learned from its earlier rounds (`--guiding`; `estimator/guide.rs`), a defensive mixture
     /// with the cosine density.
     pub guiding: Guiding,
+    /// The points run their rounds in blocks (`--block-points`): whole groups in the grouping's
+    /// order, a block closed once it holds at least this many points, each block to the target
+    /// on its own. A point's value depends only on its block (formed from the whole point set),
+    /// which makes shards bit-identical to a single run (`estimator/blocks.rs`). Default
+    /// `usize::MAX`: one block, the whole set to the target together.
+    pub block_points: usize,
+    /// Only the points of this shard are estimated (`--shard`); the others are left at
+    /// `Gathered::default()`.
+    pub shard: Option<Shard>,
 }
 
 impl Default for PathSettings {
@@ -643,6 +698,8 @@ impl Default for PathSettings {
             max_rays: 1 << 16,
             neighbours: 16,
             guiding: Guiding::Auto,
+            block_points: usize::MAX,
+            shard: None,
         }
     }
 }

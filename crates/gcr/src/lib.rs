@@ -59,15 +59,15 @@ mod weld;
 
 pub use config::{
     BaseDomain, Breaking, ConfigError, GUIDING_FROM, GatherMode, GatherSamples, Guiding,
-    NetworkTarget, OutputFit, PILOT_RAYS, PathSettings, Quality, SolveConfig, StrengthFrom,
+    NetworkTarget, OutputFit, PILOT_RAYS, PathSettings, Quality, Shard, SolveConfig, StrengthFrom,
     SurfaceClusters, Transfer,
 };
 pub use domain::{Domain, Ray};
 pub use element::{BANDS, Bands};
 pub use emitters::Emitters;
 pub use estimator::{
-    GatherError, GatherStats, irradiance_at_points, point_seed, radiosity_at_points,
-    relative_std_error,
+    GatherError, GatherStats, ShardError, irradiance_at_points, point_seed, radiosity_at_points,
+    relative_std_error, shard_points,
 };
 pub use gather::Gathered;
 pub use lightmap::{

@@ -43,6 +43,10 @@ pub struct SolveOptions {
     pub share_paths: usize,
     /// `--guiding`: guided bounces ([`PathSettings::guiding`]).
     pub guiding: crate::Guiding,
+    /// `--block-points` ([`PathSettings::block_points`]).
+    pub block_points: usize,
+    /// `--shard` ([`PathSettings::shard`]).
+    pub shard: Option<crate::Shard>,
     /// `--keep-base`: train the shading network and its base even when nothing reads them.
     pub keep_base: bool,
     /// `--keep-networks`: train the networks even when nothing reads them.
@@ -70,6 +74,8 @@ impl Default for SolveOptions {
             corrections: None,
             share_paths: PathSettings::default().neighbours,
             guiding: PathSettings::default().guiding,
+            block_points: PathSettings::default().block_points,
+            shard: None,
             keep_base: false,
             keep_networks: false,
             kernel_facing: false,
@@ -114,6 +120,8 @@ impl SolveOptions {
                 target_error,
                 neighbours: self.share_paths,
                 guiding: self.guiding,
+                block_points: self.block_points,
+                shard: self.shard,
                 ..preset.paths
             },
             skip_unused_base: !self.keep_base,

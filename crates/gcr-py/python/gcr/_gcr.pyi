@@ -96,6 +96,7 @@ def solve(
     corrections: int | None = None,
     share_paths: int | None = None,
     guiding: str | None = None,
+    block_points: int | None = None,
     keep_base: bool = False,
     keep_networks: bool = False,
     kernel_facing: bool = False,

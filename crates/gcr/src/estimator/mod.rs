@@ -9,6 +9,7 @@
 //! | one point's estimate | `paths.rs` (`PathGather`) | next-event estimation through the lights ([`scene_sampler::lights`]) and cosine rays by MIS, paths continued with Russian roulette, Owen-scrambled Sobol points in two replicates (the standard error) |
 //! | neighbours share paths | `neighbours.rs` | groups of nearby, alike-facing points; every member weighs every member's rays by the multi-sample balance heuristic (unbiased) |
 //! | guided first bounces | `guide.rs` (`--guiding`) | each group's cosine rays warped by a density learned from its earlier rounds, mixed with the cosine density (defensive); off by default |
+//! | blocks | `blocks.rs` ([`shard_points`]) | the groups cut into blocks of at least `--block-points` points, each running its rounds on its own: a point's value depends only on its block, so shards (`--shard`) match a single run |
 //! | rounds to the target | `rounds.rs` (`rounds_to_target`) | a pilot round, then rounds up to the next power of two of Sobol points that covers the missing rays, until the 90 % bound of the estimated relative error ([`relative_std_error`]) meets the target or the ray cap |
 //! | pixels | `pixel_rounds.rs` | a pixel image's rays allocated by each pixel's relative σ (Neyman), stopping on the per-pixel relative error |
 //!
@@ -16,6 +17,7 @@
 //! kernel, rays: they read the networks and are not corrected) are in [`crate::gather`] and are
 //! reached through the same front door.
 
+mod blocks;
 pub(crate) mod guide;
 pub(crate) mod neighbours;
 pub(crate) mod paths;
@@ -23,5 +25,6 @@ pub(crate) mod pixel_rounds;
 mod points;
 pub(crate) mod rounds;
 
+pub use blocks::{ShardError, shard_points};
 pub use points::{GatherError, irradiance_at_points, point_seed, radiosity_at_points};
 pub use rounds::{GatherStats, relative_std_error};

@@ -53,9 +53,14 @@ pub fn radiosity_at_points(
             domain, &paths, points, &seeds, target, config,
         ));
     }
+    let mine = super::blocks::in_shard(domain, points, false, config);
     Ok(points
         .par_iter()
-        .map_init(Vec::new, |scratch, &(y, n, face)| {
+        .enumerate()
+        .map_init(Vec::new, |scratch, (i, &(y, n, face))| {
+            if mine.as_ref().is_some_and(|m| !m[i]) {
+                return Gathered::default();
+            }
             let seed = point_seed(config.seed, y, frame);
             radiosity_at(
                 (domain, trained, emitters, &paths),
@@ -101,13 +106,20 @@ pub fn irradiance_at_points(
             let white = |_| ([1.0; BANDS], [0.0; BANDS]);
             grouped_rounds(domain, &paths, &receivers, white, &seeds, target, config)
         }
-        None => (0..points.len())
-            .into_par_iter()
-            .map(|i| {
-                (paths.estimate_irradiance(points[i], seeds[i], 0, config.gather_samples))
-                    .gathered()
-            })
-            .collect(),
+        None => {
+            let at: Vec<_> = (points.iter()).map(|&(y, n)| (y, n, 0)).collect();
+            let mine = super::blocks::in_shard(domain, &at, true, config);
+            (0..points.len())
+                .into_par_iter()
+                .map(|i| match mine.as_ref().is_some_and(|m| !m[i]) {
+                    true => Gathered::default(),
+                    false => {
+                        (paths.estimate_irradiance(points[i], seeds[i], 0, config.gather_samples))
+                            .gathered()
+                    }
+                })
+                .collect()
+        }
     })
 }
 

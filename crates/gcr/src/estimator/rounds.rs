@@ -38,8 +38,10 @@ pub(super) fn paths_to_target(
 }
 
 /// [`rounds_to_target`] over the groups of neighbouring `points` ([`super::neighbours::groups`],
-/// at most `PathSettings::neighbours` a group), each round of a group by
-/// [`PathGather::estimate_group`] with the members' (ρ, E) from `material`.
+/// at most `PathSettings::neighbours` a group), block by block ([`super::blocks`]: each block's
+/// rounds on their own; only the blocks of the configured shard, the other points left at
+/// `Gathered::default()`), each round of a group by [`PathGather::estimate_group`] with the
+/// members' (ρ, E) from `material`.
 pub(super) fn grouped_rounds(
     domain: &Domain,
     paths: &PathGather<impl Fn(DVec3, DVec3) -> Bands + Sync>,
@@ -50,6 +52,41 @@ pub(super) fn grouped_rounds(
     config: &SolveConfig,
 ) -> Vec<Gathered> {
     let groups = super::neighbours::groups(domain, points, config.paths.neighbours);
+    let blocks = super::blocks::blocks(&groups, config.paths.block_points);
+    let mut out = vec![Gathered::default(); points.len()];
+    for block in &blocks[super::blocks::of_shard(blocks.len(), config.paths.shard)] {
+        // the block's points in their original order (one block: exactly the points given)
+        let mut members: Vec<usize> = groups[block.clone()].iter().flatten().copied().collect();
+        members.sort_unstable();
+        let mut local = vec![usize::MAX; points.len()];
+        members.iter().enumerate().for_each(|(k, &i)| local[i] = k);
+        let block_groups: Vec<Vec<usize>> = (groups[block.clone()].iter())
+            .map(|g| g.iter().map(|&i| local[i]).collect())
+            .collect();
+        let block_points: Vec<_> = members.iter().map(|&i| points[i]).collect();
+        let block_seeds: Vec<u64> = members.iter().map(|&i| seeds[i]).collect();
+        let at = (&block_points[..], &block_groups[..], &block_seeds[..]);
+        let gathered = block_rounds(domain, paths, at, &material, target, config);
+        for (&i, g) in members.iter().zip(gathered) {
+            out[i] = g;
+        }
+    }
+    out
+}
+
+/// A block's points, its groups (indices into the points) and the points' seeds.
+type Block<'a> = (&'a [(DVec3, DVec3, u32)], &'a [Vec<usize>], &'a [u64]);
+
+/// The rounds of one block of [`grouped_rounds`]: `points` in `groups` (indices into `points`)
+/// with their `seeds`; the block's own guides.
+fn block_rounds(
+    domain: &Domain,
+    paths: &PathGather<impl Fn(DVec3, DVec3) -> Bands + Sync>,
+    (points, groups, seeds): Block<'_>,
+    material: &(impl Fn((DVec3, DVec3, u32)) -> (Bands, Bands) + Sync),
+    target: f64,
+    config: &SolveConfig,
+) -> Vec<Gathered> {
     // ⟨Guiding: each group's guide, learned from its earlier rounds (estimator/guide.rs)⟩
     let guides: Vec<Mutex<GroupGuide>> = if config.paths.guiding != Guiding::Off {
         groups.iter().map(|_| Mutex::default()).collect()
@@ -82,7 +119,7 @@ pub(super) fn grouped_rounds(
     }
     rounds_to_target(
         points.len(),
-        &groups,
+        groups,
         |group: &[usize], first, samples, guided| {
             let members: Vec<_> = group.iter().map(|&i| points[i]).collect();
             let materials: Vec<_> = members.iter().map(|&p| material(p)).collect();

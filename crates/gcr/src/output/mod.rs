@@ -20,6 +20,7 @@ mod pixel;
 mod ply;
 mod probes;
 mod raster;
+pub mod shards;
 mod staged;
 mod tonemap;
 mod write;
@@ -62,6 +63,15 @@ pub enum OutputError {
     /// An image that would take more memory than the machine has ([`memory`]).
     #[error(transparent)]
     ImageMemory(#[from] memory::ImageTooLarge),
+    /// A shard that cannot be formed ([`crate::shard_points`]).
+    #[error(transparent)]
+    Shard(#[from] crate::ShardError),
+    /// A shard asked for outputs other than probes, or for no probes.
+    #[error(
+        "--shard splits the probes (--probes, --probe-out) and nothing else: {0} needs the whole \
+         solution; run it without --shard"
+    )]
+    ShardOutput(&'static str),
     /// Probes without a probe output, or the other way round.
     #[error("probes and a probe output go together: give both or neither")]
     ProbesWithoutOutput,

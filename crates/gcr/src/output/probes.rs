@@ -206,7 +206,15 @@ pub fn gather_probes(
             irradiance_at_points(domain, trained, emitters, config, &at)?
         }
     };
-    let stats = GatherStats::of(&gathered);
+    // a shard's probes only ([`crate::shard_points`]); the others were not estimated
+    let stats = match config.paths.shard {
+        None => GatherStats::of(&gathered),
+        Some(_) => {
+            let irradiance = quantity != ProbeQuantity::Radiosity;
+            let mine = crate::shard_points(domain, probes, irradiance, config)?;
+            GatherStats::of(&mine.iter().map(|&i| gathered[i]).collect::<Vec<_>>())
+        }
+    };
     // daylight factors in percent of the outdoor illuminance (checked positive by `validate`)
     if let (ProbeQuantity::DaylightFactor, Some(e)) = (quantity, outdoor) {
         let scale = 100.0 / e;
@@ -229,7 +237,7 @@ pub fn probe_values(
 ) -> Result<(String, GatherStats), OutputError> {
     let grey = domain.bands() == 1 && domain.dim() == 2;
     let (gathered, stats) = gather_probes(domain, trained, emitters, config, probes)?;
-    let text = gathered
+    let lines: Vec<String> = gathered
         .iter()
         .map(|g| {
             let b = g.radiosity;
@@ -240,5 +248,15 @@ pub fn probe_values(
             }
         })
         .collect();
+    // ⟨A shard writes its probes' lines with their indices (`super::shards`)⟩
+    let text = match config.paths.shard {
+        None => lines.concat(),
+        Some(shard) => {
+            let irradiance = probes.1.quantity != ProbeQuantity::Radiosity;
+            let mine = crate::shard_points(domain, probes.0, irradiance, config)?;
+            let print = super::shards::fingerprint(domain, probes.0, config);
+            super::shards::partial_text(shard, print, &lines, &mine)
+        }
+    };
     Ok((text, stats))
 }

@@ -223,12 +223,39 @@ impl OutputPlan {
         if irradiance && !self.probes.is_empty() && config.gather != GatherMode::Paths {
             return Err(GatherError::IrradianceNeedsPaths(config.gather.name()).into());
         }
+        // ⟨A shard writes its probes and nothing else (`super::shards`)⟩
+        if config.paths.shard.is_some() {
+            let p = &self.paths;
+            let other = [
+                (
+                    p.image.is_some() || !self.images.views.is_empty(),
+                    "an image",
+                ),
+                (p.mesh.is_some() || p.ply.is_some(), "a mesh"),
+                (p.lightmap.is_some(), "a lightmap"),
+                (p.kernel_image.is_some(), "a kernel image"),
+                (self.paths.probe_out.is_none(), "a run without probes"),
+            ];
+            if let Some((_, what)) = other.iter().find(|(asked, _)| *asked) {
+                return Err(OutputError::ShardOutput(what));
+            }
+        }
         // ⟨An image the machine cannot hold is refused now, not after the solve⟩
         let images = self.paths.image.is_some() || !self.images.views.is_empty();
         if images && !self.flatland {
             let footprints = config.gather == GatherMode::Paths && !config.reads_networks();
             let available = super::memory::available_memory();
             super::memory::check_image_memory(&self.images, footprints, available)?;
+        }
+        Ok(())
+    }
+
+    /// Checks that the shard `config` asks for, if any, has probes: the probe set makes at least
+    /// as many blocks as there are shards ([`crate::shard_points`]). Call it before the solve.
+    pub fn check_shard(&self, domain: &Domain, config: &SolveConfig) -> Result<(), OutputError> {
+        if config.paths.shard.is_some() {
+            let irradiance = self.probe_settings.quantity != super::ProbeQuantity::Radiosity;
+            crate::shard_points(domain, &self.probes, irradiance, config)?;
         }
         Ok(())
     }

@@ -1,0 +1,216 @@
+//! Issue 34, sharded runs: `gcr solve --shard I/N` writes its probes' lines with their indices,
+//! and `gcr merge` joins the shards into exactly the bytes of the single run (radiosity and
+//! irradiance, with blocks small enough that every shard holds several); what cannot be a shard
+//! is refused before the solve, and what cannot be merged is refused naming the file.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+
+fn gcr(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_gcr"))
+        .args(args)
+        .current_dir(ROOT)
+        .output()
+        .expect("gcr runs")
+}
+
+fn ok(o: &Output) -> String {
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "failed: {err}");
+    err
+}
+
+fn fails(o: &Output, needle: &str) {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains(needle), "`{needle}` not in: {err}");
+}
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("gcr-cli-shards-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// `n` probes on the Cornell box's floor (facing up) and back wall (facing the room), spread
+/// by a fixed low-discrepancy walk.
+fn probes(d: &Path, n: usize) -> PathBuf {
+    let mut text = String::new();
+    for i in 0..n {
+        let (u, v) = (
+            (i as f64 * 0.618_034).fract(),
+            (i as f64 * 0.754_878).fract(),
+        );
+        let (x, z) = (0.02 + 0.5 * u, 0.02 + 0.5 * v);
+        text += &match i % 2 {
+            0 => format!("{x} 0 {z} 0 1 0\n"),
+            _ => format!("{x} {z} 0.5592 0 0 -1\n"),
+        };
+    }
+    let p = d.join("in.pts");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// Solves shards 0…count−1 (in reverse order) and merges them; the single run beside them; both
+/// texts. `extra`: more options for every run.
+fn sharded_and_single(d: &Path, probes: &Path, count: usize, extra: &[&str]) -> (String, String) {
+    let run = |out: &Path, shard: Option<String>| {
+        let mut args = vec![
+            "solve",
+            "cornell-box",
+            "--probes",
+            s(probes),
+            "--probe-out",
+            s(out),
+        ];
+        args.extend(extra);
+        let shard = shard.unwrap_or_default();
+        if !shard.is_empty() {
+            args.extend(["--shard", &shard]);
+        }
+        ok(&gcr(&args));
+    };
+    let mut parts = Vec::new();
+    for i in (0..count).rev() {
+        let part = d.join(format!("part{i}.txt"));
+        run(&part, Some(format!("{i}/{count}")));
+        let text = std::fs::read_to_string(&part).unwrap();
+        assert!(
+            text.starts_with(&format!("# gcr probe shard {i}/{count} of ")),
+            "{text}"
+        );
+        parts.push(part);
+    }
+    let merged = d.join("merged.txt");
+    let mut args = vec!["merge", "--probe-out", s(&merged)];
+    args.extend(parts.iter().map(|p| s(p)));
+    let err = ok(&gcr(&args));
+    assert!(err.contains(&format!("merged {count} shards")), "{err}");
+    let single = d.join("single.txt");
+    run(&single, None);
+    (
+        std::fs::read_to_string(merged).unwrap(),
+        std::fs::read_to_string(single).unwrap(),
+    )
+}
+
+#[test]
+fn merged_shards_are_the_single_runs_bytes() {
+    let d = dir("same");
+    let p = probes(&d, 600);
+    let blocks = ["--block-points", "64", "--quality", "draft"];
+    let (merged, single) = sharded_and_single(&d, &p, 3, &blocks);
+    assert_eq!(merged.lines().count(), 600);
+    assert!(
+        merged == single,
+        "the merged shards differ from the single run"
+    );
+    // irradiance probes group differently (every point a white receiver): the same holds
+    let mut extra = blocks.to_vec();
+    extra.extend(["--probe-quantity", "irradiance"]);
+    let (merged, single) = sharded_and_single(&d, &p, 4, &extra);
+    assert!(merged == single, "irradiance: the merged shards differ");
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
+fn what_cannot_be_a_shard_is_refused_before_the_solve() {
+    let d = dir("refused");
+    let p = probes(&d, 40);
+    let out = d.join("o.txt");
+    let base = [
+        "solve",
+        "cornell-box",
+        "--probes",
+        s(&p),
+        "--probe-out",
+        s(&out),
+    ];
+    let with = |more: &[&str]| {
+        let mut a = base.to_vec();
+        a.extend(more);
+        gcr(&a)
+    };
+    fails(
+        &with(&["--shard", "3/4", "--block-points", "64"]),
+        "the 40 points make only 1 block(s) of at least 64 points, fewer than the shards",
+    );
+    fails(
+        &with(&["--shard", "1/2"]),
+        "the 40 points make only 1 block(s) (no --block-points: one block), fewer than the shards",
+    );
+    let img = d.join("i.png");
+    fails(
+        &with(&["--shard", "0/2", "--image", s(&img)]),
+        "--shard splits the probes (--probes, --probe-out) and nothing else: an image",
+    );
+    let o = gcr(&["solve", "cornell-box", "--shard", "0/2"]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    for bad in ["2/2", "1", "a/b", "1/0"] {
+        let o = with(&["--shard", bad]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {err}");
+        assert!(err.contains("expected INDEX/COUNT"), "{bad}: {err}");
+    }
+    assert!(
+        std::fs::read_dir(&d).unwrap().count() == 1,
+        "a file was written"
+    );
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
+fn shards_of_different_runs_are_not_merged() {
+    let d = dir("mismatch");
+    let p = probes(&d, 200);
+    let part = |i: usize, seed: &str| {
+        let out = d.join(format!("p{i}-{seed}.txt"));
+        let shard = format!("{i}/2");
+        ok(&gcr(&[
+            "solve",
+            "cornell-box",
+            "--probes",
+            s(&p),
+            "--probe-out",
+            s(&out),
+            "--shard",
+            &shard,
+            "--block-points",
+            "32",
+            "--quality",
+            "draft",
+            "--seed",
+            seed,
+        ]));
+        out
+    };
+    let (a, b) = (part(0, "1"), part(1, "2"));
+    let merged = d.join("m.txt");
+    fails(
+        &gcr(&["merge", s(&a), s(&b), "--probe-out", s(&merged)]),
+        "not shards of one run",
+    );
+    fails(
+        &gcr(&["merge", s(&a), "--probe-out", s(&merged)]),
+        "shard 1/2 is missing",
+    );
+    fails(
+        &gcr(&["merge", s(&p), "--probe-out", s(&merged)]),
+        "not a partial probe output",
+    );
+    assert!(!merged.exists());
+    let _ = std::fs::remove_dir_all(d);
+}

@@ -1,0 +1,173 @@
+//! Blocks of output points: the unit that runs its rounds to the target on its own, and the unit
+//! that shards split.
+//!
+//! With a target error the rounds stop on an error estimated over the points they run together
+//! (`rounds.rs`), so a point's value depends on every point it runs with. Blocks bound that set:
+//! the groups of neighbours that share paths (`neighbours.rs`, formed from the whole point set
+//! in a Morton order) are cut, in that order, into blocks of at least
+//! [`PathSettings::block_points`](crate::PathSettings::block_points) points, and each block runs
+//! its own rounds, guides included. A point's value then depends only on the whole point set's
+//! grouping and on its block, never on which other blocks are computed: a shard (a contiguous
+//! run of blocks, [`crate::Shard`]) computes exactly the values a single run does.
+//!
+//! By default there is one block (`block_points = usize::MAX`): every point runs to the target
+//! together, as before blocks existed; a run of up to `block_points` points is one block too.
+
+use super::neighbours;
+use crate::config::{Shard, SolveConfig};
+use crate::domain::Domain;
+use glam::DVec3;
+use std::ops::Range;
+
+/// The blocks of `groups` (in their order): runs of whole groups, each closed once it holds at
+/// least `block_points` points; every group in exactly one block.
+pub(crate) fn blocks(groups: &[Vec<usize>], block_points: usize) -> Vec<Range<usize>> {
+    let mut out = Vec::new();
+    let (mut start, mut points) = (0, 0);
+    for (i, g) in groups.iter().enumerate() {
+        points += g.len();
+        if points >= block_points {
+            out.push(start..i + 1);
+            (start, points) = (i + 1, 0);
+        }
+    }
+    if start < groups.len() {
+        out.push(start..groups.len());
+    }
+    out
+}
+
+/// The blocks (a range of `blocks` indices) of `shard`: block b belongs to shard
+/// ⌊b·count/blocks⌋, so shards differ by at most one block. Every block when there is no shard.
+pub(crate) fn of_shard(blocks: usize, shard: Option<Shard>) -> Range<usize> {
+    match shard {
+        None => 0..blocks,
+        Some(Shard { index, count }) => {
+            let first = |i: usize| (i * blocks).div_ceil(count);
+            first(index)..first(index + 1)
+        }
+    }
+}
+
+/// The points (indices into `points`, ascending) of the shard `config` asks for
+/// ([`PathSettings::shard`](crate::PathSettings::shard); every point without one), as the paths
+/// gather forms its blocks: radiosity at surface points `(point, normal, face)`, or irradiance
+/// (`irradiance`: the faces are ignored, every point is a white receiver). Errors when the shard
+/// has no block: fewer blocks than shards.
+pub fn shard_points(
+    domain: &Domain,
+    points: &[(DVec3, DVec3, u32)],
+    irradiance: bool,
+    config: &SolveConfig,
+) -> Result<Vec<usize>, ShardError> {
+    let receivers: Vec<_>;
+    let points = match irradiance {
+        true => {
+            receivers = (points.iter())
+                .map(|&(y, n, _)| (y, n, scene_sampler::NO_FACE))
+                .collect();
+            &receivers
+        }
+        false => points,
+    };
+    let groups = neighbours::groups(domain, points, config.paths.neighbours);
+    let blocks = blocks(&groups, config.paths.block_points);
+    let mine = of_shard(blocks.len(), config.paths.shard);
+    if let (Some(shard), true) = (config.paths.shard, mine.is_empty()) {
+        return Err(ShardError::Empty {
+            shard,
+            blocks: blocks.len(),
+            points: points.len(),
+            block_points: config.paths.block_points,
+        });
+    }
+    let mut out: Vec<usize> = (blocks[mine].iter())
+        .flat_map(|b| groups[b.clone()].iter().flatten().copied())
+        .collect();
+    out.sort_unstable();
+    Ok(out)
+}
+
+/// Whether each of `points` is in the configured shard (`None`: no shard, every point), for the
+/// gathers without rounds, whose points are estimated one by one (radiosity `points`, or
+/// irradiance: `irradiance`).
+pub(crate) fn in_shard(
+    domain: &Domain,
+    points: &[(DVec3, DVec3, u32)],
+    irradiance: bool,
+    config: &SolveConfig,
+) -> Option<Vec<bool>> {
+    config.paths.shard?;
+    let mut mine = vec![false; points.len()];
+    // an empty shard computes nothing (the program refuses it before the solve: `shard_points`)
+    for i in shard_points(domain, points, irradiance, config).unwrap_or_default() {
+        mine[i] = true;
+    }
+    Some(mine)
+}
+
+/// A shard that cannot be formed.
+#[derive(Debug, thiserror::Error)]
+pub enum ShardError {
+    /// More shards than blocks.
+    #[error(
+        "shard {shard}: the {points} points make only {blocks} block(s){}, fewer than the \
+         shards; use fewer shards or a smaller --block-points (every shard, and any single run \
+         compared with them, must use the same)",
+        match *block_points { usize::MAX => " (no --block-points: one block)".to_string(),
+                              b => format!(" of at least {b} points") }
+    )]
+    Empty {
+        /// The shard asked for.
+        shard: Shard,
+        /// The blocks there are.
+        blocks: usize,
+        /// The points.
+        points: usize,
+        /// The block size.
+        block_points: usize,
+    },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blocks_hold_whole_groups_of_at_least_the_block_size() {
+        let groups: Vec<Vec<usize>> = [3, 1, 4, 1, 5, 9, 2, 6]
+            .iter()
+            .scan(0, |next, &len| {
+                let g = (*next..*next + len).collect();
+                *next += len;
+                Some(g)
+            })
+            .collect();
+        assert_eq!(blocks(&groups, 5), [0..3, 3..5, 5..6, 6..8]);
+        assert_eq!(blocks(&groups, 1000), vec![0..8]);
+        assert_eq!(
+            blocks(&groups, 1),
+            (0..8).map(|i| i..i + 1).collect::<Vec<_>>()
+        );
+        assert!(blocks(&[], 5).is_empty());
+    }
+
+    #[test]
+    fn shards_split_the_blocks_evenly_and_cover_each_once() {
+        for blocks in [1, 2, 7, 10, 64] {
+            for count in 1..=blocks {
+                let mut next = 0;
+                for index in 0..count {
+                    let r = of_shard(blocks, Some(Shard { index, count }));
+                    assert_eq!(r.start, next);
+                    assert!(!r.is_empty() && r.len() <= blocks.div_ceil(count));
+                    next = r.end;
+                }
+                assert_eq!(next, blocks);
+            }
+        }
+        assert_eq!(of_shard(5, None), 0..5);
+        // more shards than blocks: the last is empty (`shard_points` refuses it)
+        assert!(of_shard(2, Some(Shard { index: 2, count: 3 })).is_empty());
+    }
+}

@@ -17,8 +17,8 @@ if ! python3 -m venv --clear "$venv"; then
     python3 -m virtualenv --clear "$venv"
 fi
 # pandas and SCIPY_ARRAY_API let scikit-learn run its pandas and array-API estimator checks
-# instead of skipping them
-"$venv/bin/python" -m pip install -q maturin numpy pytest scikit-learn pandas
+# instead of skipping them; dask[distributed] for the sharded bake on a local cluster (test_shards.py)
+"$venv/bin/python" -m pip install -q maturin numpy pytest scikit-learn pandas "dask[distributed]"
 
 rm -rf "$target/wheels"
 # the dev profile (optimized, as the workspace sets it) reuses the dependencies `cargo test` has

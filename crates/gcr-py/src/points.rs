@@ -8,11 +8,13 @@
 use crate::errors::{gcr_error, value_error, warn_all};
 use crate::runner;
 use crate::solve::Solved;
-use gcr::Emitters;
 use gcr::output::{
     ProbePoints, ProbeQuantity, ProbeSettings, gather_probes, gather_warnings, place_probes,
 };
-use numpy::{AllowTypeChange, PyArray1, PyArrayDyn, PyArrayLikeDyn, PyArrayMethods};
+use gcr::{Emitters, Shard};
+use numpy::{
+    AllowTypeChange, PyArray1, PyArrayDyn, PyArrayLikeDyn, PyArrayMethods, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 use std::sync::Arc;
 
@@ -46,9 +48,53 @@ pub(crate) fn at_points<'py>(
     settings: ProbeSettings,
     progress: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Values<'py>> {
+    let (gathered, _) = gathered(py, solved, (&points, &normals), settings, None, progress)?;
+    let all: Vec<usize> = (0..gathered.len()).collect();
+    arrays(py, solved, &gathered, &all)
+}
+
+/// The values of shard `shard` of `points` with `normals`: the rows' indices (ascending), their
+/// values and standard errors, each exactly as [`at_points`] gives them for those rows when the
+/// solve has the same `block_points` (`gcr solve --shard`; `estimator/blocks.rs`).
+pub(crate) fn shard_at_points<'py>(
+    py: Python<'py>,
+    solved: &Arc<Solved>,
+    (points, normals): (
+        PyArrayLikeDyn<'py, f64, AllowTypeChange>,
+        PyArrayLikeDyn<'py, f64, AllowTypeChange>,
+    ),
+    settings: ProbeSettings,
+    shard: Shard,
+    progress: Option<&Bound<'py, PyAny>>,
+) -> PyResult<(Bound<'py, PyArray1<usize>>, Values<'py>)> {
+    let (gathered, mine) = gathered(
+        py,
+        solved,
+        (&points, &normals),
+        settings,
+        Some(shard),
+        progress,
+    )?;
+    let values = arrays(py, solved, &gathered, &mine)?;
+    Ok((PyArray1::from_vec(py, mine), values))
+}
+
+/// The gather at the rows of `points` and `normals`, as the probe output gets it (with `shard`:
+/// only its points, whose indices come second; else every index).
+fn gathered<'py>(
+    py: Python<'py>,
+    solved: &Arc<Solved>,
+    (points, normals): (
+        &PyArrayLikeDyn<'py, f64, AllowTypeChange>,
+        &PyArrayLikeDyn<'py, f64, AllowTypeChange>,
+    ),
+    settings: ProbeSettings,
+    shard: Option<Shard>,
+    progress: Option<&Bound<'py, PyAny>>,
+) -> PyResult<(Vec<gcr::Gathered>, Vec<usize>)> {
     settings.validate().map_err(gcr_error)?;
     let dim = solved.scene.dim();
-    let rows = rows(&points, &normals, dim)?;
+    let rows = rows(points, normals, dim)?;
     let probes = match dim {
         3 => ProbePoints::ThreeD(
             scene_sampler::probes_from_rows(SOURCE, &fixed::<6>(&rows)).map_err(gcr_error)?,
@@ -57,32 +103,63 @@ pub(crate) fn at_points<'py>(
             scene_sampler::flat_probes_from_rows(SOURCE, &fixed::<4>(&rows)).map_err(gcr_error)?,
         ),
     };
-    let n = rows.len() / (2 * dim);
-    let (gathered, stats) = runner::run(py, progress, |monitor| {
+    let mut config = solved.config.clone();
+    config.paths.shard = shard;
+    let irradiance = settings.quantity != ProbeQuantity::Radiosity;
+    let (gathered, stats, mine) = runner::run(py, progress, |monitor| {
         monitor.observing(|| {
             solved.scene.with_domain(|domain| {
                 let placed = place_probes(domain, &probes, &settings, SOURCE)?;
                 if placed.is_empty() {
-                    return Ok((Vec::new(), Default::default()));
+                    return Ok((Vec::new(), Default::default(), Vec::new()));
                 }
+                let mine = match shard {
+                    Some(_) => gcr::shard_points(domain, &placed, irradiance, &config)?,
+                    None => (0..placed.len()).collect(),
+                };
                 let emitters = Emitters::new(domain);
                 let probes = (placed.as_slice(), &settings);
-                gather_probes(domain, &solved.trained, &emitters, &solved.config, probes)
+                let (g, stats) =
+                    gather_probes(domain, &solved.trained, &emitters, &config, probes)?;
+                Ok::<_, gcr::output::OutputError>((g, stats, mine))
             })
         })
     })?
     .map_err(gcr_error)?;
-    warn_all(py, &gather_warnings(&stats, &solved.config))?;
+    warn_all(py, &gather_warnings(&stats, &config))?;
+    Ok((gathered, mine))
+}
+
+/// The values and standard errors of the points `rows` of `gathered` as numpy arrays (one row
+/// per index, the scene's bands wide).
+fn arrays<'py>(
+    py: Python<'py>,
+    solved: &Solved,
+    gathered: &[gcr::Gathered],
+    rows: &[usize],
+) -> PyResult<Values<'py>> {
     let bands = columns(solved);
     let pick = |f: fn(&gcr::Gathered) -> [f64; 3]| -> Vec<f64> {
-        gathered
-            .iter()
-            .flat_map(|g| f(g)[..bands].to_vec())
+        (rows.iter())
+            .flat_map(|&i| f(&gathered[i])[..bands].to_vec())
             .collect()
     };
+    let n = rows.len();
     let values = PyArray1::from_vec(py, pick(|g| g.radiosity)).reshape(vec![n, bands])?;
     let errors = PyArray1::from_vec(py, pick(|g| g.std_error)).reshape(vec![n, bands])?;
     Ok((values, errors))
+}
+
+/// The numbers of `a` as an owned array. numpy arrays may sit at unaligned addresses (Dask and
+/// pickle hand them out of message buffers), where viewing them panics: those are copied by
+/// numpy first.
+fn aligned(a: &PyArrayLikeDyn<'_, f64, AllowTypeChange>) -> PyResult<numpy::ndarray::ArrayD<f64>> {
+    if a.is_aligned() {
+        return Ok(a.as_array().to_owned());
+    }
+    let copy = a.as_any().call_method0("copy")?;
+    let copy: numpy::PyReadonlyArrayDyn<'_, f64> = copy.extract()?;
+    Ok(copy.as_array().to_owned())
 }
 
 /// Flat numbers as rows of `K`.
@@ -104,7 +181,7 @@ fn rows(
     normals: &PyArrayLikeDyn<'_, f64, AllowTypeChange>,
     dim: usize,
 ) -> PyResult<Vec<f64>> {
-    let (p, n) = (points.as_array(), normals.as_array());
+    let (p, n) = (aligned(points)?, aligned(normals)?);
     for (what, shape) in [("points", p.shape()), ("normals", n.shape())] {
         if shape.len() != 2 || shape[1] != dim {
             return Err(value_error(format!(

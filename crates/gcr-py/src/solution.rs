@@ -12,6 +12,13 @@ use pyo3::prelude::*;
 use std::path::PathBuf;
 use std::sync::Arc;
 
+/// A shard's row indices, values and standard errors.
+type ShardValues<'py> = (
+    Bound<'py, numpy::PyArray1<usize>>,
+    Bound<'py, PyArrayDyn<f64>>,
+    Bound<'py, PyArrayDyn<f64>>,
+);
+
 /// N × dim points and normals, as the methods take them.
 type Points<'py> = PyArrayLikeDyn<'py, f64, AllowTypeChange>;
 
@@ -87,6 +94,48 @@ impl Solution {
             settings,
             progress.as_ref(),
         )
+    }
+
+    /// The values of one shard of ``points``: ``(indices, values, std_errors)``, the rows (from
+    /// 0, ascending) that shard ``shard = (index, count)`` holds and their values as
+    /// :meth:`radiosity` (``quantity="radiosity"``), :meth:`irradiance` or
+    /// :meth:`daylight_factor` give them, bit for bit, for the same points and a solve with the
+    /// same ``block_points`` (``gcr solve --shard``). Shards split the points' blocks
+    /// (``gcr.solve(..., block_points=N)``; without it all points are one block, one shard);
+    /// fewer blocks than shards raise :class:`gcr.GcrError`. ``gcr.distributed`` runs the shards
+    /// on a Dask cluster.
+    #[pyo3(signature = (points, normals, *, shard, quantity="radiosity", tolerance=None, progress=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn shard_values<'py>(
+        &self,
+        py: Python<'py>,
+        points: Points<'py>,
+        normals: Points<'py>,
+        shard: (usize, usize),
+        quantity: &str,
+        tolerance: Option<f64>,
+        progress: Option<Bound<'py, PyAny>>,
+    ) -> PyResult<ShardValues<'py>> {
+        let quantity: ProbeQuantity = quantity.parse().map_err(crate::errors::value_error)?;
+        if shard.0 >= shard.1 {
+            return Err(crate::errors::value_error(format!(
+                "shard {shard:?}: expected (index, count) with 0 <= index < count"
+            )));
+        }
+        let shard = gcr::Shard {
+            index: shard.0,
+            count: shard.1,
+        };
+        let settings = points::settings(&self.inner, quantity, tolerance);
+        let (indices, (values, errors)) = points::shard_at_points(
+            py,
+            &self.inner,
+            (points, normals),
+            settings,
+            shard,
+            progress.as_ref(),
+        )?;
+        Ok((indices, values, errors))
     }
 
     /// An image as numbers: linear radiance L = B/π per pixel, an H × W × 3 float32 array

@@ -117,6 +117,16 @@ class Solution:
     def irradiance(
         self, points: ArrayLike, normals: ArrayLike, *, progress: ProgressCallback | None = None
     ) -> Values: ...
+    def shard_values(
+        self,
+        points: ArrayLike,
+        normals: ArrayLike,
+        *,
+        shard: tuple[int, int],
+        quantity: Literal["radiosity", "irradiance", "daylight-factor"] = "radiosity",
+        tolerance: float | None = None,
+        progress: ProgressCallback | None = None,
+    ) -> tuple[npt.NDArray[np.uintp], npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
     def daylight_factor(
         self, points: ArrayLike, normals: ArrayLike, *, progress: ProgressCallback | None = None
     ) -> Values: ...

@@ -66,7 +66,8 @@ def shard_values(
         {"scene": str(scene), "load": load or {}, "solve": {**(solve or {}), "block_points": block_points}},
         sort_keys=True,
     )
-    at = client.scatter((points, normals), broadcast=True)
+    # unique keys: a later call with the same arrays must not meet this one's release
+    at = client.scatter((points, normals), broadcast=True, hash=False)
     futures = [
         client.submit(_shard, settings, at, (i, shards), quantity, tolerance, pure=False)
         for i in range(shards)

@@ -54,7 +54,9 @@ pub(super) fn grouped_rounds(
     let groups = super::neighbours::groups(domain, points, config.paths.neighbours);
     let blocks = super::blocks::blocks(&groups, config.paths.block_points);
     let mut out = vec![Gathered::default(); points.len()];
-    for block in &blocks[super::blocks::of_shard(blocks.len(), config.paths.shard)] {
+    for block in
+        (super::blocks::of_shard(blocks.len(), config.paths.shard).iter()).map(|&b| &blocks[b])
+    {
         // the block's points in their original order (one block: exactly the points given)
         let mut members: Vec<usize> = groups[block.clone()].iter().flatten().copied().collect();
         members.sort_unstable();

@@ -4,26 +4,12 @@
 //! what images take: the peak memory of a run (its metrics) grows with the pixels by at most
 //! the estimate, and by at least half of it (so the check refuses nothing it need not).
 
+mod common;
+
+use common::*;
+
 use gcr::output::memory::{MESH_BYTES_PER_PIXEL, PIXEL_BYTES_PER_PIXEL, available_memory};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
-
-fn gcr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gcr"))
-        .args(args)
-        .current_dir(ROOT)
-        .output()
-        .expect("gcr runs")
-}
-
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("gcr-cli-mem-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use std::path::Path;
 
 /// The peak memory (bytes) of `gcr solve cornell-box` writing `image` at `side × side` with
 /// `extra` options.
@@ -54,7 +40,7 @@ fn the_memory_estimates_bound_what_images_take() {
         eprintln!("skipped: the peak memory is read from /proc on Linux only");
         return;
     }
-    let d = dir("bound");
+    let d = dir("mem", "bound");
     let mesh = MESH_BYTES_PER_PIXEL as f64;
     for image in ["m.png", "m.exr"] {
         let got = per_pixel(&d, image, (256, 640), &[]);
@@ -83,7 +69,7 @@ fn an_image_larger_than_memory_is_refused_before_the_solve() {
             return;
         }
     }
-    let d = dir("refused");
+    let d = dir("mem", "refused");
     let img = d.join("big.png");
     let start = std::time::Instant::now();
     let o = gcr(&[

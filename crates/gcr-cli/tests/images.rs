@@ -2,25 +2,12 @@
 //! EXR images and the exposure, through `gcr solve`; bad camera values are errors before the
 //! solve.
 
+mod common;
+
+use common::*;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
-
-fn gcr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gcr"))
-        .args(args)
-        .current_dir(ROOT)
-        .output()
-        .expect("gcr runs")
-}
-
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("gcr-cli-img-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use std::process::Output;
 
 fn s(p: &Path) -> String {
     p.display().to_string()
@@ -65,7 +52,7 @@ fn lamp_scene(d: &Path) -> PathBuf {
 /// pixels read 2; the image has the asked-for size, non-square.
 #[test]
 fn an_exr_image_holds_linear_radiance() {
-    let d = dir("exr");
+    let d = dir("img", "exr");
     let scene = lamp_scene(&d);
     let exr = d.join("up.exr");
     let o = gcr(&[
@@ -123,7 +110,7 @@ fn read_exr(path: &Path) -> (usize, Vec<[f32; 3]>) {
 /// both estimators' noise), with the pixel gather's estimated error in the metrics.
 #[test]
 fn a_pixel_image_agrees_with_the_mesh_raster_and_needs_no_networks() {
-    let d = dir("pixel");
+    let d = dir("img", "pixel");
     let scene = lamp_scene(&d);
     let view = [
         "--resolution",
@@ -189,7 +176,7 @@ fn a_pixel_image_agrees_with_the_mesh_raster_and_needs_no_networks() {
 /// `--exposure` is used and recorded; without it the automatic value is recorded and printed.
 #[test]
 fn the_exposure_is_recorded_in_the_metrics_and_printed() {
-    let d = dir("exposure");
+    let d = dir("img", "exposure");
     let m = d.join("m.json");
     let base = ["solve", "cornell-box", "--cells", "20", "--metrics", &s(&m)];
     let png = s(&d.join("i.png"));
@@ -236,7 +223,7 @@ fn the_exposure_is_recorded_in_the_metrics_and_printed() {
 /// without a camera gets the automatic camera by default.
 #[test]
 fn a_closed_room_with_the_automatic_camera_is_not_black() {
-    let d = dir("closed");
+    let d = dir("img", "closed");
     for (scene, extra) in [("cornell-box", None), ("scenes/furnace.obj", None)]
         .into_iter()
         .chain([("furnace", Some("--auto-camera"))])
@@ -265,7 +252,7 @@ fn a_closed_room_with_the_automatic_camera_is_not_black() {
 /// An open scene file (the Cornell box OBJ, no front wall) is framed tightly from outside.
 #[test]
 fn an_open_room_is_framed_tightly() {
-    let d = dir("open");
+    let d = dir("img", "open");
     let (png, m) = (d.join("o.png"), d.join("m.json"));
     let o = gcr(&[
         "solve",
@@ -288,7 +275,7 @@ fn an_open_room_is_framed_tightly() {
 /// in the metrics; a view of the same solve is written beside it.
 #[test]
 fn a_camera_looking_away_warns_and_views_share_the_solve() {
-    let d = dir("away");
+    let d = dir("img", "away");
     let (png, m, view) = (d.join("away.png"), d.join("m.json"), d.join("view.exr"));
     let view_arg = format!("0.278,0.273,-0.8;0.278,0.273,0;0,1,0;39={}", s(&view));
     let o = gcr(&[
@@ -327,7 +314,7 @@ fn a_camera_looking_away_warns_and_views_share_the_solve() {
 /// what does not parse; never a panic.
 #[test]
 fn bad_camera_values_are_errors_before_the_solve() {
-    let d = dir("bad");
+    let d = dir("img", "bad");
     let png = s(&d.join("i.png"));
     let base = ["solve", "cornell-box", "--cells", "200", "--image", &png];
     let cases: [(&[&str], i32, &str); 12] = [
@@ -395,7 +382,7 @@ fn bad_camera_values_are_errors_before_the_solve() {
 /// metrics record it with source `scene`.
 #[test]
 fn a_gltf_camera_node_is_the_default_camera() {
-    let d = dir("gltf-camera");
+    let d = dir("img", "gltf-camera");
     let scene = scene_sampler::builtin("cornell-box")
         .unwrap()
         .into_3d()
@@ -462,7 +449,7 @@ fn a_gltf_camera_node_is_the_default_camera() {
 /// reaches. The image reports them as not lit and warns; the automatic camera goes inside.
 #[test]
 fn unlit_outer_walls_are_not_lit_and_the_automatic_camera_goes_inside() {
-    let d = dir("closed");
+    let d = dir("img", "closed");
     std::fs::write(
         d.join("room.mtl"),
         "newmtl lamp\nKd 0 0 0\nKe 5 5 5\nnewmtl wall\nKd 0.6 0.6 0.6\n",

@@ -5,27 +5,13 @@
 
 #![cfg(unix)]
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::*;
+
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
-
-const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
-
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("gcr-cli-int-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn entries(d: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(d)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
-}
 
 /// `gcr solve cornell-box` writing probes to `d/p.txt`, and (`image`) a per-pixel image whose
 /// gather runs long after the probes are staged.
@@ -68,7 +54,7 @@ fn signal(child: &Child, name: &str) {
 #[test]
 fn sigint_and_sigterm_remove_the_staged_files() {
     for name in ["INT", "TERM"] {
-        let d = dir(name);
+        let d = dir("int", name);
         let mut child = solve(&d, true).spawn().unwrap();
         wait_for_temp(&d, &mut child);
         signal(&child, name);
@@ -83,7 +69,7 @@ fn sigint_and_sigterm_remove_the_staged_files() {
 
 #[test]
 fn the_next_run_removes_what_a_killed_run_left() {
-    let d = dir("kill");
+    let d = dir("int", "kill");
     let mut child = solve(&d, true).spawn().unwrap();
     wait_for_temp(&d, &mut child);
     child.kill().unwrap();

@@ -2,39 +2,16 @@
 //! solve, outputs are all-or-nothing (temporary files beside the targets, renamed at the end), and
 //! every write error — the last buffered chunk's included — is reported, naming the file.
 
+mod common;
+
+use common::*;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// A cell budget whose solve takes long enough (over 0.1 s) to print the progress line: an
 /// error that comes with no progress line was found before the solve.
 const SOLVE_REPORTS: &str = "200";
-
-const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
-
-fn gcr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gcr"))
-        .args(args)
-        .current_dir(ROOT)
-        .output()
-        .expect("gcr runs")
-}
-
-/// A fresh, empty directory for one test.
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("gcr-cli-out-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn entries(d: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(d)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
-}
 
 fn s(p: &Path) -> String {
     p.display().to_string()
@@ -60,8 +37,8 @@ fn assert_fails(o: &Output, needle: &str, before_solve: bool) {
 /// and nothing is written.
 #[test]
 fn a_bad_probe_file_is_reported_before_the_solve_and_nothing_is_written() {
-    let d = dir("probes");
-    let inputs = dir("probes-in");
+    let d = dir("out", "probes");
+    let inputs = dir("out", "probes-in");
     let bad_line = inputs.join("bad.txt");
     std::fs::write(&bad_line, "0.5 0 0.5 0 1 0\n0.5 0 x 0 1 0\n").unwrap();
     let off_surface = inputs.join("off.txt");
@@ -90,7 +67,7 @@ fn a_bad_probe_file_is_reported_before_the_solve_and_nothing_is_written() {
 /// solve and leaves neither b.txt nor i.png.
 #[test]
 fn a_missing_output_directory_is_reported_before_the_solve_and_nothing_is_written() {
-    let d = dir("nodir");
+    let d = dir("out", "nodir");
     let o = gcr(&[
         "solve",
         "cornell-box",
@@ -113,7 +90,7 @@ fn a_missing_output_directory_is_reported_before_the_solve_and_nothing_is_writte
 /// file; so are the other formats' wrong extensions and two outputs on one file.
 #[test]
 fn wrong_extensions_and_shared_targets_are_errors_before_the_solve() {
-    let d = dir("ext");
+    let d = dir("out", "ext");
     let cases: [(&str, PathBuf, &str); 3] = [
         ("--image", d.join("out.bmp"), ".png"),
         ("--mesh", d.join("out.gltf"), ".glb"),
@@ -149,7 +126,7 @@ fn wrong_extensions_and_shared_targets_are_errors_before_the_solve() {
 /// (the mesh to a full device) names the file and leaves none of the others.
 #[test]
 fn a_failed_write_names_the_file_and_leaves_no_other_output() {
-    let d = dir("full");
+    let d = dir("out", "full");
     let o = gcr(&[
         "solve",
         "cornell-box",
@@ -175,7 +152,7 @@ fn a_failed_write_names_the_file_and_leaves_no_other_output() {
 /// limit falls inside it) is an error, not exit 0 with a truncated file.
 #[test]
 fn a_ply_write_error_in_the_last_buffered_chunk_is_reported() {
-    let d = dir("ply");
+    let d = dir("out", "ply");
     let args = ["solve", "cornell-box", "--cells", "20", "--quiet", "--ply"];
     let full = d.join("full.ply");
     let o = gcr(&[&args[..], &[&s(&full)]].concat());
@@ -204,7 +181,7 @@ fn a_ply_write_error_in_the_last_buffered_chunk_is_reported() {
 /// and replaces an existing target.
 #[test]
 fn a_successful_solve_writes_exactly_its_outputs() {
-    let d = dir("ok");
+    let d = dir("out", "ok");
     std::fs::write(d.join("m.json"), "old").unwrap();
     let o = gcr(&[
         "solve",
@@ -238,7 +215,7 @@ fn a_successful_solve_writes_exactly_its_outputs() {
 /// settings and a Flatland scene are refused before the solve, writing nothing.
 #[test]
 fn a_lightmap_bake_writes_the_glb_and_its_pages() {
-    let d = dir("lightmap");
+    let d = dir("out", "lightmap");
     let glb = d.join("room.glb");
     let metrics = d.join("m.json");
     let args = [
@@ -272,7 +249,7 @@ fn a_lightmap_bake_writes_the_glb_and_its_pages() {
     let exr = image::open(d.join("room-lightmap-0.exr")).expect("an EXR page");
     assert_eq!(exr.width(), 128);
 
-    let bad = dir("lightmap-bad");
+    let bad = dir("out", "lightmap-bad");
     let target = s(&bad.join("x.glb"));
     let o = gcr(&[
         "solve",

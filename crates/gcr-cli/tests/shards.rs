@@ -3,18 +3,12 @@
 //! irradiance, with blocks small enough that every shard holds several); what cannot be a shard
 //! is refused before the solve, and what cannot be merged is refused naming the file.
 
+mod common;
+
+use common::*;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
-
-fn gcr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gcr"))
-        .args(args)
-        .current_dir(ROOT)
-        .output()
-        .expect("gcr runs")
-}
+use std::process::Output;
 
 fn ok(o: &Output) -> String {
     let err = String::from_utf8_lossy(&o.stderr).into_owned();
@@ -26,13 +20,6 @@ fn fails(o: &Output, needle: &str) {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.contains(needle), "`{needle}` not in: {err}");
-}
-
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("gcr-cli-shards-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 fn s(p: &Path) -> &str {
@@ -104,7 +91,7 @@ fn sharded_and_single(d: &Path, probes: &Path, count: usize, extra: &[&str]) -> 
 
 #[test]
 fn merged_shards_are_the_single_runs_bytes() {
-    let d = dir("same");
+    let d = dir("shards", "same");
     let p = probes(&d, 600);
     let blocks = ["--block-points", "64", "--quality", "draft"];
     let (merged, single) = sharded_and_single(&d, &p, 3, &blocks);
@@ -123,7 +110,7 @@ fn merged_shards_are_the_single_runs_bytes() {
 
 #[test]
 fn what_cannot_be_a_shard_is_refused_before_the_solve() {
-    let d = dir("refused");
+    let d = dir("shards", "refused");
     let p = probes(&d, 40);
     let out = d.join("o.txt");
     let base = [
@@ -174,7 +161,7 @@ fn what_cannot_be_a_shard_is_refused_before_the_solve() {
 
 #[test]
 fn shards_of_different_runs_are_not_merged() {
-    let d = dir("mismatch");
+    let d = dir("shards", "mismatch");
     let p = probes(&d, 200);
     let part = |i: usize, seed: &str| {
         let out = d.join(format!("p{i}-{seed}.txt"));

@@ -9,32 +9,20 @@
 //! under a 3 GiB address-space limit, so a loader that allocates what a header claims aborts it.
 //! Deterministic (ChaCha8, fixed seeds).
 
+mod common;
+
+use common::{base64, count_panics, panics};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use scene_sampler::*;
 use serde_json::{Value, json};
-use std::cell::Cell;
 use std::path::{Path, PathBuf};
-
-thread_local! {
-    /// Panics on this thread since the hook was installed, caught or not.
-    static PANICS: Cell<usize> = const { Cell::new(0) };
-}
-
-/// Panics on this thread so far.
-fn panics() -> usize {
-    PANICS.with(Cell::get)
-}
 
 /// Installs the panic counter and the address-space limit, once for the binary.
 fn harness() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
-        let previous = std::panic::take_hook();
-        std::panic::set_hook(Box::new(move |info| {
-            PANICS.with(|p| p.set(p.get() + 1));
-            previous(info);
-        }));
+        count_panics();
         #[cfg(target_os = "linux")]
         {
             use rustix::process::{Resource, Rlimit, getrlimit, setrlimit};
@@ -69,24 +57,6 @@ fn jpeg(w: u32, h: u32) -> Vec<u8> {
     let mut out = std::io::Cursor::new(Vec::new());
     img.write_to(&mut out, image::ImageFormat::Jpeg).unwrap();
     out.into_inner()
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for c in bytes.chunks(3) {
-        let n = c
-            .iter()
-            .enumerate()
-            .fold(0u32, |n, (i, &b)| n | u32::from(b) << (16 - 8 * i));
-        for k in 0..4 {
-            out.push(match k <= c.len() {
-                true => A[(n >> (18 - 6 * k) & 63) as usize] as char,
-                false => '=',
-            });
-        }
-    }
-    out
 }
 
 fn data_uri(mime: &str, bytes: &[u8]) -> String {

@@ -6,29 +6,13 @@
 //! strides and sparse accessors still load, and a rotation that is not a unit quaternion is
 //! normalised with a warning.
 
+mod common;
+
+use common::{base64, count_panics, panics};
 use scene_sampler::*;
 use serde_json::{Value, json};
-use std::cell::Cell;
 use std::path::PathBuf;
-use std::sync::Once;
 use std::sync::atomic::{AtomicUsize, Ordering};
-
-thread_local! {
-    /// Panics on this thread since the hook was installed, caught or not.
-    static PANICS: Cell<usize> = const { Cell::new(0) };
-}
-
-/// Counts every panic on its thread (a loader's guard would hide one from the result).
-fn count_panics() {
-    static HOOK: Once = Once::new();
-    HOOK.call_once(|| {
-        let previous = std::panic::take_hook();
-        std::panic::set_hook(Box::new(move |info| {
-            PANICS.with(|p| p.set(p.get() + 1));
-            previous(info);
-        }));
-    });
-}
 
 /// A floor quad (two triangles, indexed) at y = 0 facing up and a lamp quad at y = 1 facing down,
 /// as little-endian bytes: floor positions (48), lamp positions (48), floor indices (12), lamp
@@ -83,24 +67,6 @@ fn document() -> Value {
     })
 }
 
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for c in bytes.chunks(3) {
-        let n = c
-            .iter()
-            .enumerate()
-            .fold(0u32, |n, (i, &b)| n | u32::from(b) << (16 - 8 * i));
-        for k in 0..4 {
-            out.push(match k <= c.len() {
-                true => A[(n >> (18 - 6 * k) & 63) as usize] as char,
-                false => '=',
-            });
-        }
-    }
-    out
-}
-
 /// Loads `doc` (written to its own temp file): the scene or the error message; asserts that
 /// nothing panicked on the way, not even inside a guard.
 fn load_doc(doc: &Value) -> std::result::Result<Scene, String> {
@@ -112,10 +78,10 @@ fn load_doc(doc: &Value) -> std::result::Result<Scene, String> {
         COUNT.fetch_add(1, Ordering::Relaxed)
     ));
     std::fs::write(&p, doc.to_string()).unwrap();
-    let before = PANICS.with(Cell::get);
+    let before = panics();
     let result = load_gltf(&p).map_err(|e| e.to_string());
     let _ = std::fs::remove_file(&p);
-    assert_eq!(PANICS.with(Cell::get), before, "a panic while loading");
+    assert_eq!(panics(), before, "a panic while loading");
     result
 }
 

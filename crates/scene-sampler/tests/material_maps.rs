@@ -4,6 +4,9 @@
 //! faces; BLEND is read as MASK with a warning; OPAQUE ignores alpha. glTF `emissiveTexture`: each
 //! face emits the texture's mean over its texture-coordinate triangle.
 
+mod common;
+
+use common::base64;
 use glam::DVec3;
 use scene_sampler::{SceneBvh, load};
 use std::path::PathBuf;
@@ -107,24 +110,6 @@ fn an_obj_grille_lets_rays_through_its_transparent_stripes() {
     std::fs::write(d.join("grille.mtl"), "newmtl floor\nd 1.5\n").unwrap();
     let e = load(d.join("grille.obj")).unwrap_err().to_string();
     assert!(e.contains("line 2") && e.contains("`d`"), "{e}");
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for c in bytes.chunks(3) {
-        let n = (u32::from(c[0]) << 16)
-            | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
-            | u32::from(*c.get(2).unwrap_or(&0));
-        for k in 0..4 {
-            if k <= c.len() {
-                out.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
 }
 
 /// The grille as glTF: a floor and a grille primitive whose material has `alpha_mode`, the

@@ -5,6 +5,9 @@
 //! Every test builds its hostile files in its own folder under the system's temp directory: the
 //! scene in `<root>/scene/`, the files it must not reach in `<root>/secret/`.
 
+mod common;
+
+use common::base64;
 use scene_sampler::*;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -238,24 +241,6 @@ fn png_bomb(w: u32, h: u32) -> Vec<u8> {
     chunk(b"IDAT", &zlib, &mut png);
     chunk(b"IEND", &[], &mut png);
     png
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for c in bytes.chunks(3) {
-        let n = (u32::from(c[0]) << 16)
-            | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
-            | u32::from(*c.get(2).unwrap_or(&0));
-        for k in 0..4 {
-            out.push(if k <= c.len() {
-                T[(n >> (18 - 6 * k) & 63) as usize] as char
-            } else {
-                '='
-            });
-        }
-    }
-    out
 }
 
 #[cfg(unix)]

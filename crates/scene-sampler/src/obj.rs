@@ -1,5 +1,5 @@
 //! The OBJ + MTL loader (tobj): materials (`Kd`, `Ke`, one-number greys), `map_Kd` textures,
-//! `d`/`map_d` cut-outs, each line of trouble named.
+//! `map_Ke` emissive textures, `d`/`map_d` cut-outs, each line of trouble named.
 //!
 //! Units (FORMATS.md): OBJ `Ke` is emitted **radiance** L_e, as a path tracer reads it; the scene
 //! stores emitted radiosity (exitance) `E = π·L_e`.
@@ -17,8 +17,8 @@ use std::path::Path;
 /// their syntax.
 const MTL_COLOURS: [&str; 5] = ["Ka", "Kd", "Ks", "Ke", "Tf"];
 
-/// Rewrites MTL text into the subset tobj parses without trouble: only `newmtl`, `Kd`, `Ke`, `map_Kd`, `d`
-/// and `map_d` lines are kept (maps with their file name alone: texture options are an error naming the
+/// Rewrites MTL text into the subset tobj parses without trouble: only `newmtl`, `Kd`, `Ke`, `map_Kd`,
+/// `map_Ke`, `d` and `map_d` lines are kept (maps with their file name alone: texture options are an error naming the
 /// line; `d` one number in [0, 1]; `Tr` is dropped: exporters disagree on its sense),
 /// and a colour with one number (`Kd 0.5`, grey in the MTL format) is written out as three. A colour
 /// keyword with no number, two numbers, or a word that is not a number is an error naming file and line
@@ -69,7 +69,7 @@ fn sanitize_mtl(source: &str, text: &str) -> Result<String> {
             if key == "Kd" || key == "Ke" {
                 out.push_str(&format!("{key} {:?} {:?} {:?}\n", rgb[0], rgb[1], rgb[2]));
             }
-        } else if key == "map_Kd" || key == "map_d" {
+        } else if key == "map_Kd" || key == "map_Ke" || key == "map_d" {
             // `map_Kd [options] file`: the options (scale, offset, …) are not supported; the file
             // is the last word.
             let args: Vec<&str> = words.collect();
@@ -151,6 +151,7 @@ pub(crate) fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let mut warnings = Vec::new();
     let mut budget = TextureBudget::new(options.max_texture_bytes);
     let (textures, texture_of) = obj_textures(&materials, &folder, &source, &mut budget)?;
+    let emissive = obj_emissive(&materials, &folder, &source, &mut budget)?;
     let (masks, alpha_of) = obj_alphas(&materials, &folder, &source, &mut budget, &mut warnings)?;
     // ⟨The faces of every model, then the scene⟩
     let looks = ObjMaterials {
@@ -158,12 +159,13 @@ pub(crate) fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
         materials: &materials,
         texture_of,
         alpha_of,
+        emissive_of: emissive.1,
     };
     let mut faces = ObjFaces::new(materials.len());
     for m in &models {
         faces.add_model(m, &looks, &mut warnings)?;
     }
-    faces.into_scene(path, &source, textures, masks, warnings)
+    faces.into_scene(path, &source, (textures, emissive.0), masks, warnings)
 }
 
 /// The models and materials tobj reads from the OBJ `text` (polygons triangulated), its
@@ -293,12 +295,34 @@ fn obj_textures(
     let mut texture_of: Vec<Option<u32>> = vec![None; materials.len()];
     for (i, mat) in materials.iter().enumerate() {
         if let Some(file) = &mat.diffuse_texture {
-            let tex = obj_texture(folder, file, &mat.name, source, budget)?;
+            let tex = obj_texture(folder, file, &mat.name, source, budget, "map_Kd")?;
             texture_of[i] = Some(textures.len() as u32);
             textures.push(tex);
         }
     }
     Ok((textures, texture_of))
+}
+
+/// The materials' `map_Ke` emissive textures (decoded as [`obj_texture`], within `budget`) and,
+/// per material, its emissive texture's index. Each face of such a material emits its `Ke` (1 1 1
+/// when the material gives only the map) times the texture's mean over the face's texture
+/// coordinates, constant over the face, as glTF emissive textures (`crate::gltf_emission`).
+fn obj_emissive(
+    materials: &[tobj::Material],
+    folder: &Folder,
+    source: &str,
+    budget: &mut TextureBudget,
+) -> Result<(Vec<Texture>, Vec<Option<u32>>)> {
+    let mut textures: Vec<Texture> = Vec::new();
+    let mut emissive_of: Vec<Option<u32>> = vec![None; materials.len()];
+    for (i, mat) in materials.iter().enumerate() {
+        if let Some(file) = mat.unknown_param.get("map_Ke") {
+            let tex = obj_texture(folder, file, &mat.name, source, budget, "map_Ke")?;
+            emissive_of[i] = Some(textures.len() as u32);
+            textures.push(tex);
+        }
+    }
+    Ok((textures, emissive_of))
 }
 
 /// An OBJ file's materials as its faces take them: per material its texture (index into the
@@ -309,6 +333,8 @@ struct ObjMaterials<'a> {
     materials: &'a [tobj::Material],
     texture_of: Vec<Option<u32>>,
     alpha_of: Vec<ObjAlpha>,
+    /// Per material: its `map_Ke` emissive texture (index into the emissive textures).
+    emissive_of: Vec<Option<u32>>,
 }
 
 /// A model's mesh as its faces read it, with the model's name and the file for messages.
@@ -390,6 +416,8 @@ struct ModelLook {
     e: Spectrum,
     texture: Option<u32>,
     alpha: ObjAlpha,
+    /// The material's emissive texture (index), when it has one.
+    emissive: Option<u32>,
 }
 
 /// The faces of an OBJ file as its models are read, and what the warnings report.
@@ -408,6 +436,8 @@ struct ObjFaces {
     missing_material: usize,
     /// Objects with a textured material but no `vt`.
     untextured: Vec<String>,
+    /// Faces (index into `faces`) with an emissive texture, and their mapping (factor: E).
+    emissive_faces: Vec<(usize, FaceTexture)>,
     /// Per object: its faces whose `vn` normals point against their winding.
     against_normals: Vec<(String, usize)>,
 }
@@ -423,6 +453,7 @@ impl ObjFaces {
             hidden: 0,
             missing_material: 0,
             untextured: Vec::new(),
+            emissive_faces: Vec::new(),
             against_normals: Vec::new(),
         }
     }
@@ -454,6 +485,8 @@ impl ObjFaces {
         };
         // ⟨The texture mapping of a textured material: vt per corner⟩
         let texture = (m.mesh.material_id).and_then(|i| looks.texture_of.get(i).copied().flatten());
+        let emissive =
+            (m.mesh.material_id).and_then(|i| looks.emissive_of.get(i).copied().flatten());
         // a `vt nan` would read texel 0 (ρ = 0) in silence
         if mesh.with_uv() && m.mesh.texcoords.iter().any(|t| !t.is_finite()) {
             return Err(SceneError::Parse {
@@ -464,7 +497,10 @@ impl ObjFaces {
                 ),
             });
         }
-        if texture.is_some() && !mesh.with_uv() && !self.untextured.contains(&m.name) {
+        if (texture.is_some() || emissive.is_some())
+            && !mesh.with_uv()
+            && !self.untextured.contains(&m.name)
+        {
             self.untextured.push(m.name.clone());
         }
         let look = ModelLook {
@@ -475,6 +511,7 @@ impl ObjFaces {
             alpha: (m.mesh.material_id)
                 .and_then(|i| looks.alpha_of.get(i).copied())
                 .unwrap_or(ObjAlpha::Opaque),
+            emissive,
         };
         let mut against = 0usize;
         for k in 0..m.mesh.indices.len() / 3 {
@@ -507,7 +544,12 @@ impl ObjFaces {
                 None => {
                     let mat = &materials[i];
                     let kd = Spectrum(mat.diffuse.unwrap_or([0.0; 3]));
-                    let e = Spectrum(mat.emissive.unwrap_or([0.0; 3]).map(|v| v * PI));
+                    // a `map_Ke` without `Ke` is the texture alone (Ke 1 1 1)
+                    let ke = match mat.unknown_param.contains_key("map_Ke") {
+                        true => mat.emissive.unwrap_or([1.0; 3]),
+                        false => mat.emissive.unwrap_or([0.0; 3]),
+                    };
+                    let e = Spectrum(ke.map(|v| v * PI));
                     let rho = check_file_material(looks.source, &mat.name, kd, e, warnings)?;
                     self.checked[i] = Some((rho, e));
                     (rho, e)
@@ -559,6 +601,16 @@ impl ObjFaces {
                 face.texture = Some(ft);
             }
         }
+        if let (Some(texture), true) = (look.emissive, with_uv) {
+            if let Some(uv) = mesh.corner_uvs(k) {
+                let ft = FaceTexture {
+                    texture,
+                    uv,
+                    factor: look.e,
+                };
+                self.emissive_faces.push((self.faces.len(), ft));
+            }
+        }
         self.faces.push(face);
         self.surface += 1;
         Ok(against)
@@ -572,12 +624,19 @@ impl ObjFaces {
         self,
         path: &Path,
         source: &str,
-        textures: Vec<Texture>,
+        (textures, emissive): (Vec<Texture>, Vec<Texture>),
         masks: Vec<crate::AlphaMask>,
         mut warnings: Vec<String>,
     ) -> Result<Scene> {
         let mut faces = self.faces;
         average_albedo(&mut faces, &textures);
+        // ⟨map_Ke: each face emits its texture's mean, constant over the face⟩
+        if !self.emissive_faces.is_empty() {
+            let mipmaps = crate::Mipmaps::new(&emissive);
+            for (i, t) in &self.emissive_faces {
+                faces[*i].emission = t.mean_rho(&mipmaps);
+            }
+        }
         if self.hidden > 0 {
             warnings.push(format!(
                 "{source}: dropped {} face(s) whose material's opacity `d` is below 0.5 (fully \
@@ -590,7 +649,8 @@ impl ObjFaces {
             .with_masks(masks)?;
         warnings.extend(self.untextured.into_iter().map(|o| {
             format!(
-                "{source}: object `{o}`: a textured material (map_Kd) but no `vt`: its Kd is used"
+                "{source}: object `{o}`: a textured material (map_Kd or map_Ke) but no `vt`: its \
+                 Kd and Ke are used"
             )
         }));
         warnings.extend(self.against_normals.into_iter().map(|(o, n)| {
@@ -658,19 +718,21 @@ fn obj_alphas(
     Ok((masks, alpha_of))
 }
 
-/// An OBJ material's `map_Kd` texture `file`, read within the scene's folder and decoded within
-/// `budget`; a file that cannot be read or decoded is an error naming the material.
+/// An OBJ material's colour texture `file` (its `key`: `map_Kd` or `map_Ke`), read within the
+/// scene's folder and decoded within `budget`; a file that cannot be read or decoded is an error
+/// naming the material.
 fn obj_texture(
     folder: &Folder,
     file: &str,
     material: &str,
     source: &str,
     budget: &mut TextureBudget,
+    key: &str,
 ) -> Result<Texture> {
-    let (full, bytes) = obj_map(folder, file, material, source, "map_Kd")?;
+    let (full, bytes) = obj_map(folder, file, material, source, key)?;
     let name = full.display().to_string();
     Texture::from_file_bytes(&name, &full, &bytes, [Wrap::Repeat; 2], budget)
-        .map_err(|e| obj_map_error(e, source, material, "map_Kd"))
+        .map_err(|e| obj_map_error(e, source, material, key))
 }
 
 /// An OBJ material's `map_d` alpha mask `file` ([`crate::cutout`]: its alpha channel, or its grey

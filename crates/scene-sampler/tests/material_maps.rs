@@ -251,6 +251,78 @@ fn an_emissive_texture_emits_its_mean_per_face() {
     );
 }
 
+/// OBJ `map_Ke` (#31): a lamp quad whose two triangles map onto the white and the black half of
+/// its emissive texture emits Ke·π on the first and nothing on the second (it was dropped in
+/// silence: both emitted Ke·π); without `Ke` the texture alone (Ke 1 1 1); without `vt` the
+/// uniform Ke, with a warning.
+#[test]
+fn an_obj_emissive_texture_emits_its_mean_per_face() {
+    let d = dir("map_ke");
+    // 8 × 1: white on the left (u < 0.5), black on the right; the triangles stay between
+    // texel centres of one colour, so that the bilinear lookups see only it
+    image::GrayImage::from_raw(8, 1, vec![255, 255, 255, 255, 0, 0, 0, 0])
+        .unwrap()
+        .save(d.join("ke.png"))
+        .unwrap();
+    // the lamp (y = 1, facing down): triangle 1 over u ∈ [0.1, 0.4], triangle 2 over [0.6, 0.9]
+    let obj = |lamp_vt: bool| {
+        let f = |a: usize, b: usize, c: usize| match lamp_vt {
+            true => format!("f {a}/{a} {b}/{b} {c}/{c}\n"),
+            false => format!("f {a} {b} {c}\n"),
+        };
+        let vt = match lamp_vt {
+            true => {
+                "vt 0 0\nvt 0 0\nvt 0 0\nvt 0 0\n\
+                     vt 0.1 0.5\nvt 0.1 0.5\nvt 0.4 0.5\nvt 0.4 0.5\n\
+                     vt 0.6 0.5\nvt 0.6 0.5\nvt 0.9 0.5\nvt 0.9 0.5\n"
+            }
+            false => "",
+        };
+        format!(
+            "mtllib l.mtl\nv 0 0 0\nv 2 0 0\nv 2 0 2\nv 0 0 2\n\
+             v 0 1 0\nv 0 1 2\nv 1 1 2\nv 1 1 0\nv 1 1 0\nv 1 1 2\nv 2 1 2\nv 2 1 0\n{vt}\
+             o floor\nusemtl floor\nf 1 4 3\nf 1 3 2\no lamp\nusemtl lamp\n{}{}",
+            f(5, 7, 6),
+            f(9, 11, 10)
+        )
+    };
+    let load_with = |mtl: &str, vt: bool| {
+        std::fs::write(d.join("l.mtl"), mtl).unwrap();
+        std::fs::write(d.join("l.obj"), obj(vt)).unwrap();
+        load(d.join("l.obj")).unwrap().into_3d().unwrap()
+    };
+    let lamp = |s: &scene_sampler::Scene| -> Vec<f64> {
+        (s.faces.iter())
+            .filter(|f| f.v[0].y == 1.0)
+            .map(|f| f.emission.0[0])
+            .collect()
+    };
+    let pi = std::f64::consts::PI;
+    let floor = "newmtl floor\nKd 0.5 0.5 0.5\n";
+    let s = load_with(
+        &format!("{floor}newmtl lamp\nKd 0 0 0\nKe 2 2 2\nmap_Ke ke.png\n"),
+        true,
+    );
+    assert_eq!(lamp(&s), [2.0 * pi, 0.0]);
+    let s = load_with(
+        &format!("{floor}newmtl lamp\nKd 0 0 0\nmap_Ke ke.png\n"),
+        true,
+    );
+    assert_eq!(lamp(&s), [pi, 0.0]);
+    let s = load_with(
+        &format!("{floor}newmtl lamp\nKd 0 0 0\nKe 2 2 2\nmap_Ke ke.png\n"),
+        false,
+    );
+    assert_eq!(lamp(&s), [2.0 * pi, 2.0 * pi]);
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("object `lamp`") && w.contains("no `vt`")),
+        "{:?}",
+        s.warnings
+    );
+}
+
 /// A `doubleSided` material's faces get back faces (reversed winding, the same material and
 /// texture), so a ray from below lands on a face that faces it; `LoadOptions::single_sided` and
 /// one-sided materials leave the faces as they are; a back the file already models is not doubled.

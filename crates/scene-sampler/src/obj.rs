@@ -104,13 +104,21 @@ struct Statement {
 }
 
 /// The `mtllib` and `usemtl` statements of OBJ text, with their lines, read as tobj reads them (the argument
-/// is everything after the first space, trimmed).
+/// is everything after the first space, trimmed); and, when the file has `vt` lines, every face
+/// (`f`) with a corner that has none (key `f-no-vt`): tobj gives those corners another corner's
+/// coordinates ([`check_missing_vt`]).
 fn scan_obj(text: &str) -> Vec<Statement> {
     let mut out = Vec::new();
+    let has_vt = text.lines().any(|l| l.trim_start().starts_with("vt "));
     for (k, raw) in text.lines().enumerate() {
-        let key = match raw.split_whitespace().next() {
+        let mut words = raw.split_whitespace();
+        let key = match words.next() {
             Some("mtllib") => "mtllib",
             Some("usemtl") => "usemtl",
+            // `v` and `v//vn` corners have no texture coordinates
+            Some("f") if has_vt && words.any(|c| c.split('/').nth(1).is_none_or(str::is_empty)) => {
+                "f-no-vt"
+            }
             _ => continue,
         };
         out.push(Statement {
@@ -147,8 +155,8 @@ pub(crate) fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let statements = scan_obj(&text);
     let (models, materials) = parse_obj(&text, &statements, &folder, &source)?;
     check_usemtl(&statements, &materials, &source)?;
+    let mut warnings = check_missing_vt(&statements, &materials, &source);
     // ⟨The materials' textures and cut-outs⟩
-    let mut warnings = Vec::new();
     let mut budget = TextureBudget::new(options.max_texture_bytes);
     let (textures, texture_of) = obj_textures(&materials, &folder, &source, &mut budget)?;
     let emissive = obj_emissive(&materials, &folder, &source, &mut budget)?;
@@ -248,6 +256,48 @@ fn read_mtl(mtl: &Path, statements: &[Statement], folder: &Folder, source: &str)
             })?;
             sanitize_mtl(&mtl_source, &text)
         })
+}
+
+/// A warning per textured material (`map_Kd`, `map_Ke`, `map_d`) with faces that have corners
+/// without `vt` in a file that has `vt`: tobj gives such a corner the previous corner's texture
+/// coordinates (or the first `vt`), so the face reads its texture at a point nobody chose. Named
+/// by the first such line; the count of faces.
+fn check_missing_vt(
+    statements: &[Statement],
+    materials: &[tobj::Material],
+    source: &str,
+) -> Vec<String> {
+    let textured = |name: &str| {
+        (materials.iter()).any(|m| {
+            m.name == name
+                && (m.diffuse_texture.is_some()
+                    || m.dissolve_texture.is_some()
+                    || m.unknown_param.contains_key("map_Ke"))
+        })
+    };
+    // per material: the first line and the faces
+    let mut found: Vec<(&str, usize, usize)> = Vec::new();
+    let mut current = "";
+    for s in statements {
+        match s.key {
+            "usemtl" => current = &s.arg,
+            "f-no-vt" if textured(current) => match found.iter_mut().find(|f| f.0 == current) {
+                Some(f) => f.2 += 1,
+                None => found.push((current, s.line, 1)),
+            },
+            _ => {}
+        }
+    }
+    (found.into_iter())
+        .map(|(m, line, n)| {
+            format!(
+                "{source}:{line}: {n} face(s) of textured material `{m}` have corners without \
+                 `vt`: the OBJ parser gives them another corner's texture coordinates, so their \
+                 texture is read where no one chose; give every face of a textured material its \
+                 `vt`"
+            )
+        })
+        .collect()
 }
 
 /// An error for the first `usemtl` statement that names no material of `materials`, naming its

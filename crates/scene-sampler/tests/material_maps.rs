@@ -323,6 +323,37 @@ fn an_obj_emissive_texture_emits_its_mean_per_face() {
     );
 }
 
+/// A face of a textured material without `vt`, in a file that has `vt`: tobj gives its corners
+/// another corner's coordinates (here the first `vt`, on the texture's black half: ρ = 0 in
+/// silence); a warning names the line and the material.
+#[test]
+fn textured_faces_without_vt_are_named() {
+    let d = dir("no_vt");
+    image::GrayImage::from_raw(8, 1, vec![255, 255, 255, 255, 0, 0, 0, 0])
+        .unwrap()
+        .save(d.join("t.png"))
+        .unwrap();
+    std::fs::write(
+        d.join("l.mtl"),
+        "newmtl a\nKd 0.5 0.5 0.5\nmap_Kd t.png\nnewmtl lamp\nKd 0 0 0\nKe 1 1 1\n",
+    )
+    .unwrap();
+    let obj = "mtllib l.mtl\nv 0 0 0\nv 0 0 2\nv 2 0 2\nv 0 1 0\nv 2 1 0\nv 0 1 2\n\
+               vt 0.6 0.5\nvt 0.7 0.5\nvt 0.8 0.5\no a\nusemtl a\nf 1 2 3\nf 1/1 2/2 3/3\n\
+               o lamp\nusemtl lamp\nf 4 5 6\n";
+    std::fs::write(d.join("l.obj"), obj).unwrap();
+    let s = load(d.join("l.obj")).unwrap().into_3d().unwrap();
+    let warned: Vec<_> = (s.warnings.iter())
+        .filter(|w| w.contains("without `vt`"))
+        .collect();
+    assert_eq!(warned.len(), 1, "{:?}", s.warnings);
+    assert!(
+        warned[0].contains("l.obj:13: 1 face(s) of textured material `a`"),
+        "{}",
+        warned[0]
+    );
+}
+
 /// A `doubleSided` material's faces get back faces (reversed winding, the same material and
 /// texture), so a ray from below lands on a face that faces it; `LoadOptions::single_sided` and
 /// one-sided materials leave the faces as they are; a back the file already models is not doubled.

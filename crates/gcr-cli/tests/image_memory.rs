@@ -1,4 +1,5 @@
-//! Issue 35 item 5: an image is checked against the machine's memory before the solve
+//! Issue 35 item 5 and issue 36 item 3: an image (and a probe set) is checked against the
+//! machine's memory before the solve
 //! (`gcr::output::memory`). `--resolution 16384x16384`, the documented maximum, used to abort on
 //! a 24 GiB allocation after the whole solve. The estimates per pixel are checked here against
 //! what images take: the peak memory of a run (its metrics) grows with the pixels by at most
@@ -8,7 +9,9 @@ mod common;
 
 use common::*;
 
-use gcr::output::memory::{MESH_BYTES_PER_PIXEL, PIXEL_BYTES_PER_PIXEL, available_memory};
+use gcr::output::memory::{
+    MESH_BYTES_PER_PIXEL, PIXEL_BYTES_PER_PIXEL, PROBE_BYTES, available_memory,
+};
 use std::path::Path;
 
 /// The peak memory (bytes) of `gcr solve cornell-box` writing `image` at `side × side` with
@@ -56,6 +59,64 @@ fn the_memory_estimates_bound_what_images_take() {
     let got = per_pixel(&d, "p.png", (128, 320), &extra);
     eprintln!("pixel image: {got:.0} bytes a pixel (estimate {pixel})");
     assert!(got <= pixel && got >= 0.5 * pixel, "{got:.0} bytes a pixel");
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// The peak memory (bytes) of `gcr solve cornell-box` at `n` probes on its faces (a fixed
+/// low-discrepancy walk over the floor and the back wall) of `quantity`, at the draft quality.
+fn probe_peak(d: &Path, n: usize, quantity: &str) -> f64 {
+    let mut text = String::new();
+    for i in 0..n {
+        let (u, v) = (
+            (i as f64 * 0.618_034).fract(),
+            (i as f64 * 0.754_878).fract(),
+        );
+        let (x, z) = (0.02 + 0.5 * u, 0.02 + 0.5 * v);
+        text += &match i % 2 {
+            0 => format!("{x} 0 {z} 0 1 0\n"),
+            _ => format!("{x} {z} 0.5592 0 0 -1\n"),
+        };
+    }
+    let (pts, out, m) = (d.join("p.pts"), d.join("o.txt"), d.join("m.json"));
+    std::fs::write(&pts, text).unwrap();
+    let o = gcr(&[
+        "solve",
+        "cornell-box",
+        "--probes",
+        pts.to_str().unwrap(),
+        "--probe-out",
+        out.to_str().unwrap(),
+        "--metrics",
+        m.to_str().unwrap(),
+        "--quality",
+        "draft",
+        "--probe-quantity",
+        quantity,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&m).unwrap()).unwrap();
+    metrics["peak_memory_bytes"]
+        .as_f64()
+        .expect("peak memory in the metrics")
+}
+
+#[test]
+fn the_probe_estimate_bounds_what_probes_take() {
+    if !cfg!(target_os = "linux") {
+        eprintln!("skipped: the peak memory is read from /proc on Linux only");
+        return;
+    }
+    let d = dir("mem", "probes");
+    let bound = PROBE_BYTES as f64;
+    for quantity in ["radiosity", "irradiance"] {
+        let got = (probe_peak(&d, 25_000, quantity) - probe_peak(&d, 5_000, quantity)) / 20_000.0;
+        eprintln!("{quantity} probes: {got:.0} bytes a probe (estimate {bound})");
+        assert!(
+            got <= bound && got >= 0.5 * bound,
+            "{quantity}: {got:.0} bytes a probe"
+        );
+    }
     let _ = std::fs::remove_dir_all(d);
 }
 

@@ -15,6 +15,11 @@
 //!   box, `--quality draft`, 1024² − 512²). With a gather that reads the networks, every
 //!   sub-sample (`--pixel-samples`) is a point of its own: that times the sub-samples.
 //!
+//! - **probes** (and any points the paths gather runs to a target): per point its placement, its
+//!   group, its seeds, its estimates and the rounds' state: [`PROBE_BYTES`] = 1 152, over the
+//!   861–994 bytes a probe measured (Cornell box, 5 000 → 25 000 and 20 000 → 100 000 probes,
+//!   radiosity and irradiance, peak RSS from the metrics).
+//!
 //! The machine's memory is Linux's `MemAvailable`, lowered to a cgroup v2 limit when one is set
 //! (containers, CI runners); elsewhere nothing is checked.
 
@@ -49,6 +54,42 @@ pub const MESH_BYTES_PER_PIXEL: u64 = 192;
 /// Bytes a pixel of a per-pixel image takes at its peak with the default paths gather (module
 /// docs).
 pub const PIXEL_BYTES_PER_PIXEL: u64 = 800;
+
+/// Bytes a probe takes at the gather's peak (module docs).
+pub const PROBE_BYTES: u64 = 1152;
+
+/// Probes that would take more memory than is available.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "{probes} probes: about {} at the gather's peak, more than the {} available: split them \
+     over machines (--block-points and --shard, docs/guide/probes.md) or give fewer",
+    gib(*needed),
+    gib(*available)
+)]
+pub struct TooManyProbes {
+    /// The probes.
+    pub probes: usize,
+    /// Bytes they would take.
+    pub needed: u64,
+    /// Bytes available.
+    pub available: u64,
+}
+
+/// Refuses `probes` probes that would take more than `available` bytes (none: no check).
+pub(crate) fn check_probe_memory(
+    probes: usize,
+    available: Option<u64>,
+) -> Result<(), TooManyProbes> {
+    let needed = (probes as u64).saturating_mul(PROBE_BYTES);
+    match available {
+        Some(available) if needed > available => Err(TooManyProbes {
+            probes,
+            needed,
+            available,
+        }),
+        _ => Ok(()),
+    }
+}
 
 /// The peak bytes one image of `settings` takes (`footprints`: a pixel image is gathered over
 /// pixel footprints by the paths gather, not point by point per sub-sample).
@@ -157,6 +198,19 @@ mod tests {
         s.pixel_samples = 4;
         assert_eq!(image_bytes(&s, true), 5000 * PIXEL_BYTES_PER_PIXEL);
         assert_eq!(image_bytes(&s, false), 4 * 5000 * PIXEL_BYTES_PER_PIXEL);
+    }
+
+    #[test]
+    fn probes_beyond_memory_are_refused() {
+        assert!(check_probe_memory(1_000_000, Some(2 << 30)).is_ok());
+        let err = check_probe_memory(10_000_000, Some(2 << 30)).unwrap_err();
+        assert_eq!(err.needed, 11_520_000_000);
+        let message = err.to_string();
+        assert!(
+            message.contains("10000000 probes: about 10.7 GiB") && message.contains("--shard"),
+            "{message}"
+        );
+        assert!(check_probe_memory(10_000_000, None).is_ok());
     }
 
     #[test]

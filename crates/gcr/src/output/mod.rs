@@ -63,6 +63,9 @@ pub enum OutputError {
     /// An image that would take more memory than the machine has ([`memory`]).
     #[error(transparent)]
     ImageMemory(#[from] memory::ImageTooLarge),
+    /// Probes that would take more memory than the machine has ([`memory`]).
+    #[error(transparent)]
+    ProbeMemory(#[from] memory::TooManyProbes),
     /// A shard that cannot be formed ([`crate::shard_points`]).
     #[error(transparent)]
     Shard(#[from] crate::ShardError),

@@ -240,13 +240,14 @@ impl OutputPlan {
                 return Err(OutputError::ShardOutput(what));
             }
         }
-        // ⟨An image the machine cannot hold is refused now, not after the solve⟩
+        // ⟨An image or probes the machine cannot hold are refused now, not after the solve⟩
+        let available = super::memory::available_memory();
         let images = self.paths.image.is_some() || !self.images.views.is_empty();
         if images && !self.flatland {
             let footprints = config.gather == GatherMode::Paths && !config.reads_networks();
-            let available = super::memory::available_memory();
             super::memory::check_image_memory(&self.images, footprints, available)?;
         }
+        super::memory::check_probe_memory(self.probes.len(), available)?;
         Ok(())
     }
 

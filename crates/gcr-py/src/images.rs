@@ -123,6 +123,7 @@ pub(crate) struct WriteArgs {
     pub images: ImageSettings,
     pub probe_quantity: Option<String>,
     pub probe_tolerance: Option<f64>,
+    pub lightmap: gcr::LightmapSettings,
 }
 
 /// Writes the outputs as `gcr solve` does after its solve (checked first, all at once) and
@@ -143,7 +144,10 @@ pub(crate) fn write<'py>(
         outdoor_illuminance: solved.scene.outdoor_illuminance,
     };
     let metrics = runner::run(py, progress, |monitor| {
-        monitor.observing(|| write_files(solved, args.paths, args.images, probe_settings, monitor))
+        monitor.observing(|| {
+            let settings = (args.images, probe_settings, args.lightmap);
+            write_files(solved, args.paths, settings, monitor)
+        })
     })?
     .map_err(gcr_error)?;
     let known = solved
@@ -163,13 +167,13 @@ pub(crate) fn write<'py>(
 fn write_files(
     solved: &Solved,
     paths: OutputPaths,
-    images: ImageSettings,
-    probes: ProbeSettings,
+    (images, probes, lightmap): (ImageSettings, ProbeSettings, gcr::LightmapSettings),
     monitor: &Arc<runner::Monitor>,
 ) -> anyhow::Result<gcr::Metrics> {
     let name = &solved.scene.name;
     solved.scene.with_domain(|domain| {
         let plan = OutputPlan::with_options(domain, paths, images, probes)
+            .and_then(|plan| plan.with_lightmap(lightmap))
             .and_then(|plan| plan.check_config(&solved.config).map(|()| plan))
             .with_context(|| format!("checking the outputs for `{name}`"))?;
         let (options, config) = (&solved.options, &solved.config);

@@ -12,6 +12,26 @@ use pyo3::prelude::*;
 use std::path::PathBuf;
 use std::sync::Arc;
 
+/// The lightmap settings of [`Solution::write`]'s arguments (the program's defaults for those not
+/// given; checked by the output plan).
+fn lightmap_settings(
+    density: Option<f64>,
+    size: Option<u32>,
+    padding: Option<u32>,
+    quantity: Option<String>,
+) -> PyResult<gcr::LightmapSettings> {
+    let defaults = gcr::LightmapSettings::default();
+    Ok(gcr::LightmapSettings {
+        texels_per_unit: density,
+        page_size: size.unwrap_or(defaults.page_size),
+        padding: padding.unwrap_or(defaults.padding),
+        quantity: match quantity {
+            Some(q) => q.parse().map_err(crate::errors::value_error)?,
+            None => defaults.quantity,
+        },
+    })
+}
+
 /// A shard's row indices, values and standard errors.
 type ShardValues<'py> = (
     Bound<'py, numpy::PyArray1<usize>>,
@@ -187,7 +207,10 @@ impl Solution {
     }
 
     /// Writes the program's outputs of this solution, as ``gcr solve`` does after its solve:
-    /// ``image`` (.png, .jpg, .exr), ``mesh`` (glTF .glb with vertex colours: the bake), ``ply``,
+    /// ``image`` (.png, .jpg, .exr), ``mesh`` (glTF .glb with vertex colours: the bake),
+    /// ``lightmap`` (.glb with a lightmap atlas on TEXCOORD_1 and the EXR pages beside it, with
+    /// ``lightmap_density``, ``lightmap_size``, ``lightmap_padding`` and ``lightmap_quantity``
+    /// as ``--lightmap-*``), ``ply``,
     /// ``metrics`` (JSON), ``probes`` (a probe file) with ``probe_out`` (and
     /// ``probe_quantity``, ``probe_tolerance``), ``kernel_image`` (Flatland), ``views``
     /// (``(path, eye, target[, up[, fov]])`` each), and the camera and image options of
@@ -198,6 +221,8 @@ impl Solution {
     #[pyo3(signature = (
         *, image=None, mesh=None, ply=None, metrics=None, probes=None, probe_out=None,
         probe_quantity=None, probe_tolerance=None, kernel_image=None, views=Vec::new(),
+        lightmap=None, lightmap_density=None, lightmap_size=None, lightmap_padding=None,
+        lightmap_quantity=None,
         camera_eye=None, camera_target=None, camera_up=[0.0, 1.0, 0.0], fov=None,
         auto_camera=false, resolution=None, image_mode=None, pixel_samples=1, exposure=None,
         progress=None
@@ -216,6 +241,11 @@ impl Solution {
         probe_tolerance: Option<f64>,
         kernel_image: Option<PathBuf>,
         views: Vec<ViewArg>,
+        lightmap: Option<PathBuf>,
+        lightmap_density: Option<f64>,
+        lightmap_size: Option<u32>,
+        lightmap_padding: Option<u32>,
+        lightmap_quantity: Option<String>,
         camera_eye: Option<[f64; 3]>,
         camera_target: Option<[f64; 3]>,
         camera_up: [f64; 3],
@@ -244,8 +274,7 @@ impl Solution {
                 kernel_image,
                 mesh,
                 ply,
-                // lightmaps (`gcr solve --lightmap`) are not offered from Python yet
-                lightmap: None,
+                lightmap,
                 probes_in: probes,
                 probe_out,
                 metrics,
@@ -253,6 +282,12 @@ impl Solution {
             images: image_args.settings(views)?,
             probe_quantity,
             probe_tolerance,
+            lightmap: lightmap_settings(
+                lightmap_density,
+                lightmap_size,
+                lightmap_padding,
+                lightmap_quantity,
+            )?,
         };
         images::write(py, &self.inner, args, progress.as_ref())
     }

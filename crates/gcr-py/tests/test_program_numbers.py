@@ -8,6 +8,7 @@ import shlex
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import gcr
 from conftest import run_gcr
@@ -71,6 +72,23 @@ def test_probes_give_the_programs_numbers_bit_for_bit(root, gcr_bin, tmp_path, p
     written = tmp_path / "y.txt"
     solution.write(probes=probe_file, probe_out=written)
     assert written.read_bytes() == out.read_bytes()
+
+
+def test_lightmaps_are_the_programs_bytes(gcr_bin, tmp_path):
+    """`Solution.write(lightmap=...)` writes the glTF and the EXR pages `gcr solve --lightmap`
+    writes, byte for byte (issue 33: lightmaps from Python)."""
+    (tmp_path / "cli").mkdir()
+    (tmp_path / "py").mkdir()
+    args = ["--lightmap-size", "128", "--lightmap-quantity", "radiosity", "--quality", "draft"]
+    run_gcr(gcr_bin, "solve", "cornell-box", "--lightmap", str(tmp_path / "cli" / "b.glb"), *args, "--quiet")
+    solution = gcr.solve(gcr.Scene.load("cornell-box"), quality="draft")
+    solution.write(lightmap=tmp_path / "py" / "b.glb", lightmap_size=128, lightmap_quantity="radiosity")
+    cli = sorted(p.name for p in (tmp_path / "cli").iterdir())
+    assert cli == sorted(p.name for p in (tmp_path / "py").iterdir()) and len(cli) >= 2, cli
+    for name in cli:
+        assert (tmp_path / "cli" / name).read_bytes() == (tmp_path / "py" / name).read_bytes(), name
+    with pytest.raises(ValueError, match="unknown lightmap quantity"):
+        solution.write(lightmap=tmp_path / "py" / "c.glb", lightmap_quantity="albedo")
 
 
 def test_irradiance_gives_the_programs_numbers(root, gcr_bin, tmp_path, probes):

@@ -65,20 +65,8 @@ fn the_memory_estimates_bound_what_images_take() {
 /// The peak memory (bytes) of `gcr solve cornell-box` at `n` probes on its faces (a fixed
 /// low-discrepancy walk over the floor and the back wall) of `quantity`, at the draft quality.
 fn probe_peak(d: &Path, n: usize, quantity: &str) -> f64 {
-    let mut text = String::new();
-    for i in 0..n {
-        let (u, v) = (
-            (i as f64 * 0.618_034).fract(),
-            (i as f64 * 0.754_878).fract(),
-        );
-        let (x, z) = (0.02 + 0.5 * u, 0.02 + 0.5 * v);
-        text += &match i % 2 {
-            0 => format!("{x} 0 {z} 0 1 0\n"),
-            _ => format!("{x} {z} 0.5592 0 0 -1\n"),
-        };
-    }
     let (pts, out, m) = (d.join("p.pts"), d.join("o.txt"), d.join("m.json"));
-    std::fs::write(&pts, text).unwrap();
+    cornell_probes(&pts, n);
     let o = gcr(&[
         "solve",
         "cornell-box",

@@ -26,23 +26,10 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-/// `n` probes on the Cornell box's floor (facing up) and back wall (facing the room), spread
-/// by a fixed low-discrepancy walk.
+/// `n` probes on the Cornell box's faces, in `d/in.pts`.
 fn probes(d: &Path, n: usize) -> PathBuf {
-    let mut text = String::new();
-    for i in 0..n {
-        let (u, v) = (
-            (i as f64 * 0.618_034).fract(),
-            (i as f64 * 0.754_878).fract(),
-        );
-        let (x, z) = (0.02 + 0.5 * u, 0.02 + 0.5 * v);
-        text += &match i % 2 {
-            0 => format!("{x} 0 {z} 0 1 0\n"),
-            _ => format!("{x} {z} 0.5592 0 0 -1\n"),
-        };
-    }
     let p = d.join("in.pts");
-    std::fs::write(&p, text).unwrap();
+    cornell_probes(&p, n);
     p
 }
 

@@ -340,17 +340,8 @@ fn obj_textures(
     source: &str,
     budget: &mut TextureBudget,
 ) -> Result<(Vec<Texture>, Vec<Option<u32>>)> {
-    let mut textures: Vec<Texture> = Vec::new();
-    // per material: its texture's index once loaded
-    let mut texture_of: Vec<Option<u32>> = vec![None; materials.len()];
-    for (i, mat) in materials.iter().enumerate() {
-        if let Some(file) = &mat.diffuse_texture {
-            let tex = obj_texture(folder, file, &mat.name, source, budget, "map_Kd")?;
-            texture_of[i] = Some(textures.len() as u32);
-            textures.push(tex);
-        }
-    }
-    Ok((textures, texture_of))
+    let map = |m: &tobj::Material| m.diffuse_texture.clone();
+    material_maps(materials, (map, "map_Kd"), folder, source, budget)
 }
 
 /// The materials' `map_Ke` emissive textures (decoded as [`obj_texture`], within `budget`) and,
@@ -363,16 +354,29 @@ fn obj_emissive(
     source: &str,
     budget: &mut TextureBudget,
 ) -> Result<(Vec<Texture>, Vec<Option<u32>>)> {
+    let map = |m: &tobj::Material| m.unknown_param.get("map_Ke").cloned();
+    material_maps(materials, (map, "map_Ke"), folder, source, budget)
+}
+
+/// The colour textures `map` names (the MTL keyword `key`), one per material that has one, and
+/// per material its texture's index.
+fn material_maps(
+    materials: &[tobj::Material],
+    (map, key): (impl Fn(&tobj::Material) -> Option<String>, &str),
+    folder: &Folder,
+    source: &str,
+    budget: &mut TextureBudget,
+) -> Result<(Vec<Texture>, Vec<Option<u32>>)> {
     let mut textures: Vec<Texture> = Vec::new();
-    let mut emissive_of: Vec<Option<u32>> = vec![None; materials.len()];
+    let mut index_of: Vec<Option<u32>> = vec![None; materials.len()];
     for (i, mat) in materials.iter().enumerate() {
-        if let Some(file) = mat.unknown_param.get("map_Ke") {
-            let tex = obj_texture(folder, file, &mat.name, source, budget, "map_Ke")?;
-            emissive_of[i] = Some(textures.len() as u32);
+        if let Some(file) = map(mat) {
+            let tex = obj_texture(folder, &file, &mat.name, source, budget, key)?;
+            index_of[i] = Some(textures.len() as u32);
             textures.push(tex);
         }
     }
-    Ok((textures, emissive_of))
+    Ok((textures, index_of))
 }
 
 /// An OBJ file's materials as its faces take them: per material its texture (index into the

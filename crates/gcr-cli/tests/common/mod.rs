@@ -1,5 +1,5 @@
 //! What the program's integration tests share: running `gcr` from the workspace root, a fresh
-//! directory per test, a directory's entries.
+//! directory per test, a directory's entries, probes on the Cornell box.
 
 #![allow(dead_code)] // each test file uses its own part
 
@@ -34,4 +34,22 @@ pub fn entries(d: &Path) -> Vec<String> {
         .collect();
     v.sort();
     v
+}
+
+/// Writes `n` probes on the Cornell box's floor (facing up) and back wall (facing the room),
+/// spread by a fixed low-discrepancy walk, to `path`.
+pub fn cornell_probes(path: &Path, n: usize) {
+    let mut text = String::new();
+    for i in 0..n {
+        let (u, v) = (
+            (i as f64 * 0.618_034).fract(),
+            (i as f64 * 0.754_878).fract(),
+        );
+        let (x, z) = (0.02 + 0.5 * u, 0.02 + 0.5 * v);
+        text += &match i % 2 {
+            0 => format!("{x} 0 {z} 0 1 0\n"),
+            _ => format!("{x} {z} 0.5592 0 0 -1\n"),
+        };
+    }
+    std::fs::write(path, text).unwrap();
 }

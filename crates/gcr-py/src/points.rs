@@ -9,7 +9,7 @@ use crate::errors::{gcr_error, value_error, warn_all};
 use crate::runner;
 use crate::solve::Solved;
 use gcr::output::{
-    ProbePoints, ProbeQuantity, ProbeSettings, gather_probes, gather_warnings, place_probes,
+    ProbePoints, ProbeQuantity, ProbeSettings, gather_probe_shard, gather_warnings, place_probes,
 };
 use gcr::{Emitters, Shard};
 use numpy::{
@@ -105,7 +105,6 @@ fn gathered<'py>(
     };
     let mut config = solved.config.clone();
     config.paths.shard = shard;
-    let irradiance = settings.quantity != ProbeQuantity::Radiosity;
     let (gathered, stats, mine) = runner::run(py, progress, |monitor| {
         monitor.observing(|| {
             solved.scene.with_domain(|domain| {
@@ -113,15 +112,9 @@ fn gathered<'py>(
                 if placed.is_empty() {
                     return Ok((Vec::new(), Default::default(), Vec::new()));
                 }
-                let mine = match shard {
-                    Some(_) => gcr::shard_points(domain, &placed, irradiance, &config)?,
-                    None => (0..placed.len()).collect(),
-                };
                 let emitters = Emitters::new(domain);
                 let probes = (placed.as_slice(), &settings);
-                let (g, stats) =
-                    gather_probes(domain, &solved.trained, &emitters, &config, probes)?;
-                Ok::<_, gcr::output::OutputError>((g, stats, mine))
+                gather_probe_shard(domain, &solved.trained, &emitters, &config, probes)
             })
         })
     })?

@@ -32,7 +32,9 @@ pub use lightmap::{encode_page_exr, page_paths, png_scale, to_lightmap_glb};
 pub use linear::{LinearImage, render_linear};
 pub use mesh::{UNIFORM_MESH_TRIANGLES, output_mesh, vertex_gather_point};
 pub use pixel::{PixelImage, render_pixels};
-pub use probes::{ProbePoints, ProbeQuantity, ProbeSettings, gather_probes, place_probes};
+pub use probes::{
+    ProbePoints, ProbeQuantity, ProbeSettings, gather_probe_shard, gather_probes, place_probes,
+};
 pub use raster::{Image, PinholeCamera, RadianceImage, render_image};
 pub use staged::{StagedFiles, check_target, remove_temporary_files};
 pub use tonemap::Exposure;

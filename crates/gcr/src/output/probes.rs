@@ -196,8 +196,22 @@ pub fn gather_probes(
     trained: &Trained,
     emitters: &Emitters,
     config: &SolveConfig,
-    (probes, settings): (&[(DVec3, DVec3, u32)], &ProbeSettings),
+    probes: (&[(DVec3, DVec3, u32)], &ProbeSettings),
 ) -> Result<(Vec<Gathered>, GatherStats), OutputError> {
+    let (gathered, stats, _) = gather_probe_shard(domain, trained, emitters, config, probes)?;
+    Ok((gathered, stats))
+}
+
+/// [`gather_probes`] and the indices (ascending) of the probes estimated: those of the shard
+/// `config` asks for ([`crate::shard_points`]; the others are left at `Gathered::default()` and
+/// out of the statistics), else every one.
+pub fn gather_probe_shard(
+    domain: &Domain,
+    trained: &Trained,
+    emitters: &Emitters,
+    config: &SolveConfig,
+    (probes, settings): (&[(DVec3, DVec3, u32)], &ProbeSettings),
+) -> Result<(Vec<Gathered>, GatherStats, Vec<usize>), OutputError> {
     let (quantity, outdoor) = (settings.quantity, settings.outdoor_illuminance);
     let mut gathered = match quantity {
         ProbeQuantity::Radiosity => radiosity_at_points(domain, trained, emitters, config, probes)?,
@@ -207,12 +221,13 @@ pub fn gather_probes(
         }
     };
     // a shard's probes only ([`crate::shard_points`]); the others were not estimated
-    let stats = match config.paths.shard {
-        None => GatherStats::of(&gathered),
+    let (stats, mine) = match config.paths.shard {
+        None => (GatherStats::of(&gathered), (0..gathered.len()).collect()),
         Some(_) => {
             let irradiance = quantity != ProbeQuantity::Radiosity;
             let mine = crate::shard_points(domain, probes, irradiance, config)?;
-            GatherStats::of(&mine.iter().map(|&i| gathered[i]).collect::<Vec<_>>())
+            let theirs: Vec<Gathered> = mine.iter().map(|&i| gathered[i]).collect();
+            (GatherStats::of(&theirs), mine)
         }
     };
     // daylight factors in percent of the outdoor illuminance (checked positive by `validate`)
@@ -223,7 +238,7 @@ pub fn gather_probes(
             g.std_error = g.std_error.map(|v| v * scale);
         }
     }
-    Ok((gathered, stats))
+    Ok((gathered, stats, mine))
 }
 
 /// The probes' values as the probe output holds them ([`gather_probes`]), one line each:
@@ -236,7 +251,7 @@ pub fn probe_values(
     probes: (&[(DVec3, DVec3, u32)], &ProbeSettings),
 ) -> Result<(String, GatherStats), OutputError> {
     let grey = domain.bands() == 1 && domain.dim() == 2;
-    let (gathered, stats) = gather_probes(domain, trained, emitters, config, probes)?;
+    let (gathered, stats, mine) = gather_probe_shard(domain, trained, emitters, config, probes)?;
     let lines: Vec<String> = gathered
         .iter()
         .map(|g| {
@@ -252,8 +267,6 @@ pub fn probe_values(
     let text = match config.paths.shard {
         None => lines.concat(),
         Some(shard) => {
-            let irradiance = probes.1.quantity != ProbeQuantity::Radiosity;
-            let mine = crate::shard_points(domain, probes.0, irradiance, config)?;
             let print = super::shards::fingerprint(domain, probes.0, config);
             super::shards::partial_text(shard, print, &lines, &mine)
         }

@@ -19,7 +19,7 @@ fn main() {
     for threads in [1, 2] {
         let r = scene_sampler::bench::measure(&scene, queries, threads, 7);
         println!(
-            "{threads} thread(s): build {:.2} s | bare obvhs {:.2} M rays/s | SceneBvh::visible {:.2} M/s | \
+            "{threads} thread(s): build {:.2} s | bare {:.2} M rays/s | SceneBvh::visible {:.2} M/s | \
              kernel {:.2} M samples/s | kernel/bare {:.2} | facing pairs {:.0} % | visible {:.1} %",
             r.build_high_s,
             r.bare_rays_per_s / 1e6,

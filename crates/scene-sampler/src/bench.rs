@@ -1,8 +1,8 @@
 //! Throughput measurements (used by `cargo xtask bench --only scenes` and `examples/ray_throughput.rs`).
 //!
 //! Three numbers on the same BVH and the same random surface-point pairs:
-//! * **bare obvhs**: f32 rays prepared in advance, `CwBvh::ray_traverse_miss` with obvhs's own
-//!   `Triangle::intersect`, exactly as obvhs's examples drive it — the ceiling for any occlusion query;
+//! * **bare**: f32 rays prepared in advance, the BVH's occlusion traversal with no face skipping,
+//!   offsets or cut-outs — the ceiling for any occlusion query;
 //! * **[`SceneBvh::visible`]**: the same queries through our API (f64 → f32 conversion, normal offsets, face
 //!   skipping);
 //! * **[`KernelSampler::sample`]**: the whole kernel sample — parameterize 4 numbers to two surface points,
@@ -27,11 +27,11 @@ pub struct Throughput {
     pub queries: usize,
     /// BVH build time (s) with [`BuildQuality::High`].
     pub build_high_s: f64,
-    /// Bare obvhs occlusion rays per second.
+    /// Bare occlusion rays per second.
     pub bare_rays_per_s: f64,
     /// BVH build time (s) with [`BuildQuality::Medium`].
     pub build_medium_s: f64,
-    /// Bare obvhs occlusion rays per second through the [`BuildQuality::Medium`] BVH (same rays).
+    /// Bare occlusion rays per second through the [`BuildQuality::Medium`] BVH (same rays).
     pub bare_medium_rays_per_s: f64,
     /// [`SceneBvh::visible`] queries per second.
     pub visible_per_s: f64,
@@ -210,7 +210,7 @@ pub fn thread_cpu_ns() -> u64 {
 /// Per-query thread CPU times (ns) of [`cpu_ratio`].
 #[derive(Clone, Copy, Debug)]
 pub struct CpuTimes {
-    /// Bare obvhs occlusion ray.
+    /// Bare occlusion ray.
     pub bare: f64,
     /// [`KernelSampler::sample`].
     pub kernel: f64,

@@ -1,4 +1,4 @@
-//! Ray queries: a CWBVH over the scene's triangles (obvhs, f32) and brute-force Flatland segment casting.
+//! Ray queries: an eight-wide BVH over the scene's triangles (built by obvhs, f32; `wide.rs`) and brute-force Flatland segment casting.
 //!
 //! # Self-intersection policy
 //! The scene is f64, the BVH f32. A triangle stored in f32 is off by up to ~6·10⁻⁸·|coordinate|, so a ray that
@@ -23,13 +23,13 @@
 //! 10⁶ the spacing of representable numbers is 0.06, a tenth of the box). Inputs and outputs ([`Hit::point`])
 //! stay in the scene's own coordinates.
 
+mod wide;
+
 use crate::{AlphaMask, Face, FlatPoint, FlatlandScene, NO_FACE, Scene, SurfacePoint};
 use glam::{DVec2, DVec3, Vec3A};
-use obvhs::{
-    BvhBuildParams, cwbvh::CwBvh, cwbvh::builder::build_cwbvh_from_tris, ray::Ray,
-    triangle::Triangle,
-};
+use obvhs::{BvhBuildParams, bvh2::builder::build_bvh2_from_tris, ray::Ray, triangle::Triangle};
 use rayon::prelude::*;
+use wide::WideBvh;
 
 /// How much effort the BVH build spends (a trade between build time and trace speed).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -56,11 +56,8 @@ pub struct Hit {
 
 /// A compressed-wide BVH over a scene's triangles, built once, queried from many threads.
 pub struct SceneBvh {
-    bvh: CwBvh,
-    /// Triangles in BVH primitive order.
-    tris: Vec<Triangle>,
-    /// Face index of each BVH primitive.
-    face_of: Vec<u32>,
+    /// obvhs's binary BVH collapsed to eight-wide nodes ([`wide`]).
+    bvh: WideBvh,
     /// Face normals (f64), by face index.
     normals: Vec<DVec3>,
     /// Face centroids (f64), by face index: `trace_from` nudges origins toward them, away from edges.
@@ -80,7 +77,8 @@ pub struct SceneBvh {
 impl std::fmt::Debug for SceneBvh {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("SceneBvh")
-            .field("primitives", &self.tris.len())
+            .field("nodes", &self.bvh.node_count())
+            .field("packs", &self.bvh.pack_count())
             .field("eps", &self.eps)
             .finish()
     }
@@ -124,13 +122,16 @@ impl SceneBvh {
                 v2: v3a(f.v[2] - centre),
             })
             .collect();
-        let params = match quality {
-            BuildQuality::Medium => BvhBuildParams::medium_build(),
-            BuildQuality::High => BvhBuildParams::very_slow_build(),
+        let params = BvhBuildParams {
+            // a leaf is one four-lane pack (wide.rs)
+            max_prims_per_leaf: 4,
+            ..match quality {
+                BuildQuality::Medium => BvhBuildParams::medium_build(),
+                BuildQuality::High => BvhBuildParams::very_slow_build(),
+            }
         };
-        let bvh = build_cwbvh_from_tris(&tris, params, &mut std::time::Duration::default());
-        let face_of: Vec<u32> = bvh.primitive_indices.clone();
-        let tris = face_of.iter().map(|&i| tris[i as usize]).collect();
+        let bvh2 = build_bvh2_from_tris(&tris, params, &mut std::time::Duration::default());
+        let bvh = WideBvh::from_bvh2(&bvh2, &tris);
         // the largest |coordinate| in the f32 frame: (hi − lo)/2 per axis
         let max_abs = (0.5 * (hi - lo)).max_element();
         let eps = 1e-5 * scene.diagonal().max(max_abs);
@@ -148,8 +149,6 @@ impl SceneBvh {
         }
         SceneBvh {
             bvh,
-            tris,
-            face_of,
             normals: scene.faces.iter().map(|f| f.normal).collect(),
             centroids: scene.faces.iter().map(|f| f.centroid()).collect(),
             centre,
@@ -160,16 +159,11 @@ impl SceneBvh {
         }
     }
 
-    /// The distance to BVH primitive `id` along the ray `r` (the BVH's frame), infinite for a miss
-    /// or a hit in a cut-out's hole: every query's primitive test.
+    /// Whether the ray `r` (the BVH's frame) meeting face `face` at `t` is a hit: not one in a
+    /// cut-out's hole. Every query's test of a geometric hit.
     #[inline]
-    fn hit_t(&self, r: &Ray, id: usize) -> f32 {
-        let t = self.tris[id].intersect(r);
-        if t.is_finite() && !self.cut_index.is_empty() && self.in_hole(self.face_of[id], r, t) {
-            f32::INFINITY
-        } else {
-            t
-        }
+    fn solid(&self, r: &Ray, face: u32, t: f32) -> bool {
+        self.cut_index.is_empty() || !self.in_hole(face, r, t)
     }
 
     /// Whether the point at `t` along `r` on face `face` is in a hole of its cut-out.
@@ -186,11 +180,12 @@ impl SceneBvh {
     }
 
     /// How far rays start *behind* their true origin (`2·10⁻⁴ + eps`, world units), with `tmin` raised by the
-    /// same amount. obvhs's CWBVH node test clamps the entry distance to an absolute `1e-4`
-    /// (`cwbvh::node::EPSILON`), which silently drops every hit closer than 10⁻⁴ world units to the ray
-    /// origin — a ray leaving a concave corner would escape through the adjoining wall. Starting the ray
-    /// earlier puts all wanted hits beyond that clamp; the primitive test's `tmin` still excludes hits behind
-    /// the true origin.
+    /// same amount. obvhs's own CWBVH node test clamped the entry distance to an absolute `1e-4`
+    /// (`cwbvh::node::EPSILON`), which silently dropped every hit closer than 10⁻⁴ world units to the ray
+    /// origin — a ray leaving a concave corner escaped through the adjoining wall. Our traversal
+    /// ([`wide`]) has no such clamp; the backoff stays so that every f32 ray, hence every hit
+    /// distance, is the one it was (the primitive test's `tmin` still excludes hits behind the
+    /// true origin).
     pub fn backoff(&self) -> f64 {
         2e-4 + self.eps
     }
@@ -227,13 +222,8 @@ impl SceneBvh {
             (back + self.eps) as f32,
             (back + len - self.eps) as f32,
         );
-        self.bvh.ray_traverse_miss(ray, |r, id| {
-            let f = self.face_of[id];
-            if f == skip_a || f == skip_b {
-                f32::INFINITY
-            } else {
-                self.hit_t(r, id)
-            }
+        !self.bvh.any(&ray, |f, t| {
+            f != skip_a && f != skip_b && self.solid(&ray, f, t)
         })
     }
 
@@ -266,31 +256,23 @@ impl SceneBvh {
             back as f32,
             tmax_world,
         );
-        let mut hit = obvhs::ray::RayHit::none();
         // Two-sided thin geometry is two coincident faces with opposite normals, and a ray meets
         // both at the same t. The one facing the ray must win (the other one's back is not a
         // surface the ray can reach), so back faces are pushed back by a tie margin.
         let tie = self.eps as f32;
-        let found = self.bvh.ray_traverse(ray, &mut hit, |r, id| {
-            let face = self.face_of[id];
-            if face == skip {
-                return f32::INFINITY;
-            }
-            let t = self.hit_t(r, id);
-            if t.is_finite() && self.normals[face as usize].dot(u) > 0.0 {
+        let (face, key) = self.bvh.closest(&ray, |face, t| {
+            if face == skip || !self.solid(&ray, face, t) {
+                f32::INFINITY
+            } else if self.normals[face as usize].dot(u) > 0.0 {
                 t + tie
             } else {
                 t
             }
-        });
-        if !found {
-            return None;
-        }
-        let face = self.face_of[hit.primitive_id as usize];
+        })?;
         let t_hit = if self.normals[face as usize].dot(u) > 0.0 {
-            hit.t - tie
+            key - tie
         } else {
-            hit.t
+            key
         };
         let t_world = (t_hit as f64 - back).max(0.0);
         Some(Hit {
@@ -326,13 +308,9 @@ impl SceneBvh {
             back as f32,
             f32::INFINITY,
         );
-        self.bvh.ray_traverse_miss(ray, |r, id| {
-            if self.face_of[id] == from.face {
-                f32::INFINITY
-            } else {
-                self.hit_t(r, id)
-            }
-        })
+        !self
+            .bvh
+            .any(&ray, |f, t| f != from.face && self.solid(&ray, f, t))
     }
 
     /// Whether a light sample's shadow ray from the receiver `from` is clear: to a point, the
@@ -376,11 +354,10 @@ impl SceneBvh {
         }
     }
 
-    /// A bare obvhs occlusion query, as obvhs's examples make it: no face skipping, no offsets (for
-    /// [`crate::bench`]). The ray is in the BVH's frame: see [`SceneBvh::centre`].
+    /// A bare occlusion query: no face skipping, no offsets, no cut-outs (for [`crate::bench`]).
+    /// The ray is in the BVH's frame: see [`SceneBvh::centre`].
     pub(crate) fn bare_miss(&self, ray: &Ray) -> bool {
-        self.bvh
-            .ray_traverse_miss(*ray, |r, id| self.tris[id].intersect(r))
+        !self.bvh.any(ray, |_, _| true)
     }
 
     /// The origin of the BVH's f32 frame (the centre of the scene's bounds): a bare [`Ray`] for the BVH
@@ -391,7 +368,7 @@ impl SceneBvh {
 
     /// Number of BVH primitives (more than the face count when spatial splits duplicated references).
     pub fn primitive_count(&self) -> usize {
-        self.tris.len()
+        self.bvh.primitive_count()
     }
 }
 

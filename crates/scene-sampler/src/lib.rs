@@ -10,7 +10,7 @@
 //!   and decoded texture memory ([`LoadOptions`], [`load_with`], [`confine`]).
 //! * **Sampling** — area-uniform parameterizations [`SurfaceSampler`] (`[0,1]² →` surface) and [`FlatSampler`]
 //!   (`[0,1] →` segments), with inverses (fig. B.2); cosine-weighted direction helpers.
-//! * **Visibility** — [`SceneBvh`] (a CWBVH from obvhs, f32, with a documented self-intersection policy):
+//! * **Visibility** — [`SceneBvh`] (obvhs's BVH collapsed to eight-wide nodes, f32, with a documented self-intersection policy):
 //!   occlusion between surface points, batched in parallel, and closest-hit queries; [`FlatVisibility`].
 //! * **The kernel** — [`KernelSampler`] / [`FlatKernelSampler`] evaluate `K(x,y) = ρ(y)·G(x,y)·V(x,y)` (sec. 3.1,
 //!   docs/design/math.md §4), with the `r → 0` singularity clamped as documented in [`kernel`].

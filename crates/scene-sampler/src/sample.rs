@@ -290,7 +290,7 @@ impl FaceRec {
 /// A hint to load the cache line holding `r` into all cache levels: the x86 `prefetcht0` instruction (through
 /// `safe_arch`, no `unsafe` here), nothing on other targets. It never faults and never changes a result.
 #[inline(always)]
-fn prefetch<T>(r: &T) {
+pub(crate) fn prefetch<T>(r: &T) {
     #[cfg(all(
         any(target_arch = "x86", target_arch = "x86_64"),
         target_feature = "sse"

@@ -1,5 +1,5 @@
 //! Benchmarks of the `scenes` group: BVH build and occlusion-ray throughput on generated scenes of 1k to 1M
-//! triangles (`--quick`: 1k and 20k), on 1 and 2 threads: bare obvhs rays, `SceneBvh::visible`, and the
+//! triangles (`--quick`: 1k and 20k), on 1 and 2 threads: bare rays, `SceneBvh::visible`, and the
 //! kernel sampler (parameterize + cosines + ray + G); and the peak resident memory of building a scene and
 //! its BVH, measured per size in a child process ([`mem_probe`]). Writes `benchmarks-scenes.md` and the
 //! plots `figures/scaling-rays.png` and `figures/scaling-memory.png`.
@@ -110,15 +110,15 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         "# scene-sampler throughput\n\n\
          Command: `cargo xtask bench --only scenes` (release). Scene: `scene_sampler::random_boxes(N, 1)` \
          (Cornell box plus random boxes; N = 0 gives the bare Cornell box). Queries: random area-uniform surface-point pairs that face each other \
-         (the ones the kernel traces); best of 3 runs each. *bare obvhs* = prepared f32 rays through \
-         `CwBvh::ray_traverse_miss` + `Triangle::intersect`, as obvhs's examples drive it; *visible* = \
+         (the ones the kernel traces); best of 3 runs each. *bare* = prepared f32 rays through \
+         the BVH's occlusion traversal, no face skipping or offsets; *visible* = \
          `SceneBvh::visible`; *kernel* = `KernelSampler::sample` (parameterize 4 numbers, cosines, ray, G), one call per sample; \
          *samples* = the same samples, bit for bit, through the iterator `KernelSampler::samples` (chunks of 1024 per rayon task), which \
          prefetches the surface look-ups of the next three samples while one traces its ray (what gcr's batched sampling, \
          `Domain::rays`, uses); the last two columns: the same bare rays \
          through a BVH built with `medium_build` instead of `very_slow_build`. The machine is shared (2 cores): \
          numbers move by ±10 % between runs.\n\n\
-         | triangles | threads | build (s) | bare obvhs (M rays/s) | visible (M/s) | kernel (M samples/s) | kernel / bare time | samples (M/s) | samples / bare time | facing pairs | visible pairs | medium build (s) | bare obvhs, medium BVH (M rays/s) |\n\
+         | triangles | threads | build (s) | bare (M rays/s) | visible (M/s) | kernel (M samples/s) | kernel / bare time | samples (M/s) | samples / bare time | facing pairs | visible pairs | medium build (s) | bare, medium BVH (M rays/s) |\n\
          |---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     let load = || std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
@@ -156,7 +156,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
             writeln!(md, "{line}")?;
             let t = if threads == 1 { "thread" } else { "threads" };
             push(
-                format!("bare obvhs rays, {threads} {t}"),
+                format!("bare rays, {threads} {t}"),
                 r.triangles,
                 r.bare_rays_per_s / 1e6,
             );

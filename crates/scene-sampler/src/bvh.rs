@@ -79,6 +79,7 @@ impl std::fmt::Debug for SceneBvh {
         f.debug_struct("SceneBvh")
             .field("nodes", &self.bvh.node_count())
             .field("packs", &self.bvh.pack_count())
+            .field("depth", &self.bvh.depth())
             .field("eps", &self.eps)
             .finish()
     }

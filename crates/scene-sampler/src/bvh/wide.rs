@@ -14,12 +14,15 @@
 //! * **Order**: a closest-hit query tests a node's leaves when it visits the node (a hit shortens
 //!   the ray), visits the inner children it meets nearest first (a stack sorted by entry distance)
 //!   and skips any whose entry lies beyond the closest hit so far. An occlusion query stops at
-//!   the first accepted hit and visits children in the slot order of the ray's octant.
+//!   the first accepted hit and visits children in the slot order of the ray's octant. Both ask
+//!   for the memory of the children they will visit (prefetch) before testing a node's leaves:
+//!   on 10⁵–10⁶ triangles the loads of nodes and packs, not the arithmetic, are most of the time
+//!   (+20–30 % rays per second on incoherent rays).
 //!
 //! It replaced obvhs's CWBVH (Ylitie et al. 2017) traversal, a port of a GPU design: child boxes
 //! quantised to bytes and converted at every visit, octant order for closest hits, leaves of at
 //! most three triangles through a per-triangle closure. On the `rays` bench (docs/results/
-//! benchmarks-rays.md, best of three runs) it raised our throughput from 0.38–0.82× Embree's to 0.60–1.16×.
+//! benchmarks-rays.md, best of three runs) it raised our throughput from 0.38–0.82× Embree's to 0.67–1.25×.
 //!
 //! The caller decides what a geometric hit means (`accept`): a face to skip, a cut-out's hole, a
 //! back face's tie margin (see [`super::SceneBvh`]). It is called only for lanes whose triangle the
@@ -38,8 +41,9 @@ use wide::{CmpGe, CmpLe, CmpNe, f32x4, f32x8};
 const LEAF: u32 = 1 << 31;
 
 /// Entries of a traversal stack on the thread's stack: a node pushes at most seven entries more than
-/// it pops, so a tree `D` levels deep needs at most `7·D + 8` (`D` ≤ 34 here; BVH8s of 10⁶ triangles
-/// are about 10 deep). A deeper tree (degenerate geometry) gets a stack on the heap per query.
+/// it pops, so a tree `D` levels deep needs at most `7·D + 8`. A query takes a stack of `STACK / 4`
+/// entries when that suffices (`D` ≤ 8), else of `STACK` (`D` ≤ 35), else one on the heap
+/// (degenerate geometry).
 const STACK: usize = 256;
 
 /// Eight child boxes in structure-of-arrays form and what each child is: 224 bytes in four
@@ -51,6 +55,8 @@ struct Node8 {
     bounds: [f32x8; 6],
     /// Per child: a node index, or a leaf ([`LEAF`]).
     child: [u32; 8],
+    /// Bit `i` set when child `i` is a leaf.
+    leaves: u32,
 }
 
 /// Four triangles of one node's leaves, lane by lane (a node's leaves share packs: one pack per
@@ -241,6 +247,7 @@ impl WideBvh {
                 .try_into()
                 .expect("six bounds"),
             child: [0; 8],
+            leaves: 0,
         };
         wide.nodes.push(empty);
         let mut packs: Vec<PackBuilder> = Vec::new();
@@ -310,6 +317,7 @@ impl WideBvh {
                 for &prim in &bvh2.primitive_indices[start..start + count] {
                     packs[p].push(&tris[prim as usize], prim);
                 }
+                out.leaves |= 1 << slot_of[k];
                 out.child[slot_of[k]] =
                     LEAF | (p as u32) << 4 | (lane as u32) << 2 | (count as u32 - 1);
             }
@@ -347,9 +355,37 @@ impl WideBvh {
         leaves.filter(|&&c| c & LEAF != 0).map(|&c| lanes(c)).sum()
     }
 
+    /// The number of node levels below the root.
+    pub(crate) fn depth(&self) -> usize {
+        (self.stack_len - 8) / 7
+    }
+
     /// The number of four-triangle packs.
     pub(crate) fn pack_count(&self) -> usize {
         self.packs.len()
+    }
+
+    /// Asks for node `c`'s four cache lines.
+    #[inline(always)]
+    fn prefetch_node(&self, c: u32) {
+        let child = &self.nodes[c as usize];
+        prefetch(&child.bounds[0]);
+        prefetch(&child.bounds[2]);
+        prefetch(&child.bounds[4]);
+        prefetch(&child.child);
+    }
+
+    /// Asks for the packs of `node`'s leaves in `mask` (three cache lines each).
+    #[inline(always)]
+    fn prefetch_leaves(&self, node: &Node8, mut mask: u32) {
+        while mask != 0 {
+            let i = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let pack = &self.packs[Self::leaf(node.child[i]).0];
+            prefetch(&pack.v0[0]);
+            prefetch(&pack.e1[1]);
+            prefetch(&pack.prim);
+        }
     }
 
     /// The pack and lane mask of leaf child `c`.
@@ -367,8 +403,11 @@ impl WideBvh {
         ray: &Ray,
         accept: impl FnMut(u32, f32) -> f32,
     ) -> Option<(u32, f32)> {
+        // the smallest stack that holds the tree's deepest path (zeroing one costs per query)
         if self.nodes.is_empty() {
             None
+        } else if self.stack_len <= STACK / 4 {
+            self.closest_with(&mut [(0, 0.0); STACK / 4], ray, accept)
         } else if self.stack_len <= STACK {
             self.closest_with(&mut [(0, 0.0); STACK], ray, accept)
         } else {
@@ -392,37 +431,18 @@ impl WideBvh {
         let mut at = 0u32;
         loop {
             let node = &self.nodes[at as usize];
-            let (near, mut mask) = slab.test(node, ray.tmin, tmax);
-            // leaves at once (a hit shortens the ray for the rest); inner children pushed
-            // farthest deepest: the stack above `base` stays sorted by entry distance,
-            // decreasing toward the top
+            let (near, mask) = slab.test(node, ray.tmin, tmax);
+            let leaves = mask & node.leaves;
+            // inner children pushed farthest deepest (the stack above `base` stays sorted by
+            // entry distance, decreasing toward the top), their nodes and the leaves' packs
+            // fetched while the leaves are tested
             let base = sp;
-            while mask != 0 {
-                let i = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
+            let mut inner = mask & !node.leaves;
+            while inner != 0 {
+                let i = inner.trailing_zeros() as usize;
+                inner &= inner - 1;
                 let c = node.child[i];
-                if c & LEAF != 0 {
-                    {
-                        let (p, m) = Self::leaf(c);
-                        let pack = &self.packs[p];
-                        let (t, mut lanes) = pack.intersect(&o, &d, ray.tmin, tmax, m);
-                        while lanes != 0 {
-                            let lane = lanes.trailing_zeros() as usize;
-                            lanes &= lanes - 1;
-                            let key = accept(pack.prim[lane], t[lane]);
-                            if key < tmax {
-                                tmax = key;
-                                best = Some((pack.prim[lane], key));
-                            }
-                        }
-                    }
-                    continue;
-                }
-                let child = &self.nodes[c as usize];
-                prefetch(&child.bounds[0]);
-                prefetch(&child.bounds[2]);
-                prefetch(&child.bounds[4]);
-                prefetch(&child.child);
+                self.prefetch_node(c);
                 let entry = (c, near[i]);
                 let mut j = sp;
                 while j > base && stack[j - 1].1 < entry.1 {
@@ -431,6 +451,25 @@ impl WideBvh {
                 }
                 stack[j] = entry;
                 sp += 1;
+            }
+            self.prefetch_leaves(node, leaves);
+            // the leaves: a hit shortens the ray for the rest
+            let mut leaves = leaves;
+            while leaves != 0 {
+                let i = leaves.trailing_zeros() as usize;
+                leaves &= leaves - 1;
+                let (p, m) = Self::leaf(node.child[i]);
+                let pack = &self.packs[p];
+                let (t, mut lanes) = pack.intersect(&o, &d, ray.tmin, tmax, m);
+                while lanes != 0 {
+                    let lane = lanes.trailing_zeros() as usize;
+                    lanes &= lanes - 1;
+                    let key = accept(pack.prim[lane], t[lane]);
+                    if key < tmax {
+                        tmax = key;
+                        best = Some((pack.prim[lane], key));
+                    }
+                }
             }
             // the nearest pending node that may still hold a closer hit
             loop {
@@ -456,6 +495,8 @@ impl WideBvh {
     pub(crate) fn any(&self, ray: &Ray, accept: impl FnMut(u32, f32) -> bool) -> bool {
         if self.nodes.is_empty() {
             false
+        } else if self.stack_len <= STACK / 4 {
+            self.any_with(&mut [0; STACK / 4], ray, accept)
         } else if self.stack_len <= STACK {
             self.any_with(&mut [0; STACK], ray, accept)
         } else {
@@ -483,27 +524,31 @@ impl WideBvh {
         loop {
             let node = &self.nodes[at as usize];
             let (_, mask) = slab.test(node, ray.tmin, ray.tmax);
+            // inner children pushed in reverse slot priority (the first on top), their nodes
+            // and the leaves' packs fetched while the leaves are tested
             for k in 0..8 {
                 let i = k ^ octant;
-                if mask & (1 << i) == 0 {
-                    continue;
-                }
-                let c = node.child[i];
-                if c & LEAF == 0 {
+                if mask & !node.leaves & (1 << i) != 0 {
+                    let c = node.child[i];
+                    self.prefetch_node(c);
                     stack[sp] = c;
                     sp += 1;
+                }
+            }
+            self.prefetch_leaves(node, mask & node.leaves);
+            for k in (0..8).rev() {
+                let i = k ^ octant;
+                if mask & node.leaves & (1 << i) == 0 {
                     continue;
                 }
-                {
-                    let (p, m) = Self::leaf(c);
-                    let pack = &self.packs[p];
-                    let (t, mut lanes) = pack.intersect(&o, &d, ray.tmin, ray.tmax, m);
-                    while lanes != 0 {
-                        let lane = lanes.trailing_zeros() as usize;
-                        lanes &= lanes - 1;
-                        if accept(pack.prim[lane], t[lane]) {
-                            return true;
-                        }
+                let (p, m) = Self::leaf(node.child[i]);
+                let pack = &self.packs[p];
+                let (t, mut lanes) = pack.intersect(&o, &d, ray.tmin, ray.tmax, m);
+                while lanes != 0 {
+                    let lane = lanes.trailing_zeros() as usize;
+                    lanes &= lanes - 1;
+                    if accept(pack.prim[lane], t[lane]) {
+                        return true;
                     }
                 }
             }

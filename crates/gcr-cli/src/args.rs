@@ -59,6 +59,7 @@ pub struct MergeArgs {
 
 /// `gcr solve`.
 #[derive(Args)]
+#[command(group = clap::ArgGroup::new("shardable").args(["probes", "lightmap"]).multiple(true))]
 pub struct SolveArgs {
     /// Scene file or built-in name.
     pub scene: String,
@@ -241,6 +242,18 @@ pub struct SolveArgs {
         requires = "lightmap"
     )]
     pub lightmap_quantity: gcr::LightmapQuantity,
+    /// Take the lightmap's texels from the partial outputs of `--shard` runs
+    /// (<NAME>.shard-I-of-N.txt, every shard once) instead of gathering them, and write the files
+    /// a single run writes, byte for byte; give the shard runs' options, --shard excepted.
+    #[arg(
+        long,
+        help_heading = "Lightmaps",
+        value_name = "PARTS",
+        num_args = 1..,
+        requires = "lightmap",
+        conflicts_with = "shard"
+    )]
+    pub from_shards: Vec<PathBuf>,
     /// PLY mesh with radiosity per vertex (.ply).
     #[arg(help_heading = "Outputs", long)]
     pub ply: Option<PathBuf>,
@@ -250,15 +263,16 @@ pub struct SolveArgs {
     /// Where to write the probes' values (`r g b` per line, in the probe file's order).
     #[arg(help_heading = "Probes and work planes", long, requires = "probes")]
     pub probe_out: Option<PathBuf>,
-    /// Estimate only shard INDEX of COUNT of the probes (0 <= INDEX < COUNT; e.g. a Slurm array
-    /// or Kubernetes indexed job's index) and write them with their indices to --probe-out;
-    /// `gcr merge` joins the shards into the single run's probe output, byte for byte
-    /// (docs/guide/probes.md, "Sharded runs").
+    /// Estimate only shard INDEX of COUNT of the probes and of the lightmap's texels (0 <= INDEX
+    /// < COUNT; e.g. a Slurm array or Kubernetes indexed job's index): the probes with their
+    /// indices to --probe-out, joined by `gcr merge` (docs/guide/probes.md, "Sharded runs"); the
+    /// texels to <NAME>.shard-INDEX-of-COUNT.txt beside --lightmap's NAME.glb, joined by
+    /// --from-shards (docs/guide/lightmaps.md, "Sharded bakes"). Byte for byte the single run's.
     #[arg(
         help_heading = "Probes and work planes",
         long,
         value_name = "INDEX/COUNT",
-        requires = "probes"
+        requires = "shardable"
     )]
     pub shard: Option<gcr::Shard>,
     /// The paths gather runs its rounds in blocks of at least this many points, each to the

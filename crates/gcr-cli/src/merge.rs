@@ -5,27 +5,39 @@ use crate::args::MergeArgs;
 use anyhow::{Context, Result};
 use gcr::output::{StagedFiles, check_target, shards};
 
-/// Runs `gcr merge`.
-pub fn run(args: &MergeArgs) -> Result<()> {
-    check_target(&args.probe_out, "probe", None)?;
+/// The partial outputs at `paths` as (name, text).
+pub fn read_parts(paths: &[std::path::PathBuf]) -> Result<Vec<(String, String)>> {
     let limit = scene_sampler::LoadOptions::default().max_file_bytes;
-    let parts = (args.parts.iter())
+    (paths.iter())
         .map(|p| {
             let name = p.display().to_string();
             let bytes = scene_sampler::confine::read_regular_file(p, limit)?;
             let text = String::from_utf8(bytes)
-                .with_context(|| format!("{name}: not text (a partial probe output is UTF-8)"))?;
+                .with_context(|| format!("{name}: not text (a partial output is UTF-8)"))?;
             Ok((name, text))
         })
-        .collect::<Result<Vec<_>>>()?;
+        .collect()
+}
+
+/// Runs `gcr merge`.
+pub fn run(args: &MergeArgs) -> Result<()> {
+    check_target(&args.probe_out, "probe", None)?;
+    let parts = read_parts(&args.parts)?;
     let merged = shards::merge(&parts).context("merging the shards")?;
+    if merged.kind == shards::Kind::Lightmap {
+        anyhow::bail!(
+            "these are a lightmap's shards: they are merged by the solve that lays the atlas \
+             out, `gcr solve SCENE --lightmap OUT.glb … --from-shards PARTS…` with the shards' \
+             options (docs/guide/lightmaps.md, \"Sharded bakes\")"
+        );
+    }
     let mut staged = StagedFiles::new();
-    staged.write_bytes(&args.probe_out, merged.as_bytes())?;
+    staged.write_bytes(&args.probe_out, merged.text.as_bytes())?;
     staged.commit()?;
     eprintln!(
         "merged {} shards: {} probes to {}",
         parts.len(),
-        merged.lines().count(),
+        merged.text.lines().count(),
         args.probe_out.display()
     );
     Ok(())

@@ -1,7 +1,9 @@
 //! Issue 34, sharded runs: `gcr solve --shard I/N` writes its probes' lines with their indices,
 //! and `gcr merge` joins the shards into exactly the bytes of the single run (radiosity and
-//! irradiance, with blocks small enough that every shard holds several); what cannot be a shard
-//! is refused before the solve, and what cannot be merged is refused naming the file.
+//! irradiance, with blocks small enough that every shard holds several); a lightmap's texels
+//! likewise, merged by `gcr solve --from-shards` into the single run's .glb and EXR pages; what
+//! cannot be a shard is refused before the solve, and what cannot be merged is refused naming
+//! the file.
 
 mod common;
 
@@ -124,7 +126,8 @@ fn what_cannot_be_a_shard_is_refused_before_the_solve() {
     let img = d.join("i.png");
     fails(
         &with(&["--shard", "0/2", "--image", s(&img)]),
-        "--shard splits the probes (--probes, --probe-out) and nothing else: an image",
+        "--shard splits the probes (--probes, --probe-out) and a lightmap's texels (--lightmap) \
+         and nothing else: an image",
     );
     let o = gcr(&["solve", "cornell-box", "--shard", "0/2"]);
     assert_eq!(
@@ -183,8 +186,92 @@ fn shards_of_different_runs_are_not_merged() {
     );
     fails(
         &gcr(&["merge", s(&p), "--probe-out", s(&merged)]),
-        "not a partial probe output",
+        "not a partial output",
     );
     assert!(!merged.exists());
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// A lightmap baked in three shards and merged by `--from-shards` is the single run's .glb and
+/// EXR page, byte for byte (irradiance and radiosity); shards of other settings, a missing
+/// shard and `gcr merge` on lightmap shards are refused, writing nothing.
+#[test]
+fn lightmap_shards_merge_into_the_single_bake() {
+    let d = dir("shards", "lightmap");
+    for quantity in ["irradiance", "radiosity"] {
+        let bake_at = |density: &str, out: &Path, more: &[&str]| {
+            let mut args = vec![
+                "solve",
+                "cornell-box",
+                "--lightmap",
+                s(out),
+                "--lightmap-density",
+                density,
+                "--lightmap-quantity",
+                quantity,
+                "--block-points",
+                "128",
+                "--quality",
+                "draft",
+            ];
+            args.extend(more);
+            gcr(&args)
+        };
+        let bake = |out: &Path, more: &[&str]| bake_at("30", out, more);
+        let (single, parts, merged) = (d.join("single"), d.join("parts"), d.join("merged"));
+        for x in [&single, &parts, &merged] {
+            let _ = std::fs::remove_dir_all(x);
+            std::fs::create_dir_all(x).unwrap();
+        }
+        ok(&bake(&single.join("room.glb"), &[]));
+        for i in [2, 0, 1] {
+            ok(&bake(
+                &parts.join("room.glb"),
+                &["--shard", &format!("{i}/3")],
+            ));
+        }
+        assert_eq!(
+            entries(&parts),
+            [
+                "room.shard-0-of-3.txt",
+                "room.shard-1-of-3.txt",
+                "room.shard-2-of-3.txt"
+            ],
+            "a shard writes its part and nothing else"
+        );
+        let part = |i: usize| parts.join(format!("room.shard-{i}-of-3.txt"));
+        let (p0, p1, p2) = (part(0), part(1), part(2));
+        let glb = merged.join("room.glb");
+        ok(&bake(&glb, &["--from-shards", s(&p1), s(&p2), s(&p0)]));
+        assert_eq!(entries(&merged), entries(&single));
+        for name in entries(&single) {
+            let (a, b) = (single.join(&name), merged.join(&name));
+            assert!(
+                std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap(),
+                "{quantity}: {name} differs from the single run's"
+            );
+        }
+        // refused: other settings, a shard missing, probes' merge; nothing written
+        let other = merged.join("other.glb");
+        let all = ["--from-shards", s(&p0), s(&p1), s(&p2)];
+        fails(&bake_at("31", &other, &all), "the shards have fingerprint");
+        fails(
+            &bake(&other, &["--from-shards", s(&p0), s(&p2)]),
+            "shard 1/3 is missing",
+        );
+        let probe_out = merged.join("p.txt");
+        fails(
+            &gcr(&[
+                "merge",
+                s(&p0),
+                s(&p1),
+                s(&p2),
+                "--probe-out",
+                s(&probe_out),
+            ]),
+            "these are a lightmap's shards",
+        );
+        assert!(!other.exists() && !probe_out.exists());
+    }
     let _ = std::fs::remove_dir_all(d);
 }

@@ -72,7 +72,7 @@ pub use estimator::{
 pub use gather::Gathered;
 pub use lightmap::{
     Atlas as LightmapAtlas, FaceUv, Lightmap, LightmapError, LightmapQuantity, LightmapSettings,
-    Texel, bake_lightmap,
+    LightmapTexels, Texel, assemble_lightmap, bake_lightmap, gather_texels, lay_out_texels,
 };
 pub use mesh::ShadedMesh;
 pub use metrics::{ImageRecord, LightmapRecord, Metrics, PhaseTimes, peak_memory_bytes};

@@ -1,7 +1,7 @@
 //! Lightmaps: the scene's light baked into textures on a second UV set, as game engines and web
 //! viewers display it (Unity's and Godot's lightmappers, Bevy's `Lightmap`, three.js' `lightMap`).
 //!
-//! [`bake_lightmap`] in four steps:
+//! [`bake_lightmap`] in four steps (a sharded bake runs them apart: `output/shards.rs`):
 //!
 //! 1. **The atlas** (`atlas.rs`): every face a place on a page, at a texel density;
 //! 2. **the texels' points** (`texels.rs`): a point on the surface per covered texel (chart rims
@@ -29,6 +29,7 @@ use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::emitters::Emitters;
 use crate::estimator::{GatherStats, irradiance_at_points, radiosity_at_points};
+use crate::gather::Gathered;
 use crate::solve::Trained;
 
 /// A baked lightmap: the atlas and its pages of linear values.
@@ -92,13 +93,47 @@ impl Lightmap {
     }
 }
 
-/// Bakes the lightmap of a solved 3-D scene (module docs).
+/// The texels a lightmap estimates: the atlas and a surface point per covered texel (steps 1
+/// and 2 of the module docs). A function of the scene and the settings alone, so that the
+/// shards of a bake and the run that merges them lay out the same texels.
+#[derive(Clone, Debug)]
+pub struct LightmapTexels {
+    /// The atlas.
+    pub atlas: Atlas,
+    /// The texels to estimate, in the order of the gather.
+    pub texels: Vec<Texel>,
+    /// Texels left out because their point lay under geometry (filled by dilation).
+    pub left_out: usize,
+}
+
+impl LightmapTexels {
+    /// The points the gather estimates, as [`crate::radiosity_at_points`] takes them (point,
+    /// normal, face; the irradiance gather ignores the face).
+    pub fn points(&self) -> Vec<(glam::DVec3, glam::DVec3, u32)> {
+        (self.texels.iter())
+            .map(|t| (t.point, t.normal, t.face))
+            .collect()
+    }
+}
+
+/// Bakes the lightmap of a solved 3-D scene (module docs): [`lay_out_texels`], [`gather_texels`],
+/// [`assemble_lightmap`].
 pub fn bake_lightmap(
     domain: &Domain,
     trained: &Trained,
     config: &SolveConfig,
     settings: &LightmapSettings,
 ) -> Result<Lightmap, LightmapError> {
+    let texels = lay_out_texels(domain, settings)?;
+    let gathered = gather_texels(domain, trained, config, settings, &texels)?;
+    Ok(assemble_lightmap(texels, &gathered, settings))
+}
+
+/// Steps 1 and 2: the atlas and the texels' points ([`LightmapTexels`]).
+pub fn lay_out_texels(
+    domain: &Domain,
+    settings: &LightmapSettings,
+) -> Result<LightmapTexels, LightmapError> {
     settings.validate()?;
     let Domain::ThreeD(kernel) = domain else {
         return Err(LightmapError::NotThreeD);
@@ -135,23 +170,52 @@ pub fn bake_lightmap(
         });
     }
     let (texels, left_out) = texels::texels(kernel.scene, kernel.bvh, &atlas);
-    // ⟨The estimate at every texel⟩
+    Ok(LightmapTexels {
+        atlas,
+        texels,
+        left_out,
+    })
+}
+
+/// Step 3: the estimate at every texel (with a shard in `config`, at the shard's texels only,
+/// the others left at `Gathered::default()`: [`crate::shard_points`]).
+pub fn gather_texels(
+    domain: &Domain,
+    trained: &Trained,
+    config: &SolveConfig,
+    settings: &LightmapSettings,
+    texels: &LightmapTexels,
+) -> Result<Vec<Gathered>, LightmapError> {
     let emitters = Emitters::new(domain);
-    let gathered = match settings.quantity {
+    let at = texels.points();
+    Ok(match settings.quantity {
         LightmapQuantity::Irradiance => {
-            let at: Vec<_> = texels.iter().map(|t| (t.point, t.normal)).collect();
+            let at: Vec<_> = at.iter().map(|&(p, n, _)| (p, n)).collect();
             irradiance_at_points(domain, trained, &emitters, config, &at)?
         }
         LightmapQuantity::Radiosity => {
-            let at: Vec<_> = texels.iter().map(|t| (t.point, t.normal, t.face)).collect();
             radiosity_at_points(domain, trained, &emitters, config, &at)?
         }
-    };
+    })
+}
+
+/// Step 4: the estimates (one per texel, in order) into the pages, dilated over the padding
+/// and the left-out texels.
+pub fn assemble_lightmap(
+    texels: LightmapTexels,
+    gathered: &[Gathered],
+    settings: &LightmapSettings,
+) -> Lightmap {
+    let LightmapTexels {
+        atlas,
+        texels,
+        left_out,
+    } = texels;
     // ⟨Into the pages, then dilated over the padding and the left-out texels⟩
     let (w, h) = (atlas.width as usize, atlas.height as usize);
     let mut pages = vec![vec![[0.0f32; 3]; w * h]; atlas.pages as usize];
     let mut filled = vec![vec![false; w * h]; atlas.pages as usize];
-    for (t, g) in texels.iter().zip(&gathered) {
+    for (t, g) in texels.iter().zip(gathered) {
         let i = t.y as usize * w + t.x as usize;
         pages[t.page as usize][i] = g.radiosity.map(|v| v as f32);
         filled[t.page as usize][i] = true;
@@ -159,12 +223,12 @@ pub fn bake_lightmap(
     for (page, filled) in pages.iter_mut().zip(&mut filled) {
         dilate::dilate(page, filled, w, h, 2 * settings.padding as usize + 2);
     }
-    Ok(Lightmap {
-        stats: GatherStats::of(&gathered),
+    Lightmap {
+        stats: GatherStats::of(gathered),
         atlas,
         pages,
         quantity: settings.quantity,
         texels,
         left_out,
-    })
+    }
 }

@@ -71,12 +71,15 @@ pub enum OutputError {
     /// A shard that cannot be formed ([`crate::shard_points`]).
     #[error(transparent)]
     Shard(#[from] crate::ShardError),
-    /// A shard asked for outputs other than probes, or for no probes.
+    /// A shard asked for outputs other than probes and a lightmap, or for neither.
     #[error(
-        "--shard splits the probes (--probes, --probe-out) and nothing else: {0} needs the whole \
-         solution; run it without --shard"
+        "--shard splits the probes (--probes, --probe-out) and a lightmap's texels (--lightmap) \
+         and nothing else: {0} needs the whole solution; run it without --shard"
     )]
     ShardOutput(&'static str),
+    /// Lightmap shards that cannot be merged, or merged into another run.
+    #[error("merging the lightmap's shards: {0}")]
+    MergeShards(String),
     /// Probes without a probe output, or the other way round.
     #[error("probes and a probe output go together: give both or neither")]
     ProbesWithoutOutput,

@@ -267,8 +267,8 @@ pub fn probe_values(
     let text = match config.paths.shard {
         None => lines.concat(),
         Some(shard) => {
-            let print = super::shards::fingerprint(domain, probes.0, config);
-            super::shards::partial_text(shard, print, &lines, &mine)
+            let print = super::shards::fingerprint(domain, probes.0, config, "");
+            super::shards::partial_text(super::shards::Kind::Probes, shard, print, &lines, &mine)
         }
     };
     Ok((text, stats))

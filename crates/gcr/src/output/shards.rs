@@ -1,5 +1,5 @@
-//! Sharded probe runs: each shard's partial probe output, and their merge into the probe output
-//! a single run writes, byte for byte.
+//! Sharded runs: each shard's partial output (probes or lightmap texels), and their merge into
+//! what a single run writes, byte for byte.
 //!
 //! `gcr solve … --probes in.pts --probe-out part-I.txt --shard I/N` estimates only the probes
 //! of shard I ([`crate::shard_points`]: whole blocks of the paths gather, so each value is the
@@ -17,14 +17,46 @@
 //! shard excepted), so that shards of different runs are not merged. `gcr merge` ([`merge`])
 //! checks that every shard 0…N−1 is there once, with the same fingerprint and probe count, and
 //! that the indices cover every probe once, and writes the lines in probe order.
+//!
+//! A lightmap's texels are sharded the same way ([`Kind::Lightmap`]): `gcr solve … --lightmap
+//! out.glb --shard I/N` writes `out.shard-I-of-N.txt` ([`lightmap_part_path`]), whose lines hold
+//! each texel's whole estimate ([`gathered_line`]), and `gcr solve … --lightmap out.glb
+//! --from-shards PARTS…` lays the atlas out again, takes the texels' values from the parts
+//! instead of gathering them, and writes the single run's files.
 
 use crate::config::{Shard, SolveConfig};
 use crate::domain::Domain;
+use crate::gather::Gathered;
 use glam::DVec3;
+use std::path::{Path, PathBuf};
 
-/// The fingerprint of a sharded run (module docs): FNV-1a over the scene's summary, the probes
-/// and the settings with the shard removed.
-pub fn fingerprint(domain: &Domain, probes: &[(DVec3, DVec3, u32)], config: &SolveConfig) -> u64 {
+/// What a partial output holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// Probe values (`--probes`, `--probe-out`), merged by `gcr merge`.
+    Probes,
+    /// Lightmap texels (`--lightmap`), merged by `gcr solve … --from-shards`.
+    Lightmap,
+}
+
+impl Kind {
+    /// The header's words: what, and what its points are called.
+    fn words(self) -> (&'static str, &'static str) {
+        match self {
+            Kind::Probes => ("probe", "points"),
+            Kind::Lightmap => ("lightmap", "texels"),
+        }
+    }
+}
+
+/// The fingerprint of a sharded run (module docs): FNV-1a over the scene's summary, the points
+/// and the settings with the shard removed, and `extra` (a lightmap's settings).
+pub fn fingerprint(
+    domain: &Domain,
+    probes: &[(DVec3, DVec3, u32)],
+    config: &SolveConfig,
+    extra: &str,
+) -> u64 {
     let mut h = Fnv(0xcbf2_9ce4_8422_2325);
     let (origin, diagonal) = domain.frame();
     for v in [
@@ -49,7 +81,67 @@ pub fn fingerprint(domain: &Domain, probes: &[(DVec3, DVec3, u32)], config: &Sol
     let mut unsharded = config.clone();
     unsharded.paths.shard = None;
     h.add(format!("{unsharded:?}").as_bytes());
+    h.add(extra.as_bytes());
     h.0
+}
+
+/// Where a lightmap shard's partial output goes: `<stem>.shard-I-of-N.txt` beside the .glb.
+pub fn lightmap_part_path(glb: &Path, shard: Shard) -> PathBuf {
+    let stem = glb
+        .file_stem()
+        .map_or("lightmap".into(), |s| s.to_string_lossy());
+    glb.with_file_name(format!(
+        "{stem}.shard-{}-of-{}.txt",
+        shard.index, shard.count
+    ))
+}
+
+/// A texel's whole estimate as one line of a lightmap's partial output: B (or E), its share
+/// from the networks, its standard error (three bands each), the rays and whether guided.
+/// Rust prints an f64 with the fewest digits that read back to the same bits, so the merge
+/// restores every value exactly.
+pub fn gathered_line(g: &Gathered) -> String {
+    let b = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x:?}"))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    format!(
+        "{} {} {} {} {}\n",
+        b(&g.radiosity),
+        b(&g.from_networks),
+        b(&g.std_error),
+        g.rays,
+        u8::from(g.guided)
+    )
+}
+
+/// The estimate a [`gathered_line`] holds (`None` for a malformed line).
+pub fn parse_gathered(line: &str) -> Option<Gathered> {
+    let f: Vec<&str> = line.split_whitespace().collect();
+    let bands = scene_sampler::BANDS;
+    if f.len() != 3 * bands + 2 {
+        return None;
+    }
+    let v = |k: usize| -> Option<[f64; scene_sampler::BANDS]> {
+        let mut out = [0.0; scene_sampler::BANDS];
+        for (b, o) in out.iter_mut().enumerate() {
+            *o = f[k * bands + b].parse().ok()?;
+        }
+        Some(out)
+    };
+    Some(Gathered {
+        radiosity: v(0)?,
+        from_networks: v(1)?,
+        std_error: v(2)?,
+        rays: f[3 * bands].parse().ok()?,
+        guided: match f[3 * bands + 1] {
+            "0" => false,
+            "1" => true,
+            _ => return None,
+        },
+    })
 }
 
 /// FNV-1a, 64 bits.
@@ -63,12 +155,19 @@ impl Fnv {
     }
 }
 
-/// The partial probe output of `shard` (module docs): the header, then for each probe index in
-/// `indices` (ascending) its line from `lines` (the single run's lines, one per probe, each
+/// The partial output of `shard` (module docs): the header, then for each point index in
+/// `indices` (ascending) its line from `lines` (the single run's lines, one per point, each
 /// ending in a newline).
-pub fn partial_text(shard: Shard, fingerprint: u64, lines: &[String], indices: &[usize]) -> String {
+pub fn partial_text(
+    kind: Kind,
+    shard: Shard,
+    fingerprint: u64,
+    lines: &[String],
+    indices: &[usize],
+) -> String {
+    let (what, unit) = kind.words();
     let mut out = format!(
-        "{HEADER} {shard} of {} points, fingerprint {fingerprint:016x}\n",
+        "# gcr {what} shard {shard} of {} {unit}, fingerprint {fingerprint:016x}\n",
         lines.len()
     );
     for &i in indices {
@@ -76,8 +175,6 @@ pub fn partial_text(shard: Shard, fingerprint: u64, lines: &[String], indices: &
     }
     out
 }
-
-const HEADER: &str = "# gcr probe shard";
 
 /// A partial probe output that cannot be merged, or a set of them that does not make a run.
 #[derive(Debug, thiserror::Error)]
@@ -100,6 +197,7 @@ pub enum MergeError {
 /// One parsed partial output.
 struct Partial {
     name: String,
+    kind: Kind,
     shard: Shard,
     points: usize,
     fingerprint: String,
@@ -107,7 +205,7 @@ struct Partial {
     lines: Vec<(usize, String)>,
 }
 
-/// Parses the partial probe output `text` of the file `name`.
+/// Parses the partial output `text` of the file `name`.
 fn parse(name: &str, text: &str) -> Result<Partial, MergeError> {
     let bad = |line: usize, what: String| MergeError::Malformed {
         name: name.to_string(),
@@ -118,52 +216,60 @@ fn parse(name: &str, text: &str) -> Result<Partial, MergeError> {
     let header = lines.next().unwrap_or("");
     let fields: Vec<&str> = header.split_whitespace().collect();
     // # gcr probe shard I/N of M points, fingerprint F
-    let (shard, points, fingerprint) = match fields[..] {
+    let (kind, shard, points, fingerprint) = match fields[..] {
         [
             "#",
             "gcr",
-            "probe",
+            what,
             "shard",
             shard,
             "of",
             m,
-            "points,",
+            unit,
             "fingerprint",
             f,
-        ] => {
+        ] if [Kind::Probes, Kind::Lightmap]
+            .iter()
+            .any(|k| k.words() == (what, unit.trim_end_matches(','))) =>
+        {
+            let kind = if what == "probe" {
+                Kind::Probes
+            } else {
+                Kind::Lightmap
+            };
             let shard: Shard = (shard.parse()).map_err(|e| bad(1, format!("{e}")))?;
-            let m: usize = m
-                .parse()
-                .map_err(|_| bad(1, format!("probe count `{m}`")))?;
-            (shard, m, f.to_string())
+            let m: usize = (m.parse()).map_err(|_| bad(1, format!("{what} count `{m}`")))?;
+            (kind, shard, m, f.to_string())
         }
         _ => {
             return Err(bad(
                 1,
-                format!(
-                    "not a partial probe output of `gcr solve --shard` (it starts with \
-                     `{HEADER} I/N of M points, fingerprint F`)"
-                ),
+                "not a partial output of `gcr solve --shard` (it starts with `# gcr probe \
+                 shard I/N of M points, fingerprint F` or `# gcr lightmap shard I/N of M \
+                 texels, …`)"
+                    .into(),
             ));
         }
     };
+    let what = kind.words().0;
     let mut out = Vec::new();
     for (k, line) in lines.enumerate() {
         let (index, rest) = line
             .split_once(' ')
             .ok_or_else(|| bad(k + 2, "no value".into()))?;
         let index: usize =
-            (index.parse()).map_err(|_| bad(k + 2, format!("probe index `{index}`")))?;
+            (index.parse()).map_err(|_| bad(k + 2, format!("{what} index `{index}`")))?;
         if index >= points || !rest.ends_with('\n') {
             return Err(bad(
                 k + 2,
-                format!("probe {index} of {points}, or the line is cut short"),
+                format!("{what} {index} of {points}, or the line is cut short"),
             ));
         }
         out.push((index, rest.to_string()));
     }
     Ok(Partial {
         name: name.to_string(),
+        kind,
         shard,
         points,
         fingerprint,
@@ -171,31 +277,45 @@ fn parse(name: &str, text: &str) -> Result<Partial, MergeError> {
     })
 }
 
-/// Merges the partial probe outputs `parts` (file name, text) into the probe output of the
-/// single run: every shard 0…N−1 once, one fingerprint and probe count, every probe once.
-pub fn merge(parts: &[(String, String)]) -> Result<String, MergeError> {
+/// Shards merged: what they hold, the run's fingerprint and the single run's lines.
+#[derive(Clone, Debug)]
+pub struct Merged {
+    /// Probes or lightmap texels.
+    pub kind: Kind,
+    /// The fingerprint every shard carries (hexadecimal, as in the headers).
+    pub fingerprint: String,
+    /// The lines in point order, each ending in a newline.
+    pub text: String,
+}
+
+/// Merges the partial outputs `parts` (file name, text) into the lines of the single run:
+/// every shard 0…N−1 once, one kind, fingerprint and point count, every point once.
+pub fn merge(parts: &[(String, String)]) -> Result<Merged, MergeError> {
     let parts: Vec<Partial> = (parts.iter())
         .map(|(name, text)| parse(name, text))
         .collect::<Result<_, _>>()?;
     let Some(first) = parts.first() else {
-        return Err(MergeError::Mismatch(
-            "no partial probe output to merge".into(),
-        ));
+        return Err(MergeError::Mismatch("no partial output to merge".into()));
     };
-    let count = first.shard.count;
+    let (count, what) = (first.shard.count, first.kind.words().0);
     let mut seen: Vec<Option<&str>> = vec![None; count];
     for p in &parts {
-        if (p.shard.count, p.points, &p.fingerprint) != (count, first.points, &first.fingerprint) {
+        let this = (p.kind, p.shard.count, p.points, &p.fingerprint);
+        if this != (first.kind, count, first.points, &first.fingerprint) {
             return Err(MergeError::Mismatch(format!(
-                "{} is shard {} of {} points, fingerprint {}; {} is {} of {} points, \
+                "{} is {} shard {} of {} {}, fingerprint {}; {} is {} shard {} of {} {}, \
                  fingerprint {}: not shards of one run",
                 p.name,
+                p.kind.words().0,
                 p.shard,
                 p.points,
+                p.kind.words().1,
                 p.fingerprint,
                 first.name,
+                what,
                 first.shard,
                 first.points,
+                first.kind.words().1,
                 first.fingerprint
             )));
         }
@@ -217,7 +337,7 @@ pub fn merge(parts: &[(String, String)]) -> Result<String, MergeError> {
         for (i, line) in &p.lines {
             if lines[*i].replace(line).is_some() {
                 return Err(MergeError::Mismatch(format!(
-                    "probe {i} is in two shards (the second: {})",
+                    "{what} {i} is in two shards (the second: {})",
                     p.name
                 )));
             }
@@ -225,10 +345,14 @@ pub fn merge(parts: &[(String, String)]) -> Result<String, MergeError> {
     }
     if let Some(missing) = lines.iter().position(Option::is_none) {
         return Err(MergeError::Mismatch(format!(
-            "probe {missing} is in no shard: a partial output is cut short or of another run"
+            "{what} {missing} is in no shard: a partial output is cut short or of another run"
         )));
     }
-    Ok(lines.into_iter().flatten().collect())
+    Ok(Merged {
+        kind: first.kind,
+        fingerprint: first.fingerprint.clone(),
+        text: lines.into_iter().flatten().collect(),
+    })
 }
 
 #[cfg(test)]
@@ -245,7 +369,7 @@ mod tests {
                 let shard = Shard { index, count };
                 (
                     format!("p{index}"),
-                    partial_text(shard, 0xabc, &lines(), idx),
+                    partial_text(Kind::Probes, shard, 0xabc, &lines(), idx),
                 )
             })
             .collect()
@@ -259,7 +383,12 @@ mod tests {
                 "# gcr probe shard 0/2 of 5 points, fingerprint 0000000000000abc\n0 0.5"
             )
         );
-        assert_eq!(merge(&p).unwrap(), lines().concat());
+        let merged = merge(&p).unwrap();
+        assert_eq!(merged.text, lines().concat());
+        assert_eq!(
+            (merged.kind, merged.fingerprint.as_str()),
+            (Kind::Probes, "0000000000000abc")
+        );
     }
 
     #[test]
@@ -273,10 +402,43 @@ mod tests {
         p[1].1 = p[1].1.replace("0000000000000abc", "0000000000000abd");
         assert!(err(p).contains("not shards of one run"));
         let p = vec![("x.txt".to_string(), "0.5 0.5 0.5\n".to_string())];
-        assert!(err(p).contains("x.txt:1: not a partial probe output"));
+        assert!(err(p).contains("x.txt:1: not a partial output"));
         let mut p = parts(&[(0, &[0, 1, 2]), (1, &[3, 4])], 2);
         p[1].1.pop();
         assert!(err(p).contains("p1:3: probe 4 of 5, or the line is cut short"));
         assert!(merge(&[]).unwrap_err().to_string().contains("no partial"));
+        // a lightmap part among probe parts
+        let mut p = parts(&[(0, &[0, 1, 2]), (1, &[3, 4])], 2);
+        p[1].1 = p[1].1.replacen(
+            "probe shard 1/2 of 5 points",
+            "lightmap shard 1/2 of 5 texels",
+            1,
+        );
+        assert!(err(p).contains("p1 is lightmap shard 1/2 of 5 texels"));
+    }
+
+    #[test]
+    fn gathered_lines_restore_every_bit() {
+        let g = Gathered {
+            radiosity: [0.1 + 0.2, 1e-310, 123456.789],
+            from_networks: [0.0, -0.0, 1.0 / 3.0],
+            std_error: [f64::MIN_POSITIVE, 2.5e-17, 7.0],
+            rays: 65536,
+            guided: true,
+        };
+        let line = gathered_line(&g);
+        assert!(line.ends_with('\n'));
+        let back = parse_gathered(&line).unwrap();
+        let bits = |g: &Gathered| {
+            let v = [g.radiosity, g.from_networks, g.std_error].concat();
+            (
+                v.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                g.rays,
+                g.guided,
+            )
+        };
+        assert_eq!(bits(&back), bits(&g));
+        assert!(parse_gathered("1 2 3\n").is_none());
+        assert!(parse_gathered(&line.replace(" 1\n", " 2\n")).is_none());
     }
 }

@@ -17,6 +17,7 @@ use crate::config::{GatherMode, SolveConfig};
 use crate::domain::Domain;
 use crate::emitters::Emitters;
 use crate::estimator::{GatherError, GatherStats};
+use crate::gather::Gathered;
 use crate::lightmap::LightmapSettings;
 use crate::mesh::ShadedMesh;
 use crate::metrics::{ImageRecord, Metrics, peak_memory_bytes};
@@ -85,6 +86,9 @@ pub struct OutputPlan {
     probes: Vec<(DVec3, DVec3, u32)>,
     probe_settings: ProbeSettings,
     lightmap: LightmapSettings,
+    /// The partial lightmap outputs (name, text) whose texels the lightmap takes instead of
+    /// gathering them (`--from-shards`; `super::shards`).
+    lightmap_parts: Vec<(String, String)>,
     /// The scene brings its own camera (a built-in's or a glTF camera node).
     scene_camera: bool,
     /// The scene is a Flatland scene.
@@ -210,6 +214,7 @@ impl OutputPlan {
             probes,
             probe_settings,
             lightmap: LightmapSettings::default(),
+            lightmap_parts: Vec::new(),
             scene_camera: domain.scene_3d().is_some_and(|s| s.camera_given),
             flatland: domain.scene_flat().is_some(),
         })
@@ -223,7 +228,8 @@ impl OutputPlan {
         if irradiance && !self.probes.is_empty() && config.gather != GatherMode::Paths {
             return Err(GatherError::IrradianceNeedsPaths(config.gather.name()).into());
         }
-        // ⟨A shard writes its probes and nothing else (`super::shards`)⟩
+        // ⟨A shard writes its probes' and its lightmap texels' values and nothing else
+        // (`super::shards`)⟩
         if config.paths.shard.is_some() {
             let p = &self.paths;
             let other = [
@@ -232,9 +238,11 @@ impl OutputPlan {
                     "an image",
                 ),
                 (p.mesh.is_some() || p.ply.is_some(), "a mesh"),
-                (p.lightmap.is_some(), "a lightmap"),
                 (p.kernel_image.is_some(), "a kernel image"),
-                (self.paths.probe_out.is_none(), "a run without probes"),
+                (
+                    p.probe_out.is_none() && p.lightmap.is_none(),
+                    "a run without probes or a lightmap",
+                ),
             ];
             if let Some((_, what)) = other.iter().find(|(asked, _)| *asked) {
                 return Err(OutputError::ShardOutput(what));
@@ -254,7 +262,7 @@ impl OutputPlan {
     /// Checks that the shard `config` asks for, if any, has probes: the probe set makes at least
     /// as many blocks as there are shards ([`crate::shard_points`]). Call it before the solve.
     pub fn check_shard(&self, domain: &Domain, config: &SolveConfig) -> Result<(), OutputError> {
-        if config.paths.shard.is_some() {
+        if config.paths.shard.is_some() && !self.probes.is_empty() {
             let irradiance = self.probe_settings.quantity != super::ProbeQuantity::Radiosity;
             crate::shard_points(domain, &self.probes, irradiance, config)?;
         }
@@ -265,6 +273,30 @@ impl OutputPlan {
     pub fn with_lightmap(mut self, settings: LightmapSettings) -> Result<Self, OutputError> {
         settings.validate()?;
         self.lightmap = settings;
+        Ok(self)
+    }
+
+    /// The plan with the lightmap's texels taken from the partial outputs `parts` (file name,
+    /// text) of a sharded bake instead of gathered (`--from-shards`; `super::shards`). The run
+    /// must ask for the lightmap with the shards' settings and no shard of its own.
+    pub fn with_lightmap_parts(
+        mut self,
+        parts: Vec<(String, String)>,
+        config: &SolveConfig,
+    ) -> Result<Self, OutputError> {
+        if !parts.is_empty() {
+            if self.paths.lightmap.is_none() {
+                return Err(OutputError::MergeShards(
+                    "--from-shards fills a lightmap's texels: ask for it with --lightmap".into(),
+                ));
+            }
+            if config.paths.shard.is_some() {
+                return Err(OutputError::MergeShards(
+                    "--from-shards merges every shard: run it without --shard".into(),
+                ));
+            }
+        }
+        self.lightmap_parts = parts;
         Ok(self)
     }
 
@@ -474,10 +506,35 @@ fn write_lightmap(
         return Err(OutputError::MeshNeeds3d);
     };
     let tg = Instant::now();
-    let lightmap = {
-        let _phase = crate::progress::phase("lightmap");
-        crate::lightmap::bake_lightmap(domain, trained, config, &plan.lightmap)?
+    let settings = &plan.lightmap;
+    let texels = crate::lightmap::lay_out_texels(domain, settings)?;
+    let print = || {
+        let extra = format!("{settings:?}");
+        super::shards::fingerprint(domain, &texels.points(), config, &extra)
     };
+    // ⟨The texels' values: gathered (all of them, or a shard's), or the shards' merged⟩
+    let gathered = if plan.lightmap_parts.is_empty() {
+        let _phase = crate::progress::phase("lightmap");
+        crate::lightmap::gather_texels(domain, trained, config, settings, &texels)?
+    } else {
+        merged_texels(&plan.lightmap_parts, &format!("{:016x}", print()))?
+    };
+    if let Some(shard) = config.paths.shard {
+        // ⟨A shard writes its texels' estimates with their indices, nothing else⟩
+        let irradiance = settings.quantity == crate::LightmapQuantity::Irradiance;
+        let mine = crate::shard_points(domain, &texels.points(), irradiance, config)?;
+        let theirs: Vec<Gathered> = mine.iter().map(|&i| gathered[i]).collect();
+        record_gather(metrics, &GatherStats::of(&theirs), config);
+        metrics.seconds.gather += tg.elapsed().as_secs_f64();
+        let lines: Vec<String> = gathered.iter().map(super::shards::gathered_line).collect();
+        let kind = super::shards::Kind::Lightmap;
+        let text = super::shards::partial_text(kind, shard, print(), &lines, &mine);
+        let part = super::shards::lightmap_part_path(path, shard);
+        check_target(&part, "lightmap shard", None)?;
+        staged.write_bytes(&part, text.as_bytes())?;
+        return Ok(());
+    }
+    let lightmap = crate::lightmap::assemble_lightmap(texels, &gathered, settings);
     record_gather(metrics, &lightmap.stats, config);
     metrics.seconds.gather += tg.elapsed().as_secs_f64();
     let to = Instant::now();
@@ -508,6 +565,36 @@ fn write_lightmap(
     });
     metrics.seconds.output += to.elapsed().as_secs_f64();
     Ok(())
+}
+
+/// The texels' estimates from the partial lightmap outputs `parts` of a sharded bake, merged
+/// ([`super::shards::merge`]) and checked to be of this run (its `fingerprint`).
+fn merged_texels(
+    parts: &[(String, String)],
+    fingerprint: &str,
+) -> Result<Vec<Gathered>, OutputError> {
+    let merged =
+        super::shards::merge(parts).map_err(|e| OutputError::MergeShards(e.to_string()))?;
+    if merged.kind != super::shards::Kind::Lightmap {
+        return Err(OutputError::MergeShards(
+            "these are shards of probes: `gcr merge` joins them".into(),
+        ));
+    }
+    if merged.fingerprint != fingerprint {
+        return Err(OutputError::MergeShards(format!(
+            "the shards have fingerprint {}, this run {fingerprint}: they are of another scene, \
+             lightmap or solve settings (give the options of the shard runs, --shard excepted, \
+             --block-points included)",
+            merged.fingerprint
+        )));
+    }
+    (merged.text.lines().enumerate())
+        .map(|(i, line)| {
+            super::shards::parse_gathered(line).ok_or_else(|| {
+                OutputError::MergeShards(format!("texel {i}: not an estimate: `{line}`"))
+            })
+        })
+        .collect()
 }
 
 /// The automatic exposure of a mesh's outputs: from the radiosity of its faces that do not emit.

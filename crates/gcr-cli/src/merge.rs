@@ -5,24 +5,10 @@ use crate::args::MergeArgs;
 use anyhow::{Context, Result};
 use gcr::output::{StagedFiles, check_target, shards};
 
-/// The partial outputs at `paths` as (name, text).
-pub fn read_parts(paths: &[std::path::PathBuf]) -> Result<Vec<(String, String)>> {
-    let limit = scene_sampler::LoadOptions::default().max_file_bytes;
-    (paths.iter())
-        .map(|p| {
-            let name = p.display().to_string();
-            let bytes = scene_sampler::confine::read_regular_file(p, limit)?;
-            let text = String::from_utf8(bytes)
-                .with_context(|| format!("{name}: not text (a partial output is UTF-8)"))?;
-            Ok((name, text))
-        })
-        .collect()
-}
-
 /// Runs `gcr merge`.
 pub fn run(args: &MergeArgs) -> Result<()> {
     check_target(&args.probe_out, "probe", None)?;
-    let parts = read_parts(&args.parts)?;
+    let parts = shards::read_parts(&args.parts)?;
     let merged = shards::merge(&parts).context("merging the shards")?;
     if merged.kind == shards::Kind::Lightmap {
         anyhow::bail!(

@@ -44,7 +44,7 @@ fn solve_and_write(
     started: Instant,
 ) -> Result<()> {
     let outputs = (args.outputs(), args.images(), args.probe_settings());
-    let parts = crate::merge::read_parts(&args.from_shards)?;
+    let parts = gcr::output::shards::read_parts(&args.from_shards)?;
     let plan = OutputPlan::with_options(domain, outputs.0, outputs.1, outputs.2)
         .and_then(|plan| plan.with_lightmap(args.lightmap_settings()))
         .and_then(|plan| plan.with_lightmap_parts(parts, config))

@@ -124,6 +124,10 @@ pub(crate) struct WriteArgs {
     pub probe_quantity: Option<String>,
     pub probe_tolerance: Option<f64>,
     pub lightmap: gcr::LightmapSettings,
+    /// The shard to bake (`--shard`), if any.
+    pub shard: Option<gcr::Shard>,
+    /// The lightmap's parts to merge (`--from-shards`).
+    pub from_shards: Vec<std::path::PathBuf>,
 }
 
 /// Writes the outputs as `gcr solve` does after its solve (checked first, all at once) and
@@ -146,7 +150,8 @@ pub(crate) fn write<'py>(
     let metrics = runner::run(py, progress, |monitor| {
         monitor.observing(|| {
             let settings = (args.images, probe_settings, args.lightmap);
-            write_files(solved, args.paths, settings, monitor)
+            let shards = (args.shard, &args.from_shards[..]);
+            write_files(solved, args.paths, settings, shards, monitor)
         })
     })?
     .map_err(gcr_error)?;
@@ -168,15 +173,21 @@ fn write_files(
     solved: &Solved,
     paths: OutputPaths,
     (images, probes, lightmap): (ImageSettings, ProbeSettings, gcr::LightmapSettings),
+    (shard, from_shards): (Option<gcr::Shard>, &[std::path::PathBuf]),
     monitor: &Arc<runner::Monitor>,
 ) -> anyhow::Result<gcr::Metrics> {
     let name = &solved.scene.name;
+    let mut config = solved.config.clone();
+    config.paths.shard = shard;
+    let parts = gcr::output::shards::read_parts(from_shards)?;
     solved.scene.with_domain(|domain| {
         let plan = OutputPlan::with_options(domain, paths, images, probes)
             .and_then(|plan| plan.with_lightmap(lightmap))
-            .and_then(|plan| plan.check_config(&solved.config).map(|()| plan))
+            .and_then(|plan| plan.with_lightmap_parts(parts, &config))
+            .and_then(|plan| plan.check_config(&config).map(|()| plan))
+            .and_then(|plan| plan.check_shard(domain, &config).map(|()| plan))
             .with_context(|| format!("checking the outputs for `{name}`"))?;
-        let (options, config) = (&solved.options, &solved.config);
+        let (options, config) = (&solved.options, &config);
         let retrained = match plan.needs_networks() && !options.trains_networks(config, false) {
             true => {
                 let mut observer = monitor.solve_observer();

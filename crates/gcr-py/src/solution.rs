@@ -214,7 +214,12 @@ impl Solution {
     /// ``metrics`` (JSON), ``probes`` (a probe file) with ``probe_out`` (and
     /// ``probe_quantity``, ``probe_tolerance``), ``kernel_image`` (Flatland), ``views``
     /// (``(path, eye, target[, up[, fov]])`` each), and the camera and image options of
-    /// :meth:`image`. Every output is checked before anything is computed, and the files are
+    /// :meth:`image`. ``shard=(index, count)`` bakes one shard of the lightmap's texels and of the
+    /// probes, as ``gcr solve --shard`` (the lightmap's part goes to ``NAME.shard-I-of-N.txt``
+    /// beside ``lightmap``'s ``NAME.glb``, the probes' to ``probe_out``); ``from_shards`` (paths
+    /// of a lightmap's parts) takes the lightmap's texels from them, as ``--from-shards``: with
+    /// the solve's ``block_points``, the files are the single bake's, byte for byte.
+    /// Every output is checked before anything is computed, and the files are
     /// written all at once: either every one reaches its target or none is created or changed.
     /// Returns the run's metrics (the metrics file's contents) as a dict. Raises
     /// :class:`gcr.GcrError` with the program's message.
@@ -222,7 +227,7 @@ impl Solution {
         *, image=None, mesh=None, ply=None, metrics=None, probes=None, probe_out=None,
         probe_quantity=None, probe_tolerance=None, kernel_image=None, views=Vec::new(),
         lightmap=None, lightmap_density=None, lightmap_size=None, lightmap_padding=None,
-        lightmap_quantity=None,
+        lightmap_quantity=None, shard=None, from_shards=Vec::new(),
         camera_eye=None, camera_target=None, camera_up=[0.0, 1.0, 0.0], fov=None,
         auto_camera=false, resolution=None, image_mode=None, pixel_samples=1, exposure=None,
         progress=None
@@ -246,6 +251,8 @@ impl Solution {
         lightmap_size: Option<u32>,
         lightmap_padding: Option<u32>,
         lightmap_quantity: Option<String>,
+        shard: Option<(usize, usize)>,
+        from_shards: Vec<PathBuf>,
         camera_eye: Option<[f64; 3]>,
         camera_target: Option<[f64; 3]>,
         camera_up: [f64; 3],
@@ -288,6 +295,16 @@ impl Solution {
                 lightmap_padding,
                 lightmap_quantity,
             )?,
+            shard: match shard {
+                None => None,
+                Some((index, count)) if index < count => Some(gcr::Shard { index, count }),
+                Some(s) => {
+                    return Err(crate::errors::value_error(format!(
+                        "shard {s:?}: expected (index, count) with 0 <= index < count"
+                    )));
+                }
+            },
+            from_shards,
         };
         images::write(py, &self.inner, args, progress.as_ref())
     }

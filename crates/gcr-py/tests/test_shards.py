@@ -1,6 +1,8 @@
 """Sharded bakes (issue 34): `Solution.shard_values` gives each shard's rows exactly as one
 solve gives them, and `gcr.distributed` runs the shards on a local Dask cluster of worker
-processes, byte for byte against the single run (and against `gcr solve --shard` + `gcr merge`).
+processes, byte for byte against the single run (and against `gcr solve --shard` + `gcr merge`);
+a lightmap baked in shards (`Solution.write(shard=...)`, `from_shards`, and
+`gcr.distributed.bake_lightmap`) is the single bake's files, byte for byte.
 """
 
 from __future__ import annotations
@@ -67,6 +69,21 @@ def test_a_dask_cluster_gives_the_single_runs_bytes(single, gcr_bin, tmp_path):
         )
         # each worker process solved once and ran its shards
         assert len(client.scheduler_info()["workers"]) == 2
+        # a lightmap the same way: the program's single bake, byte for byte
+        dask_dir = tmp_path / "dask"
+        dask_dir.mkdir()
+        gcr.distributed.bake_lightmap(
+            client, "cornell-box", str(dask_dir / "room.glb"), shards=3, block_points=LM_BLOCK,
+            write=LM_OPTS, solve={"quality": "draft"}, timeout=120,
+        )
+    cli_dir = tmp_path / "cli"
+    cli_dir.mkdir()
+    subprocess.run(
+        [gcr_bin, "solve", "cornell-box", "--lightmap", cli_dir / "room.glb", "--quality", "draft",
+         "--block-points", str(LM_BLOCK), "--lightmap-density", str(LM_OPTS["lightmap_density"])],
+        check=True, capture_output=True,
+    )
+    assert same_files(dask_dir, cli_dir)
     assert got.tobytes() == values.tobytes() and got_errors.tobytes() == errors.tobytes()
     # and the program's sharded run, merged, has the same numbers
     pts = tmp_path / "in.pts"
@@ -83,6 +100,35 @@ def test_a_dask_cluster_gives_the_single_runs_bytes(single, gcr_bin, tmp_path):
     merged = tmp_path / "merged.txt"
     subprocess.run([gcr_bin, "merge", *parts, "--probe-out", merged], check=True, capture_output=True)
     assert np.array_equal(np.loadtxt(merged), values)
+
+
+LM_BLOCK = 128
+LM_OPTS = {"lightmap_density": 30}
+
+
+def same_files(a, b) -> bool:
+    """Whether folders `a` and `b` hold the same names with the same bytes."""
+    names = sorted(p.name for p in a.iterdir())
+    assert names == sorted(p.name for p in b.iterdir()), names
+    return all((a / n).read_bytes() == (b / n).read_bytes() for n in names)
+
+
+def test_a_lightmap_baked_in_shards_is_the_single_bake(tmp_path):
+    solution = gcr.solve(gcr.Scene.load("cornell-box"), quality="draft", block_points=LM_BLOCK)
+    single, parts, merged = (tmp_path / n for n in ("single", "parts", "merged"))
+    for d in (single, parts, merged):
+        d.mkdir()
+    solution.write(lightmap=single / "room.glb", **LM_OPTS)
+    for k in (2, 0, 1):
+        solution.write(lightmap=parts / "room.glb", shard=(k, 3), **LM_OPTS)
+    assert sorted(p.name for p in parts.iterdir()) == [f"room.shard-{k}-of-3.txt" for k in range(3)]
+    solution.write(lightmap=merged / "room.glb", from_shards=sorted(parts.iterdir()), **LM_OPTS)
+    assert same_files(single, merged)
+    with pytest.raises(gcr.GcrError, match="shard 1/3 is missing"):
+        solution.write(lightmap=tmp_path / "x.glb", from_shards=[parts / "room.shard-0-of-3.txt"], **LM_OPTS)
+    with pytest.raises(ValueError, match="0 <= index < count"):
+        solution.write(lightmap=tmp_path / "x.glb", shard=(3, 3), **LM_OPTS)
+    assert not (tmp_path / "x.glb").exists()
 
 
 def test_unaligned_arrays_are_read_as_aligned_ones(single):

@@ -162,6 +162,8 @@ class Solution:
         lightmap_size: int | None = None,
         lightmap_padding: int | None = None,
         lightmap_quantity: Literal["irradiance", "radiosity"] | None = None,
+        shard: tuple[int, int] | None = None,
+        from_shards: Sequence[str | os.PathLike[str]] = (),
         camera_eye: Sequence[float] | None = None,
         camera_target: Sequence[float] | None = None,
         camera_up: Sequence[float] = (0.0, 1.0, 0.0),

@@ -15,7 +15,10 @@ Nothing but the scene's name or path, the options and the shard numbers travel w
 
 equals ``gcr.solve(gcr.Scene.load("building.glb", sky=...), block_points=2000)
 .irradiance(points, normals)`` exactly (``Solution.shard_values``: the shards are whole blocks
-of the paths gather). Any Dask cluster works (``dask-jobqueue`` on Slurm or PBS,
+of the paths gather). A lightmap the same way: ``bake_lightmap(client, "level.glb",
+"out/level.glb", shards=16, block_points=4096, write={"lightmap_density": 40})`` writes the files
+``Solution.write(lightmap=..., ...)`` writes, byte for byte (each worker bakes its shard's texels
+with ``Solution.write(shard=...)``; the client merges them with ``from_shards``). Any Dask cluster works (``dask-jobqueue`` on Slurm or PBS,
 ``dask-kubernetes``); the scene's files must be readable at the same path on every worker.
 Dask is imported only when this module is used (``pip install "dask[distributed]"``).
 """
@@ -24,13 +27,15 @@ from __future__ import annotations
 
 import functools
 import json
+import os
+import tempfile
 from typing import Any
 
 import numpy as np
 
 import gcr
 
-__all__ = ["shard_values"]
+__all__ = ["bake_lightmap", "shard_values"]
 
 
 def shard_values(
@@ -61,11 +66,7 @@ def shard_values(
         raise ValueError(f"shards {shards}: at least 1")
     points = np.ascontiguousarray(points, dtype=np.float64)
     normals = np.ascontiguousarray(normals, dtype=np.float64)
-    # a canonical text of the settings: the key of each worker's cached solution
-    settings = json.dumps(
-        {"scene": str(scene), "load": load or {}, "solve": {**(solve or {}), "block_points": block_points}},
-        sort_keys=True,
-    )
+    settings = _settings(scene, load, solve, block_points)
     # unique keys: a later call with the same arrays must not meet this one's release
     at = client.scatter((points, normals), broadcast=True, hash=False)
     futures = [
@@ -86,20 +87,89 @@ def shard_values(
     return values, errors
 
 
+def bake_lightmap(
+    client: Any,
+    scene: str,
+    lightmap: str,
+    *,
+    shards: int,
+    block_points: int,
+    write: dict[str, Any] | None = None,
+    load: dict[str, Any] | None = None,
+    solve: dict[str, Any] | None = None,
+    timeout: float | None = None,
+) -> dict[str, Any]:
+    """Writes the lightmap ``lightmap`` (a .glb, its EXR pages beside it) as
+    ``gcr.solve(gcr.Scene.load(scene, **load), block_points=block_points, **solve)
+    .write(lightmap=lightmap, **write)`` writes it, byte for byte, its texels estimated as
+    ``shards`` shards on the Dask ``client``'s workers; returns the metrics of the writing run.
+    ``write``: the lightmap options of :meth:`gcr.Solution.write` (``lightmap_density``,
+    ``lightmap_size``, ``lightmap_padding``, ``lightmap_quantity``); the rest as
+    :func:`shard_values`. Each worker returns its shard's part as text, so no file system is
+    shared; the client lays the atlas out again and writes the files.
+    """
+    from dask.distributed import wait
+
+    if shards < 1:
+        raise ValueError(f"shards {shards}: at least 1")
+    settings = _settings(scene, load, solve, block_points)
+    futures = [
+        client.submit(_lightmap_shard, settings, (i, shards), write or {}, pure=False)
+        for i in range(shards)
+    ]
+    wait(futures, timeout=timeout)
+    texts = client.gather(futures)
+    with tempfile.TemporaryDirectory() as d:
+        parts = []
+        for i, text in enumerate(texts):
+            parts.append(os.path.join(d, f"part-{i}-of-{shards}.txt"))
+            with open(parts[-1], "w", encoding="utf-8") as f:
+                f.write(text)
+        return _solution(settings).write(lightmap=lightmap, from_shards=parts, **(write or {}))
+
+
+def _settings(scene: str, load: dict | None, solve: dict | None, block_points: int) -> str:
+    """A canonical text of the settings: the key of each worker's cached solution."""
+    return json.dumps(
+        {"scene": str(scene), "load": load or {}, "solve": {**(solve or {}), "block_points": block_points}},
+        sort_keys=True,
+    )
+
+
 def _shard(settings: str, at: tuple, shard: tuple[int, int], quantity: str, tolerance):
     """One shard on a worker: its rows, values and standard errors."""
     points, normals = at
-    try:
+    with _reported(shard):
         solution = _solution(settings)
         return solution.shard_values(
             points, normals, shard=shard, quantity=quantity, tolerance=tolerance
         )
-    except BaseException as e:
-        # a Rust panic arrives as pyo3's PanicException, a BaseException, which Dask's workers
-        # do not report (the task would never end): raise it as an ordinary error
-        if type(e).__name__ == "PanicException":
-            raise RuntimeError(f"gcr panicked in shard {shard}: {e}") from None
-        raise
+
+
+def _lightmap_shard(settings: str, shard: tuple[int, int], write: dict) -> str:
+    """One lightmap shard on a worker: its part (``Solution.write(shard=...)``) as text."""
+    with _reported(shard), tempfile.TemporaryDirectory() as d:
+        _solution(settings).write(lightmap=os.path.join(d, "lightmap.glb"), shard=shard, **write)
+        part = os.path.join(d, f"lightmap.shard-{shard[0]}-of-{shard[1]}.txt")
+        with open(part, encoding="utf-8") as f:
+            return f.read()
+
+
+class _reported:
+    """Raises a Rust panic in a shard as an ordinary error: it arrives as pyo3's
+    PanicException, a BaseException, which Dask's workers do not report (the task would never
+    end)."""
+
+    def __init__(self, shard: tuple[int, int]):
+        self.shard = shard
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, e, tb):
+        if kind is not None and kind.__name__ == "PanicException":
+            raise RuntimeError(f"gcr panicked in shard {self.shard}: {e}") from None
+        return False
 
 
 @functools.lru_cache(maxsize=4)

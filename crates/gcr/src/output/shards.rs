@@ -179,6 +179,14 @@ pub fn partial_text(
 /// A partial probe output that cannot be merged, or a set of them that does not make a run.
 #[derive(Debug, thiserror::Error)]
 pub enum MergeError {
+    /// A part that cannot be read, or is not text.
+    #[error("{name}: {what}")]
+    Read {
+        /// The file's name.
+        name: String,
+        /// Why.
+        what: String,
+    },
     /// Not a partial probe output, or a malformed line.
     #[error("{name}:{line}: {what}")]
     Malformed {
@@ -275,6 +283,26 @@ fn parse(name: &str, text: &str) -> Result<Partial, MergeError> {
         fingerprint,
         lines: out,
     })
+}
+
+/// The partial outputs at `paths` as (name, text), read as scene files are (regular files, at
+/// most the loader's size limit).
+pub fn read_parts(paths: &[PathBuf]) -> Result<Vec<(String, String)>, MergeError> {
+    let limit = scene_sampler::LoadOptions::default().max_file_bytes;
+    (paths.iter())
+        .map(|p| {
+            let name = p.display().to_string();
+            let what = |what: String| MergeError::Read {
+                name: name.clone(),
+                what,
+            };
+            let bytes = scene_sampler::confine::read_regular_file(p, limit)
+                .map_err(|e| what(e.to_string()))?;
+            let text = String::from_utf8(bytes)
+                .map_err(|_| what("not text (a partial output is UTF-8)".into()))?;
+            Ok((name, text))
+        })
+        .collect()
 }
 
 /// Shards merged: what they hold, the run's fingerprint and the single run's lines.

@@ -519,3 +519,79 @@ fn the_shipped_light_scenes_light_what_they_should() {
     // ≈ 53 lux
     assert!(e[1] > 96.0 && e[0] > 53.0, "{e:?}");
 }
+
+/// A mesh-mode image sees through cut-outs as the per-pixel image does: the grille of
+/// `a_cut_out_grille_casts_a_striped_shadow` (ρ = 0.2) over a bright floor (ρ = 0.8), the sun
+/// overhead, seen from straight above across one solid and one open stripe: one half of the
+/// image is the grille's top, the other the floor through the hole, 4× brighter (drawn solid,
+/// both halves were the grille).
+#[test]
+fn mesh_images_see_through_cut_outs() {
+    let dir = std::path::PathBuf::from(tmp("grille-image"));
+    std::fs::create_dir_all(&dir).unwrap();
+    image::GrayImage::from_raw(8, 1, vec![0, 0, 255, 255, 0, 0, 255, 255])
+        .unwrap()
+        .save(dir.join("mask.png"))
+        .unwrap();
+    std::fs::write(
+        dir.join("grille.mtl"),
+        "newmtl floor\nKd 0.8 0.8 0.8\nnewmtl grille\nKd 0.2 0.2 0.2\nmap_d mask.png\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("grille.obj"),
+        "mtllib grille.mtl\nv 0 0 0\nv 4 0 0\nv 4 0 4\nv 0 0 4\nv 1 1 1\nv 3 1 1\nv 3 1 3\n\
+         v 1 1 3\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\no floor\nusemtl floor\nf 1 4 3 2\n\
+         o grille\nusemtl grille\nf 5/1 8/4 7/3 6/2\n",
+    )
+    .unwrap();
+    // halves of the mean red channel: columns [0, 40 %) and [60 %, 100 %)
+    let halves = |mode: &str| {
+        let out = dir.join(format!("{mode}.exr"));
+        let o = gcr(&[
+            "solve",
+            dir.join("grille.obj").to_str().unwrap(),
+            "--sun",
+            "0,90,1000,0",
+            "--image",
+            out.to_str().unwrap(),
+            "--image-mode",
+            mode,
+            "--resolution",
+            "40x40",
+            "--camera-eye",
+            "2,11,2",
+            "--camera-target",
+            "2,0,2",
+            "--camera-up",
+            "0,0,-1",
+            "--fov",
+            "3",
+            "--quality",
+            "draft",
+            "--quiet",
+        ]);
+        assert!(o.status.success(), "{mode}: {}", stderr(&o));
+        let img = image::open(&out).unwrap().to_rgb32f();
+        let mean = |cols: std::ops::Range<u32>| {
+            let n = cols.len() as f64 * 40.0;
+            let sum: f64 = (cols.flat_map(|x| (0..40).map(move |y| (x, y))))
+                .map(|(x, y)| f64::from(img.get_pixel(x, y)[0]))
+                .sum();
+            sum / n
+        };
+        (mean(0..16), mean(24..40))
+    };
+    let (mesh, pixel) = (halves("mesh"), halves("pixel"));
+    for (mode, (a, b)) in [("mesh", mesh), ("pixel", pixel)] {
+        let ratio = a.max(b) / a.min(b);
+        assert!((3.0..5.0).contains(&ratio), "{mode}: halves {a} {b}");
+    }
+    // the same half is bright, at the same brightness
+    assert_eq!(mesh.0 > mesh.1, pixel.0 > pixel.1, "{mesh:?} {pixel:?}");
+    let bright = |h: (f64, f64)| h.0.max(h.1);
+    assert!(
+        (bright(mesh) / bright(pixel) - 1.0).abs() < 0.1,
+        "{mesh:?} {pixel:?}"
+    );
+}

@@ -170,7 +170,7 @@ fn scene_gathers(
         let config = SolveConfig { gather, ..config };
         let (mesh, _) = output_mesh(&domain, &trained, &config, RetriangulateLimits::default())?;
         let exposure = exposure.get_or_insert_with(|| exposure_of(&scene, &mesh));
-        let img = render_image(&mesh, &cam, exposure, size, size, 2);
+        let img = render_image(&mesh, None, &cam, exposure, size, size, 2);
         topology::save(
             &img,
             &ctx.out.join(format!("gcr-{name}-{}.png", gather.name())),
@@ -263,7 +263,7 @@ fn blocking_effects(
             radiosity: b.iter().map(|g| [g.radiosity[0]; 3]).collect(),
         };
         let exposure = exposure.get_or_insert_with(|| exposure_of(&scene, &mesh));
-        let img = render_image(&mesh, &cam, exposure, size, size, 2);
+        let img = render_image(&mesh, None, &cam, exposure, size, size, 2);
         topology::save(
             &img,
             &ctx.out

@@ -64,7 +64,7 @@ pub fn geometry_background(scene: &Scene, cam: &PinholeCamera, size: u32, ss: u3
         mesh.radiosity
             .extend([rgb.map(|v| v * std::f64::consts::PI); 3]);
     }
-    render_image(&mesh, cam, &Exposure { scale: 1.0 }, size, size, ss)
+    render_image(&mesh, None, cam, &Exposure { scale: 1.0 }, size, size, ss)
 }
 
 /// Unique undirected edges of triangles, as segments.

@@ -76,7 +76,7 @@ pub fn render_linear(
             (img.radiance(), img.stats)
         }
         (ImageMode::Mesh, Some((mesh, stats))) => (
-            render_radiance(&mesh, &camera, w, h, IMAGE_SUPERSAMPLING),
+            render_radiance(&mesh, Some(scene), &camera, w, h, IMAGE_SUPERSAMPLING),
             stats,
         ),
         (ImageMode::Mesh, None) => unreachable!("mesh-mode images build the mesh"),

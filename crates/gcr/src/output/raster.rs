@@ -4,6 +4,11 @@
 //! Back faces are drawn black: in radiosity only the front side of a face reflects or emits,
 //! so a visible back face means the camera looks at the unlit side of a surface.
 //!
+//! Cut-outs: given the scene, a sub-sample on a triangle of a face with an alpha cut-out tests
+//! its point (interpolated, perspective-correct, like the radiosity) against the face's mask
+//! ([`scene_sampler::Scene::is_hole`]) and lets what lies behind show through a hole, as the
+//! per-pixel images and every ray do.
+//!
 //! [`render_image`] also keeps the depth buffer, so that points and line segments in world space
 //! can be drawn over the shaded image with hidden-point removal ([`Image::draw_points`],
 //! [`Image::draw_lines`]): the figures of the sample distribution, the shading network and the
@@ -12,6 +17,7 @@
 use crate::mesh::ShadedMesh;
 use crate::output::tonemap::Exposure;
 use glam::{DVec3, DVec4};
+use scene_sampler::Scene;
 
 /// A pinhole camera.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -255,21 +261,24 @@ pub(crate) fn render(
     height: u32,
     ss: u32,
 ) -> Vec<u8> {
-    render_image(mesh, camera, exposure, width, height, ss).pixels
+    render_image(mesh, None, camera, exposure, width, height, ss).pixels
 }
 
 /// Renders `mesh` to an 8-bit sRGB image of `width × height` (row-major, top row first; each pixel
 /// averages `ss × ss` sub-samples, the background black), keeping the depth buffer (at the output
 /// resolution) for overlays.
+/// `cutouts`: the scene `mesh` was made from, whose faces' alpha cut-outs are holes (`None`: every
+/// face solid).
 pub fn render_image(
     mesh: &ShadedMesh,
+    cutouts: Option<&Scene>,
     camera: &PinholeCamera,
     exposure: &Exposure,
     width: u32,
     height: u32,
     ss: u32,
 ) -> Image {
-    let samples = Samples::rasterize(mesh, camera, width, height, ss);
+    let samples = Samples::rasterize(mesh, cutouts, camera, width, height, ss);
     let mut out = vec![0u8; (width * height * 3) as usize];
     let mut out_depth = vec![f64::INFINITY; (width * height) as usize];
     for (p, (acc, near)) in samples
@@ -294,15 +303,16 @@ pub fn render_image(
 }
 
 /// Renders `mesh` as linear radiance L = B/π per pixel (no exposure, no clipping; the mean of
-/// `ss × ss` sub-samples), for HDR output.
+/// `ss × ss` sub-samples), for HDR output; `cutouts` as [`render_image`].
 pub fn render_radiance(
     mesh: &ShadedMesh,
+    cutouts: Option<&Scene>,
     camera: &PinholeCamera,
     width: u32,
     height: u32,
     ss: u32,
 ) -> RadianceImage {
-    let samples = Samples::rasterize(mesh, camera, width, height, ss);
+    let samples = Samples::rasterize(mesh, cutouts, camera, width, height, ss);
     let inv_pi = 1.0 / std::f64::consts::PI;
     let radiance = samples
         .reduce(|b| b.map(|c| if c.is_finite() { c * inv_pi } else { 0.0 }))
@@ -339,6 +349,7 @@ struct Samples {
 impl Samples {
     fn rasterize(
         mesh: &ShadedMesh,
+        cutouts: Option<&Scene>,
         camera: &PinholeCamera,
         width: u32,
         height: u32,
@@ -362,21 +373,35 @@ impl Samples {
                 .map_or(1.0, |(lo, hi)| (hi - lo).length().max(1e-12));
         // Radiosity is interpolated first and tone-mapped per sub-sample: the physically
         // meaningful order (tone mapping per vertex would clip highlights before interpolation).
-        for &[a, b, c] in &mesh.triangles {
+        for (t, &[a, b, c]) in mesh.triangles.iter().enumerate() {
             let idx = [a as usize, b as usize, c as usize];
             let world = idx.map(|i| mesh.positions[i]);
             let normal = (world[1] - world[0]).cross(world[2] - world[0]);
             let front = normal.dot(camera.eye - world[0]) > 0.0;
             let rad = idx.map(|i| if front { mesh.radiosity[i] } else { [0.0; 3] });
             let seen = if front { Seen::Front } else { Seen::Back };
-            let cam: Vec<(DVec3, [f64; 3])> = (0..3)
-                .map(|k| (frame.to_camera(world[k]), rad[k]))
+            // the face's holes, when it has a cut-out: tested at each sub-sample's point
+            let face = mesh.face_of_triangle.get(t).copied();
+            let hole = match (cutouts, face) {
+                (Some(scene), Some(f)) if scene.faces[f as usize].cutout.is_some() => {
+                    Some(move |p: DVec3| scene.is_hole(f, p))
+                }
+                _ => None,
+            };
+            let hole = hole.as_ref().map(|h| h as &dyn Fn(DVec3) -> bool);
+            // per vertex: its radiosity, then its world position (affine in camera space, so
+            // clipped and interpolated as the radiosity is)
+            let cam: Vec<(DVec3, [f64; 6])> = (0..3)
+                .map(|k| {
+                    let (r, p) = (rad[k], world[k]);
+                    (frame.to_camera(p), [r[0], r[1], r[2], p.x, p.y, p.z])
+                })
                 .collect();
             if let Some(poly) = clip_near(&cam, near) {
                 // Fan-triangulate the clipped polygon (3 or 4 vertices).
                 for k in 1..poly.len() - 1 {
                     let tri = [poly[0], poly[k], poly[k + 1]];
-                    raster_triangle(tri, frame.f, aspect, w, h, &mut buf, seen);
+                    raster_triangle(tri, frame.f, aspect, (w, h), &mut buf, (seen, hole));
                 }
             }
         }
@@ -424,8 +449,9 @@ impl Samples {
     }
 }
 
-/// Sutherland–Hodgman clip of a camera-space polygon against the plane z = near.
-fn clip_near(poly: &[(DVec3, [f64; 3])], near: f64) -> Option<Vec<(DVec3, [f64; 3])>> {
+/// Sutherland–Hodgman clip of a camera-space polygon against the plane z = near (vertex
+/// attributes interpolated linearly).
+fn clip_near(poly: &[(DVec3, [f64; 6])], near: f64) -> Option<Vec<(DVec3, [f64; 6])>> {
     let mut out = Vec::with_capacity(4);
     for i in 0..poly.len() {
         let (p, cp) = poly[i];
@@ -436,21 +462,22 @@ fn clip_near(poly: &[(DVec3, [f64; 3])], near: f64) -> Option<Vec<(DVec3, [f64; 
         }
         if pin != qin {
             let t = (near - p.z) / (q.z - p.z);
-            let c = [0, 1, 2].map(|k| cp[k] + t * (cq[k] - cp[k]));
+            let c = [0, 1, 2, 3, 4, 5].map(|k| cp[k] + t * (cq[k] - cp[k]));
             out.push((p + t * (q - p), c));
         }
     }
     (out.len() >= 3).then_some(out)
 }
 
+/// Draws one camera-space triangle (per vertex: radiosity, then world position) into `buf`;
+/// `hole`: whether a world point is in the face's cut-out (its sub-samples then draw nothing).
 fn raster_triangle(
-    v: [(DVec3, [f64; 3]); 3],
+    v: [(DVec3, [f64; 6]); 3],
     f: f64,
     aspect: f64,
-    w: usize,
-    h: usize,
+    (w, h): (usize, usize),
     buf: &mut Samples,
-    seen: Seen,
+    (seen, hole): (Seen, Option<&dyn Fn(DVec3) -> bool>),
 ) {
     // Screen coordinates (pixels) and 1/z for perspective-correct interpolation.
     let s: [DVec4; 3] = v.map(|(p, _)| {
@@ -501,16 +528,19 @@ fn raster_triangle(
             let z = 1.0 / inv_z;
             let i = y * w + x;
             if z < buf.depth[i] {
-                buf.depth[i] = z;
-                buf.seen[i] = seen;
-                let mut c = [0.0; 3];
+                let mut c = [0.0; 6];
                 for k in 0..3 {
                     let wk = b[k] * s[k].w * z;
-                    for ch in 0..3 {
+                    for ch in 0..6 {
                         c[ch] += wk * v[k].1[ch];
                     }
                 }
-                buf.colour[i] = c;
+                if hole.is_some_and(|in_hole| in_hole(DVec3::new(c[3], c[4], c[5]))) {
+                    continue;
+                }
+                buf.depth[i] = z;
+                buf.seen[i] = seen;
+                buf.colour[i] = [c[0], c[1], c[2]];
             }
         }
     }
@@ -585,7 +615,7 @@ mod tests {
             up: DVec3::Y,
             fov_y_degrees: 30.0,
         };
-        let mut img = render_image(&mesh, &cam, &Exposure { scale: 1.0 }, 32, 32, 2);
+        let mut img = render_image(&mesh, None, &cam, &Exposure { scale: 1.0 }, 32, 32, 2);
         let centre = project(&cam, 32, 32, DVec3::ZERO).unwrap();
         assert!((centre.x - 16.0).abs() < 1e-9 && (centre.y - 16.0).abs() < 1e-9);
         assert!((img.depth[16 * 32 + 16] - 4.0).abs() < 1e-6);

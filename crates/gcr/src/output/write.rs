@@ -470,8 +470,7 @@ fn write_3d(
             Some(img) => write_pixel_image(img, &exposure, path, staged)?,
             None => {
                 let mesh = mesh.as_ref().expect("mesh-mode images build the mesh");
-                metrics.warnings.extend(solid_cutouts(scene, path));
-                write_image(mesh, camera, settings, &exposure, path, staged)?
+                write_image((mesh, scene), camera, settings, &exposure, path, staged)?
             }
         };
         let what = format!("image `{}`", path.display());
@@ -604,17 +603,6 @@ pub(super) fn exposure_of_mesh(mesh: &ShadedMesh, scene: &scene_sampler::Scene) 
         .filter(|(_, f)| scene.faces[**f as usize].emission.is_zero())
         .map(|(t, _)| mesh.radiosity[t[0] as usize]);
     Exposure::auto(lit)
-}
-
-/// The warning of a mesh-mode image of a scene with alpha cut-outs, which it draws solid.
-fn solid_cutouts(scene: &scene_sampler::Scene, path: &Path) -> Option<String> {
-    scene.faces.iter().any(|f| f.cutout.is_some()).then(|| {
-        format!(
-            "image `{}`: the scene has alpha cut-outs, which --image-mode mesh draws solid (it \
-             rasterizes the output mesh); --image-mode pixel sees through them",
-            path.display()
-        )
-    })
 }
 
 /// Records what the output gather measured (the last output set wins: the mesh after the
@@ -808,7 +796,7 @@ fn format_of(path: &Path) -> Format {
 
 /// Renders and stages one image; returns what its sub-samples saw.
 fn write_image(
-    mesh: &ShadedMesh,
+    (mesh, scene): (&ShadedMesh, &Scene),
     camera: &PinholeCamera,
     settings: &ImageSettings,
     exposure: &Exposure,
@@ -818,7 +806,7 @@ fn write_image(
     let (w, h) = (settings.width, settings.height);
     let format = format_of(path);
     if format == Format::Exr {
-        let img = render_radiance(mesh, camera, w, h, IMAGE_SUPERSAMPLING);
+        let img = render_radiance(mesh, Some(scene), camera, w, h, IMAGE_SUPERSAMPLING);
         let bytes = super::hdr::encode_exr(&img).map_err(|source| OutputError::Write {
             path: path.to_path_buf(),
             source,
@@ -826,7 +814,15 @@ fn write_image(
         staged.write_bytes(path, &bytes)?;
         return Ok(img.coverage);
     }
-    let img = render_image(mesh, camera, exposure, w, h, IMAGE_SUPERSAMPLING);
+    let img = render_image(
+        mesh,
+        Some(scene),
+        camera,
+        exposure,
+        w,
+        h,
+        IMAGE_SUPERSAMPLING,
+    );
     let coverage = img.coverage;
     let rgb = image::RgbImage::from_raw(w, h, img.pixels).expect("render fills w·h RGB pixels");
     if format == Format::Jpeg {

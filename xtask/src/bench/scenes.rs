@@ -189,7 +189,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
          thread, the four passes alternate {cpu_rounds} times over the same {cpu_queries} facing pairs, each \
          keeps its fastest round, timed in the thread's CPU time (`clock_gettime(CLOCK_THREAD_CPUTIME_ID)`), which does not \
          count time spent waiting for a core. Other jobs still share the caches.\n\n\
-         | triangles | bare obvhs (ns/ray) | visible (ns) | kernel (ns/sample) | samples (ns/sample) | kernel / bare | samples / bare |\n\
+         | triangles | bare (ns/ray) | visible (ns) | kernel (ns/sample) | samples (ns/sample) | kernel / bare | samples / bare |\n\
          |---:|---:|---:|---:|---:|---:|---:|"
     )?;
     for &(tris, _) in sizes {

@@ -282,3 +282,59 @@ fn a_lightmap_bake_writes_the_glb_and_its_pages() {
     assert_fails(&o, "3-D scene", true);
     assert!(entries(&bad).is_empty());
 }
+
+/// A glTF that has lightmap coordinates (`TEXCOORD_1`: here a bake's own output) keeps them: its
+/// bake lays nothing out, writes the same coordinates and says so in the metrics.
+#[test]
+fn a_lightmap_reuses_the_inputs_texcoord_1() {
+    let d = dir("out", "lightmap-reuse");
+    let bake = |scene: &str, glb: &std::path::Path, metrics: &std::path::Path| {
+        let args = [
+            "solve",
+            scene,
+            "--quality",
+            "draft",
+            "--quiet",
+            "--lightmap",
+            &s(glb),
+            "--lightmap-size",
+            "128",
+            "--metrics",
+            &s(metrics),
+        ];
+        let o = gcr(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(metrics).unwrap()).unwrap();
+        m["lightmap"].clone()
+    };
+    // every TEXCOORD_1 corner of a .glb, sorted (the faces may come in another order)
+    let uv1 = |glb: &std::path::Path| {
+        let (doc, buffers, _) = gltf::import(glb).unwrap();
+        let mut all = Vec::new();
+        for mesh in doc.meshes() {
+            for p in mesh.primitives() {
+                let r = p.reader(|b| Some(&buffers[b.index()]));
+                all.extend(
+                    r.read_tex_coords(1)
+                        .unwrap()
+                        .into_f32()
+                        .map(|[u, v]| (u.to_bits(), v.to_bits())),
+                );
+            }
+        }
+        all.sort_unstable();
+        all
+    };
+    let (first, again) = (d.join("first.glb"), d.join("again.glb"));
+    let m1 = bake("cornell-box", &first, &d.join("m1.json"));
+    assert_eq!(m1["uv_source"], "unwrapped");
+    let m2 = bake(&s(&first), &again, &d.join("m2.json"));
+    assert_eq!(m2["uv_source"], "input", "{m2}");
+    assert_eq!(
+        (m2["charts"].as_u64(), m2["width"].as_u64()),
+        (Some(0), Some(128))
+    );
+    assert!(m2["texels"].as_u64().unwrap() > 5000, "{m2}");
+    assert_eq!(uv1(&again), uv1(&first));
+}

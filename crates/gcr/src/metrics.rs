@@ -37,8 +37,10 @@ pub struct LightmapRecord {
     pub height: u32,
     /// Texels per scene unit.
     pub texels_per_unit: f64,
-    /// Charts.
+    /// Charts (0 when the input's own `TEXCOORD_1` is the layout).
     pub charts: u32,
+    /// Where the layout came from: `"input"` (the scene's `TEXCOORD_1`) or `"unwrapped"`.
+    pub uv_source: &'static str,
     /// Share of the pages' texels covered by charts.
     pub utilization: f64,
     /// Texels estimated.

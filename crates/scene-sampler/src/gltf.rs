@@ -186,6 +186,8 @@ struct PrimitiveLook {
     alpha: Alpha,
     /// The emissive texture (index) and its coordinates.
     emissive_map: Option<(u32, Vec<DVec2>)>,
+    /// The lightmap coordinates (`TEXCOORD_1`), if any ([`Face::lightmap_uv`]).
+    lightmap_uv: Option<Vec<DVec2>>,
 }
 
 /// The base colour textures of a glTF document, decoded once per (image, wrap modes).
@@ -398,6 +400,7 @@ impl GltfFaces {
             texture,
             alpha,
             emissive_map,
+            lightmap_uv: read_uv(1),
         };
         self.add_faces(&pos, tris, at, &look, source)
     }
@@ -453,6 +456,7 @@ impl GltfFaces {
             };
             let mut face = Face {
                 part: look.part,
+                lightmap_uv: (look.lightmap_uv.as_ref()).and_then(|uv| corner_uvs(uv, corners)),
                 ..Face::new(v, look.rho, look.e, at.object, self.surface)
             };
             if let Some((tex, uv)) = &look.emissive_map {

@@ -66,6 +66,9 @@ pub struct Face {
     pub part: u32,
     /// The alpha mask that cuts holes in the face ([`crate::cutout`]), if any.
     pub cutout: Option<FaceCutout>,
+    /// The input's lightmap coordinates of the corners `v[0..3]` (glTF `TEXCOORD_1`), which a
+    /// lightmap bake reuses instead of unwrapping the scene; `None` when the input has none.
+    pub lightmap_uv: Option<[glam::DVec2; 3]>,
 }
 
 impl Face {
@@ -92,6 +95,7 @@ impl Face {
             texture: None,
             part: object,
             cutout: None,
+            lightmap_uv: None,
         }
     }
 
@@ -112,6 +116,7 @@ impl Face {
                 uv: swap(c.uv),
                 ..c
             }),
+            lightmap_uv: self.lightmap_uv.map(swap),
             ..*self
         }
     }
@@ -273,6 +278,7 @@ impl Scene {
                 texture: f.texture,
                 part: f.part,
                 cutout: f.cutout,
+                lightmap_uv: f.lightmap_uv,
                 ..Face::new(f.v, f.rho, f.emission, f.object, f.surface)
             };
             if f.area <= 1e-14 * diag2 || f.normal == DVec3::ZERO || !f.normal.is_finite() {

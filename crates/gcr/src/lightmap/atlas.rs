@@ -6,6 +6,13 @@
 //! spans two parts; faces of different surfaces' materials stay in one chart when they connect.
 //! The back faces of two-sided materials (`Scene::add_back_faces`) are wound the other way, so
 //! they get their own charts: each side of a thin wall has its own light.
+//!
+//! **The input's own layout** ([`Atlas::of_input`]): a glTF whose every face has `TEXCOORD_1` (a
+//! lightmap set an artist or an engine made) keeps it: the page is that layout at the page size
+//! (or at the size that gives the density asked for), nothing is unwrapped, and the written .glb
+//! carries the same coordinates. It is used only when it can hold the bake: every coordinate in
+//! [0, 1] and no two faces on the same place (the two sides of a two-sided material share their
+//! coordinates); otherwise the scene is unwrapped with a warning that says why.
 
 use super::settings::{LightmapError, LightmapSettings};
 use glam::DVec3;
@@ -38,11 +45,105 @@ pub struct Atlas {
     pub utilization: f64,
     /// Per scene face, its place (`None`: a degenerate face with no chart).
     pub faces: Vec<Option<FaceUv>>,
+    /// Whether the places are the input's own `TEXCOORD_1` ([`Atlas::of_input`]) rather than
+    /// unwrapped.
+    pub from_input: bool,
+    /// Why the input's `TEXCOORD_1` was not used, when it has one but cannot hold the bake.
+    pub note: Option<String>,
 }
 
 impl Atlas {
-    /// Unwraps `scene` at the settings' density (or the highest that fits one page).
+    /// The input's own lightmap coordinates when they can hold the bake ([`Atlas::of_input`]),
+    /// else `scene` unwrapped at the settings' density (or the highest that fits one page).
     pub fn of_scene(scene: &Scene, settings: &LightmapSettings) -> Result<Self, LightmapError> {
+        let note = match Self::of_input(scene, settings) {
+            Ok(Some(atlas)) => return Ok(atlas),
+            Ok(None) => None,
+            Err(why) => Some(format!(
+                "the scene's TEXCOORD_1 was not used for the lightmap ({why}): unwrapped instead"
+            )),
+        };
+        Ok(Self {
+            note,
+            ..Self::unwrapped(scene, settings)?
+        })
+    }
+
+    /// The input's `TEXCOORD_1` as the atlas (module docs): one page of the settings' page size,
+    /// or of the size that gives their density (at most the page size). `Ok(None)` when no face
+    /// has them; `Err(why)` when they cannot hold the bake.
+    pub fn of_input(scene: &Scene, settings: &LightmapSettings) -> Result<Option<Self>, String> {
+        let given = scene
+            .faces
+            .iter()
+            .filter(|f| f.lightmap_uv.is_some())
+            .count();
+        if given == 0 {
+            return Ok(None);
+        }
+        if given < scene.faces.len() {
+            return Err(format!(
+                "{} of {} faces have none",
+                scene.faces.len() - given,
+                scene.faces.len()
+            ));
+        }
+        let uvs: Vec<[glam::DVec2; 3]> = scene.faces.iter().flat_map(|f| f.lightmap_uv).collect();
+        if let Some(i) = uvs.iter().position(|t| {
+            t.iter()
+                .any(|p| !(0.0..=1.0).contains(&p.x) || !(0.0..=1.0).contains(&p.y))
+        }) {
+            return Err(format!(
+                "face {i} has coordinates outside [0, 1]: {:?}",
+                uvs[i].map(|p| [p.x, p.y])
+            ));
+        }
+        // the same triangle of coordinates twice (corners in any order): two faces on one place
+        let mut seen = std::collections::HashMap::new();
+        for (i, t) in uvs.iter().enumerate() {
+            let mut key = t.map(|p| (p.x.to_bits(), p.y.to_bits()));
+            key.sort_unstable();
+            if let Some(j) = seen.insert(key, i) {
+                return Err(format!(
+                    "faces {j} and {i} have the same coordinates (the two sides of a two-sided \
+                     material?)"
+                ));
+            }
+        }
+        let uv_area: f64 = (uvs.iter())
+            .map(|t| 0.5 * (t[1] - t[0]).perp_dot(t[2] - t[0]).abs())
+            .sum();
+        let area: f64 = scene.faces.iter().map(|f| f.area).sum();
+        if uv_area <= 0.0 || area <= 0.0 {
+            return Err("the coordinates cover no area".into());
+        }
+        let size = match settings.texels_per_unit {
+            Some(t) => ((t * (area / uv_area).sqrt()).ceil() as u32).clamp(1, settings.page_size),
+            None => settings.page_size,
+        };
+        let faces = (uvs.iter())
+            .map(|t| {
+                Some(FaceUv {
+                    uv: t.map(|p| [p.x as f32, p.y as f32]),
+                    page: 0,
+                })
+            })
+            .collect();
+        Ok(Some(Self {
+            width: size,
+            height: size,
+            pages: 1,
+            texels_per_unit: f64::from(size) * (uv_area / area).sqrt(),
+            charts: 0,
+            utilization: uv_area,
+            faces,
+            from_input: true,
+            note: None,
+        }))
+    }
+
+    /// Unwraps `scene` at the settings' density (or the highest that fits one page).
+    fn unwrapped(scene: &Scene, settings: &LightmapSettings) -> Result<Self, LightmapError> {
         // ⟨One unwrap input per part: its faces as a triangle soup, relative to the scene's corner
         // (f32 positions keep their precision; identical positions are welded by the unwrapper)⟩
         let origin = scene.bounds.0;
@@ -106,6 +207,80 @@ impl Atlas {
             charts: atlas.chart_count,
             utilization: f64::from(atlas.utilization),
             faces,
+            from_input: false,
+            note: None,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec2;
+    use scene_sampler::{Face, Spectrum};
+
+    /// A unit square of two faces with lightmap coordinates `uv` (per face, per corner).
+    fn square(uv: [Option<[DVec2; 3]>; 2]) -> Scene {
+        let p = |x: f64, z: f64| DVec3::new(x, 0.0, z);
+        let grey = Spectrum([0.5; 3]);
+        let faces = [
+            [p(0.0, 0.0), p(0.0, 1.0), p(1.0, 1.0)],
+            [p(0.0, 0.0), p(1.0, 1.0), p(1.0, 0.0)],
+        ]
+        .into_iter()
+        .zip(uv)
+        .map(|(v, uv)| Face {
+            lightmap_uv: uv,
+            ..Face::new(v, grey, Spectrum([0.0; 3]), 0, 0)
+        })
+        .collect();
+        Scene::new("square", "test", faces, vec!["square".into()], None).unwrap()
+    }
+
+    fn uv(c: [[f64; 2]; 3]) -> Option<[DVec2; 3]> {
+        Some(c.map(DVec2::from))
+    }
+
+    #[test]
+    fn the_inputs_coordinates_are_the_atlas_when_they_can_hold_the_bake() {
+        let settings = LightmapSettings {
+            page_size: 64,
+            ..LightmapSettings::default()
+        };
+        let left = uv([[0.0, 0.0], [0.0, 0.5], [0.5, 0.5]]);
+        let right = uv([[0.5, 0.5], [1.0, 1.0], [1.0, 0.5]]);
+        let atlas = Atlas::of_scene(&square([left, right]), &settings).unwrap();
+        assert!(atlas.from_input && atlas.note.is_none());
+        assert_eq!((atlas.width, atlas.height, atlas.pages), (64, 64, 1));
+        assert_eq!(
+            atlas.faces[1].unwrap().uv,
+            [[0.5, 0.5], [1.0, 1.0], [1.0, 0.5]]
+        );
+        // a quarter of the page over 1 m²: 32 texels per metre; a density sets the size
+        assert!((atlas.texels_per_unit - 32.0).abs() < 1e-9);
+        let dense = LightmapSettings {
+            texels_per_unit: Some(10.0),
+            ..settings
+        };
+        assert_eq!(
+            Atlas::of_scene(&square([left, right]), &dense)
+                .unwrap()
+                .width,
+            20
+        );
+        // refused, unwrapped instead, with the reason
+        let why = |uv: [Option<[DVec2; 3]>; 2]| {
+            let atlas = Atlas::of_scene(&square(uv), &settings).unwrap();
+            assert!(!atlas.from_input);
+            atlas.note.unwrap()
+        };
+        assert!(why([left, None]).contains("1 of 2 faces have none"));
+        let outside = uv([[0.5, 0.5], [1.0, 1.5], [1.0, 0.5]]);
+        assert!(why([left, outside]).contains("face 1 has coordinates outside [0, 1]"));
+        let same = uv([[0.0, 0.5], [0.5, 0.5], [0.0, 0.0]]);
+        assert!(why([left, same]).contains("faces 0 and 1 have the same coordinates"));
+        // no coordinates at all: unwrapped without a word
+        let atlas = Atlas::of_scene(&square([None, None]), &settings).unwrap();
+        assert!(!atlas.from_input && atlas.note.is_none());
     }
 }

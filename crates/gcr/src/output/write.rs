@@ -533,6 +533,7 @@ fn write_lightmap(
         staged.write_bytes(&part, text.as_bytes())?;
         return Ok(());
     }
+    metrics.warnings.extend(texels.atlas.note.clone());
     let lightmap = crate::lightmap::assemble_lightmap(texels, &gathered, settings);
     record_gather(metrics, &lightmap.stats, config);
     metrics.seconds.gather += tg.elapsed().as_secs_f64();
@@ -557,6 +558,11 @@ fn write_lightmap(
         height: lightmap.atlas.height,
         texels_per_unit: lightmap.atlas.texels_per_unit,
         charts: lightmap.atlas.charts,
+        uv_source: if lightmap.atlas.from_input {
+            "input"
+        } else {
+            "unwrapped"
+        },
         utilization: lightmap.atlas.utilization,
         texels: lightmap.texels.len(),
         left_out: lightmap.left_out,

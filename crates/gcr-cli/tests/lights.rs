@@ -331,12 +331,11 @@ fn an_environment_map_of_the_clear_sky_lights_as_the_sky() {
     );
 }
 
-/// A grille cut out by an alpha mask (`map_d`: transparent stripes at x ∈ [1, 1.5) and [2, 2.5))
-/// over a floor, the sun straight overhead: the floor gets the sun's full 1 000 lux under the
-/// open stripes and nothing under the solid ones (the grille's underside is its back).
-#[test]
-fn a_cut_out_grille_casts_a_striped_shadow() {
-    let dir = std::path::PathBuf::from(tmp("grille"));
+/// A folder `name` with `grille.obj`: a 4 × 4 floor (ρ = `floor`) at y = 0 and over its middle,
+/// at y = 1, a 2 × 2 grille (ρ = `grille`) cut by the alpha mask `mask.png` (`map_d`):
+/// transparent stripes at x ∈ [1, 1.5) and [2, 2.5).
+fn grille_scene(name: &str, floor: f64, grille: f64) -> std::path::PathBuf {
+    let dir = std::path::PathBuf::from(tmp(name));
     std::fs::create_dir_all(&dir).unwrap();
     image::GrayImage::from_raw(8, 1, vec![0, 0, 255, 255, 0, 0, 255, 255])
         .unwrap()
@@ -344,7 +343,10 @@ fn a_cut_out_grille_casts_a_striped_shadow() {
         .unwrap();
     std::fs::write(
         dir.join("grille.mtl"),
-        "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl grille\nKd 0.5 0.5 0.5\nmap_d mask.png\n",
+        format!(
+            "newmtl floor\nKd {floor} {floor} {floor}\nnewmtl grille\nKd {grille} {grille} \
+             {grille}\nmap_d mask.png\n"
+        ),
     )
     .unwrap();
     std::fs::write(
@@ -354,6 +356,15 @@ fn a_cut_out_grille_casts_a_striped_shadow() {
          o grille\nusemtl grille\nf 5/1 8/4 7/3 6/2\n",
     )
     .unwrap();
+    dir
+}
+
+/// A grille cut out by an alpha mask (`map_d`: transparent stripes at x ∈ [1, 1.5) and [2, 2.5))
+/// over a floor, the sun straight overhead: the floor gets the sun's full 1 000 lux under the
+/// open stripes and nothing under the solid ones (the grille's underside is its back).
+#[test]
+fn a_cut_out_grille_casts_a_striped_shadow() {
+    let dir = grille_scene("grille", 0.5, 0.5);
     let (probes, out) = (dir.join("p.txt"), dir.join("out.txt"));
     std::fs::write(
         &probes,
@@ -527,24 +538,7 @@ fn the_shipped_light_scenes_light_what_they_should() {
 /// both halves were the grille).
 #[test]
 fn mesh_images_see_through_cut_outs() {
-    let dir = std::path::PathBuf::from(tmp("grille-image"));
-    std::fs::create_dir_all(&dir).unwrap();
-    image::GrayImage::from_raw(8, 1, vec![0, 0, 255, 255, 0, 0, 255, 255])
-        .unwrap()
-        .save(dir.join("mask.png"))
-        .unwrap();
-    std::fs::write(
-        dir.join("grille.mtl"),
-        "newmtl floor\nKd 0.8 0.8 0.8\nnewmtl grille\nKd 0.2 0.2 0.2\nmap_d mask.png\n",
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("grille.obj"),
-        "mtllib grille.mtl\nv 0 0 0\nv 4 0 0\nv 4 0 4\nv 0 0 4\nv 1 1 1\nv 3 1 1\nv 3 1 3\n\
-         v 1 1 3\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\no floor\nusemtl floor\nf 1 4 3 2\n\
-         o grille\nusemtl grille\nf 5/1 8/4 7/3 6/2\n",
-    )
-    .unwrap();
+    let dir = grille_scene("grille-image", 0.8, 0.2);
     // halves of the mean red channel: columns [0, 40 %) and [60 %, 100 %)
     let halves = |mode: &str| {
         let out = dir.join(format!("{mode}.exr"));

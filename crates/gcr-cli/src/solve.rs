@@ -45,11 +45,8 @@ fn solve_and_write(
 ) -> Result<()> {
     let outputs = (args.outputs(), args.images(), args.probe_settings());
     let parts = gcr::output::shards::read_parts(&args.from_shards)?;
-    let plan = OutputPlan::with_options(domain, outputs.0, outputs.1, outputs.2)
-        .and_then(|plan| plan.with_lightmap(args.lightmap_settings()))
-        .and_then(|plan| plan.with_lightmap_parts(parts, config))
-        .and_then(|plan| plan.check_config(config).map(|()| plan))
-        .and_then(|plan| plan.check_shard(domain, config).map(|()| plan))
+    let lightmap = (args.lightmap_settings(), parts);
+    let plan = OutputPlan::checked(domain, outputs, lightmap, config)
         .with_context(|| format!("checking the outputs for `{}`", args.scene))?;
     let mut progress = ProgressLine::new(args.quiet);
     // ⟨Train the networks only when something reads them⟩

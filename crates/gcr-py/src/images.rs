@@ -181,11 +181,7 @@ fn write_files(
     config.paths.shard = shard;
     let parts = gcr::output::shards::read_parts(from_shards)?;
     solved.scene.with_domain(|domain| {
-        let plan = OutputPlan::with_options(domain, paths, images, probes)
-            .and_then(|plan| plan.with_lightmap(lightmap))
-            .and_then(|plan| plan.with_lightmap_parts(parts, &config))
-            .and_then(|plan| plan.check_config(&config).map(|()| plan))
-            .and_then(|plan| plan.check_shard(domain, &config).map(|()| plan))
+        let plan = OutputPlan::checked(domain, (paths, images, probes), (lightmap, parts), &config)
             .with_context(|| format!("checking the outputs for `{name}`"))?;
         let (options, config) = (&solved.options, &config);
         let retrained = match plan.needs_networks() && !options.trains_networks(config, false) {

@@ -135,6 +135,25 @@ impl OutputPlan {
         Self::with_options(domain, paths, images, ProbeSettings::default())
     }
 
+    /// The whole plan of a run, checked before its solve as `gcr solve` and Python's
+    /// `Solution.write` check it: [`OutputPlan::with_options`], the lightmap settings and the
+    /// parts of a sharded lightmap to merge ([`OutputPlan::with_lightmap`],
+    /// [`OutputPlan::with_lightmap_parts`]), then what `config` can compute and the machine hold
+    /// ([`OutputPlan::check_config`]) and its shard ([`OutputPlan::check_shard`]).
+    pub fn checked(
+        domain: &Domain,
+        (paths, images, probe_settings): (OutputPaths, ImageSettings, ProbeSettings),
+        (lightmap, parts): (LightmapSettings, Vec<(String, String)>),
+        config: &SolveConfig,
+    ) -> Result<Self, OutputError> {
+        let plan = Self::with_options(domain, paths, images, probe_settings)?
+            .with_lightmap(lightmap)?
+            .with_lightmap_parts(parts, config)?;
+        plan.check_config(config)?;
+        plan.check_shard(domain, config)?;
+        Ok(plan)
+    }
+
     /// [`OutputPlan::with_images`] with probe settings, checked too
     /// ([`ProbeSettings::validate`]; radiosity probes snap within its tolerance).
     pub fn with_options(

@@ -10,8 +10,8 @@
 //! * **[`KernelSampler::samples`]**: the same samples (bit for bit) through the iterator that prefetches the
 //!   look-ups of the next samples while one traces its ray (what gcr's batch sampling uses).
 
+use crate::bvh::Ray;
 use crate::{BuildQuality, KernelSampler, Scene, SceneBvh, SurfacePoint, SurfaceSampler};
-use obvhs::ray::Ray;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -91,12 +91,12 @@ impl Queries {
                 let d = (y.point - x.point).as_vec3a();
                 let len = d.length();
                 let u = d / len.max(f32::MIN_POSITIVE);
-                Ray::new(
-                    o - u * back,
-                    u,
-                    back + eps,
-                    (back + len - eps).max(back + eps),
-                )
+                Ray {
+                    origin: o - u * back,
+                    direction: u,
+                    tmin: back + eps,
+                    tmax: (back + len - eps).max(back + eps),
+                }
             })
             .collect();
         Queries {

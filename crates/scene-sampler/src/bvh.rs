@@ -27,8 +27,9 @@ mod wide;
 
 use crate::{AlphaMask, Face, FlatPoint, FlatlandScene, NO_FACE, Scene, SurfacePoint};
 use glam::{DVec2, DVec3, Vec3A};
-use obvhs::{BvhBuildParams, bvh2::builder::build_bvh2_from_tris, ray::Ray, triangle::Triangle};
+use obvhs::{BvhBuildParams, bvh2::builder::build_bvh2_from_tris, triangle::Triangle};
 use rayon::prelude::*;
+pub(crate) use wide::Ray;
 use wide::WideBvh;
 
 /// How much effort the BVH build spends (a trade between build time and trace speed).
@@ -90,18 +91,19 @@ fn v3a(p: DVec3) -> Vec3A {
 }
 
 /// The BVH ray from `origin` along `dir` over `[tmin, tmax]`, with each direction component that
-/// is ±0 replaced by +10⁻³⁰: a direction with components of −0 (−Y is (−0, −1, −0)) has infinite
-/// inverse components of the wrong sign for obvhs's slab test and missed every triangle (found by
-/// the cut-out tests with a ray straight down). The change of direction is far below f32's
-/// resolution of any hit.
+/// is ±0 replaced by +10⁻³⁰: with obvhs's slab test a direction with components of −0 (−Y is
+/// (−0, −1, −0)) had infinite inverse components of the wrong sign and missed every triangle
+/// (found by the cut-out tests with a ray straight down). Our slab test needs no nudge
+/// (`wide.rs`); it stays so that every ray, hence every hit distance, is the one it was. The
+/// change of direction is far below f32's resolution of any hit.
 fn ray(origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> Ray {
     let nudge = |c: f32| if c == 0.0 { 1e-30 } else { c };
-    Ray::new(
+    Ray {
         origin,
-        Vec3A::new(nudge(dir.x), nudge(dir.y), nudge(dir.z)),
+        direction: Vec3A::new(nudge(dir.x), nudge(dir.y), nudge(dir.z)),
         tmin,
         tmax,
-    )
+    }
 }
 
 impl SceneBvh {

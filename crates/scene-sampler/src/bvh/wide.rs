@@ -33,7 +33,7 @@
 
 use crate::sample::prefetch;
 use glam::Vec3A;
-use obvhs::{bvh2::Bvh2, ray::Ray, triangle::Triangle};
+use obvhs::{bvh2::Bvh2, triangle::Triangle};
 use wide::{CmpGe, CmpLe, CmpNe, f32x4, f32x8};
 
 /// Set on a [`Node8`] child that is a leaf; the rest of its bits are `pack << 4 | lane << 2 |
@@ -81,6 +81,16 @@ pub(crate) struct WideBvh {
     stack_len: usize,
 }
 
+/// A ray in the BVH's frame: `origin + t·direction` for `t` in `[tmin, tmax]` (the slab tests
+/// take its inverse direction once, [`Slab::new`]; obvhs's `Ray` computed one more per ray).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Ray {
+    pub(crate) origin: Vec3A,
+    pub(crate) direction: Vec3A,
+    pub(crate) tmin: f32,
+    pub(crate) tmax: f32,
+}
+
 /// A ray prepared for the slab tests: `o`, `1/d` and which bound is near on each axis.
 struct Slab {
     o: [f32x8; 3],
@@ -92,8 +102,8 @@ struct Slab {
 impl Slab {
     fn new(ray: &Ray) -> Self {
         // |d| ≥ 10⁻³⁰ per axis, so 1/d is finite and (b − o)/d is never 0·∞ (obvhs's
-        // `inv_direction` instead clamps |1/d| to 2²³, which shortens the slab of a direction
-        // near an axis)
+        // `Ray::inv_direction` clamps |1/d| to 2²³ instead, which shortens the slab of a
+        // direction near an axis)
         let inv = |c: f32| {
             1.0 / if c.abs() < 1e-30 {
                 1e-30f32.copysign(c)
@@ -681,9 +691,15 @@ mod tests {
                 let (a, b) = (p(), p());
                 let len = (b - a).length();
                 let tmax = [f32::INFINITY, len, 0.3 * len][k % 3];
-                let ray = Ray::new(a, (b - a) / len, 0.0, tmax);
+                let ray = Ray {
+                    origin: a,
+                    direction: (b - a) / len,
+                    tmin: 0.0,
+                    tmax,
+                };
+                let reference = obvhs::ray::Ray::new(a, ray.direction, 0.0, tmax);
                 let brute = (0..tris.len())
-                    .map(|i| (i as u32, tris[i].intersect(&ray)))
+                    .map(|i| (i as u32, tris[i].intersect(&reference)))
                     .filter(|x| x.1.is_finite())
                     .min_by(|x, y| x.1.total_cmp(&y.1));
                 let ours = wide.closest(&ray, |_, t| t);
@@ -693,7 +709,7 @@ mod tests {
                     assert_eq!(t.to_bits(), t_brute.to_bits(), "{name} ray {k}");
                     if face != theirs {
                         ties += 1;
-                        let t2 = tris[face as usize].intersect(&ray);
+                        let t2 = tris[face as usize].intersect(&reference);
                         assert_eq!(t2.to_bits(), t.to_bits(), "{name} ray {k}");
                     }
                 }
@@ -704,7 +720,7 @@ mod tests {
                 if let Some((first, _)) = brute {
                     let second = (0..tris.len())
                         .filter(|&i| i as u32 != first)
-                        .map(|i| tris[i].intersect(&ray))
+                        .map(|i| tris[i].intersect(&reference))
                         .filter(|t| t.is_finite())
                         .min_by(f32::total_cmp);
                     let ours =

@@ -526,10 +526,8 @@ fn write_lightmap(
     let tg = Instant::now();
     let settings = &plan.lightmap;
     let texels = crate::lightmap::lay_out_texels(domain, settings)?;
-    let print = || {
-        let extra = format!("{settings:?}");
-        super::shards::fingerprint(domain, &texels.points(), config, &extra)
-    };
+    let points = texels.points();
+    let print = || super::shards::fingerprint(domain, &points, config, &format!("{settings:?}"));
     // ⟨The texels' values: gathered (all of them, or a shard's), or the shards' merged⟩
     let gathered = if plan.lightmap_parts.is_empty() {
         let _phase = crate::progress::phase("lightmap");
@@ -540,7 +538,7 @@ fn write_lightmap(
     if let Some(shard) = config.paths.shard {
         // ⟨A shard writes its texels' estimates with their indices, nothing else⟩
         let irradiance = settings.quantity == crate::LightmapQuantity::Irradiance;
-        let mine = crate::shard_points(domain, &texels.points(), irradiance, config)?;
+        let mine = crate::shard_points(domain, &points, irradiance, config)?;
         let theirs: Vec<Gathered> = mine.iter().map(|&i| gathered[i]).collect();
         record_gather(metrics, &GatherStats::of(&theirs), config);
         metrics.seconds.gather += tg.elapsed().as_secs_f64();

@@ -14,21 +14,27 @@ use gcr::output::memory::{
 };
 use std::path::Path;
 
-/// The peak memory (bytes) of `gcr solve cornell-box` writing `image` at `side × side` with
-/// `extra` options.
-fn peak(d: &Path, image: &str, side: u32, extra: &[&str]) -> f64 {
-    let (img, m) = (d.join(image), d.join("m.json"));
-    let res = format!("{side}x{side}");
-    let mut args = vec!["solve", "cornell-box", "--image", img.to_str().unwrap()];
-    args.extend(["--resolution", &res, "--metrics", m.to_str().unwrap()]);
-    args.extend(extra);
-    let o = gcr(&args);
+/// The peak memory (bytes) of `gcr ARGS` with `--metrics` in `d`, as its metrics report it.
+fn peak_of(d: &Path, args: &[&str]) -> f64 {
+    let m = d.join("m.json");
+    let o = gcr(&[args, &["--metrics", m.to_str().unwrap()]].concat());
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let metrics: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&m).unwrap()).unwrap();
     metrics["peak_memory_bytes"]
         .as_f64()
         .expect("peak memory in the metrics")
+}
+
+/// The peak memory (bytes) of `gcr solve cornell-box` writing `image` at `side × side` with
+/// `extra` options.
+fn peak(d: &Path, image: &str, side: u32, extra: &[&str]) -> f64 {
+    let img = d.join(image);
+    let res = format!("{side}x{side}");
+    let mut args = vec!["solve", "cornell-box", "--image", img.to_str().unwrap()];
+    args.extend(["--resolution", &res]);
+    args.extend(extra);
+    peak_of(d, &args)
 }
 
 /// Bytes a pixel adds to the peak between `small` and `large` square images.
@@ -65,28 +71,21 @@ fn the_memory_estimates_bound_what_images_take() {
 /// The peak memory (bytes) of `gcr solve cornell-box` at `n` probes on its faces (a fixed
 /// low-discrepancy walk over the floor and the back wall) of `quantity`, at the draft quality.
 fn probe_peak(d: &Path, n: usize, quantity: &str) -> f64 {
-    let (pts, out, m) = (d.join("p.pts"), d.join("o.txt"), d.join("m.json"));
+    let (pts, out) = (d.join("p.pts"), d.join("o.txt"));
     cornell_probes(&pts, n);
-    let o = gcr(&[
+    let args = vec![
         "solve",
         "cornell-box",
         "--probes",
         pts.to_str().unwrap(),
         "--probe-out",
         out.to_str().unwrap(),
-        "--metrics",
-        m.to_str().unwrap(),
         "--quality",
         "draft",
         "--probe-quantity",
         quantity,
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let metrics: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&m).unwrap()).unwrap();
-    metrics["peak_memory_bytes"]
-        .as_f64()
-        .expect("peak memory in the metrics")
+    ];
+    peak_of(d, &args)
 }
 
 #[test]

@@ -23,17 +23,16 @@ pub fn run(args: &SolveArgs) -> Result<()> {
         .lights
         .light(loaded, args.quiet)
         .with_context(|| format!("lighting `{}`", args.scene))?;
-    match loaded {
+    // ⟨The scene as the estimators see it (a 3-D scene with its BVH, or Flatland)⟩
+    let bvh;
+    let domain = match &loaded {
         AnyScene::ThreeD(s) => {
-            let bvh = SceneBvh::new(&s);
-            let domain = Domain::ThreeD(KernelSampler::new(&s, &bvh));
-            solve_and_write(&domain, args, &config, started)
+            bvh = SceneBvh::new(s);
+            Domain::ThreeD(KernelSampler::new(s, &bvh))
         }
-        AnyScene::Flatland(s) => {
-            let domain = Domain::Flat(FlatKernelSampler::new(&s));
-            solve_and_write(&domain, args, &config, started)
-        }
-    }
+        AnyScene::Flatland(s) => Domain::Flat(FlatKernelSampler::new(s)),
+    };
+    solve_and_write(&domain, args, &config, started)
 }
 
 /// Checks the outputs (paths, probes) first, so that a bad one is reported before the solve.
@@ -43,20 +42,21 @@ fn solve_and_write(
     config: &SolveConfig,
     started: Instant,
 ) -> Result<()> {
-    let outputs = (args.outputs(), args.images(), args.probe_settings());
+    let (options, outputs) = (args.options(), args.outputs());
+    let (images, probes, lightmap) = (
+        args.images(),
+        args.probe_settings(),
+        args.lightmap_settings(),
+    );
     let parts = gcr::output::shards::read_parts(&args.from_shards)?;
-    let lightmap = (args.lightmap_settings(), parts);
-    let plan = OutputPlan::checked(domain, outputs, lightmap, config)
+    let plan = OutputPlan::checked(domain, (outputs, images, probes), (lightmap, parts), config)
         .with_context(|| format!("checking the outputs for `{}`", args.scene))?;
     let mut progress = ProgressLine::new(args.quiet);
     // ⟨Train the networks only when something reads them⟩
-    let trained = gcr::solve_for_outputs(
-        domain,
-        &args.options(),
-        config,
-        plan.needs_networks(),
-        &mut |p| progress.update(p),
-    )?;
+    let trained =
+        gcr::solve_for_outputs(domain, &options, config, plan.needs_networks(), &mut |p| {
+            progress.update(p)
+        })?;
     progress.solved();
     for w in &trained.metrics.warnings {
         eprintln!("warning: {w}");

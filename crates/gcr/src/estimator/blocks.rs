@@ -5,7 +5,7 @@
 //! (`rounds.rs`), so a point's value depends on every point it runs with. Blocks bound that set:
 //! the groups of neighbours that share paths (`neighbours.rs`, formed from the whole point set
 //! in a Morton order) are cut, in that order, into blocks of at least
-//! [`PathSettings::block_points`](crate::PathSettings::block_points) points, and each block runs
+//! [`PathSettings::block_points`] points, and each block runs
 //! its own rounds, guides included. A point's value then depends only on the whole point set's
 //! grouping and on its block, never on which other blocks are computed: a shard (every N-th
 //! block, [`crate::Shard`]) computes exactly the values a single run does.
@@ -14,7 +14,7 @@
 //! together, as before blocks existed; a run of up to `block_points` points is one block too.
 
 use super::neighbours;
-use crate::config::{Shard, SolveConfig};
+use crate::config::{PathSettings, Shard, SolveConfig};
 use crate::domain::Domain;
 use glam::DVec3;
 use std::ops::Range;
@@ -48,9 +48,62 @@ pub(crate) fn of_shard(blocks: usize, shard: Option<Shard>) -> Vec<usize> {
     }
 }
 
+/// The groups of neighbouring output points that share paths ([`neighbours::groups`], formed
+/// from the whole point set), cut into blocks ([`blocks`]), and the blocks the configured shard
+/// computes ([`of_shard`]): formed once per point set, read by the rounds and by the gathers
+/// that estimate points one by one.
+pub(crate) struct Blocks {
+    /// The groups of neighbours (indices into the points).
+    pub groups: Vec<Vec<usize>>,
+    /// The blocks: runs of whole groups.
+    pub blocks: Vec<Range<usize>>,
+    /// The blocks (indices, ascending) the shard computes; every block without a shard.
+    pub mine: Vec<usize>,
+}
+
+impl Blocks {
+    /// The blocks of surface points `(point, normal, face)` (receivers in the air have
+    /// [`scene_sampler::NO_FACE`]) under `settings`' group size, block size and shard.
+    pub(crate) fn new(
+        domain: &Domain,
+        points: &[(DVec3, DVec3, u32)],
+        settings: &PathSettings,
+    ) -> Self {
+        let groups = neighbours::groups(domain, points, settings.neighbours);
+        let blocks = blocks(&groups, settings.block_points);
+        let mine = of_shard(blocks.len(), settings.shard);
+        Self {
+            groups,
+            blocks,
+            mine,
+        }
+    }
+
+    /// The points (indices, ascending) of the shard's blocks.
+    pub(crate) fn points(&self) -> Vec<usize> {
+        let mut out: Vec<usize> = (self.mine.iter())
+            .flat_map(|&b| {
+                self.groups[self.blocks[b].clone()]
+                    .iter()
+                    .flatten()
+                    .copied()
+            })
+            .collect();
+        out.sort_unstable();
+        out
+    }
+
+    /// Whether each of `count` points is in the shard's blocks.
+    pub(crate) fn mask(&self, count: usize) -> Vec<bool> {
+        let mut mine = vec![false; count];
+        self.points().into_iter().for_each(|i| mine[i] = true);
+        mine
+    }
+}
+
 /// The points (indices into `points`, ascending) of the shard `config` asks for
-/// ([`PathSettings::shard`](crate::PathSettings::shard); every point without one), as the paths
-/// gather forms its blocks: radiosity at surface points `(point, normal, face)`, or irradiance
+/// ([`PathSettings::shard`]; every point without one), as the paths gather forms its blocks
+/// ([`Blocks`]): radiosity at surface points `(point, normal, face)`, or irradiance
 /// (`irradiance`: the faces are ignored, every point is a white receiver). Errors when the shard
 /// has no block: fewer blocks than shards.
 pub fn shard_points(
@@ -69,40 +122,16 @@ pub fn shard_points(
         }
         false => points,
     };
-    let groups = neighbours::groups(domain, points, config.paths.neighbours);
-    let blocks = blocks(&groups, config.paths.block_points);
-    let mine = of_shard(blocks.len(), config.paths.shard);
-    if let (Some(shard), true) = (config.paths.shard, mine.is_empty()) {
+    let blocks = Blocks::new(domain, points, &config.paths);
+    if let (Some(shard), true) = (config.paths.shard, blocks.mine.is_empty()) {
         return Err(ShardError::Empty {
             shard,
-            blocks: blocks.len(),
+            blocks: blocks.blocks.len(),
             points: points.len(),
             block_points: config.paths.block_points,
         });
     }
-    let mut out: Vec<usize> = (mine.iter())
-        .flat_map(|&b| groups[blocks[b].clone()].iter().flatten().copied())
-        .collect();
-    out.sort_unstable();
-    Ok(out)
-}
-
-/// Whether each of `points` is in the configured shard (`None`: no shard, every point), for the
-/// gathers without rounds, whose points are estimated one by one (radiosity `points`, or
-/// irradiance: `irradiance`).
-pub(crate) fn in_shard(
-    domain: &Domain,
-    points: &[(DVec3, DVec3, u32)],
-    irradiance: bool,
-    config: &SolveConfig,
-) -> Option<Vec<bool>> {
-    config.paths.shard?;
-    let mut mine = vec![false; points.len()];
-    // an empty shard computes nothing (the program refuses it before the solve: `shard_points`)
-    for i in shard_points(domain, points, irradiance, config).unwrap_or_default() {
-        mine[i] = true;
-    }
-    Some(mine)
+    Ok(blocks.points())
 }
 
 /// A shard that cannot be formed.

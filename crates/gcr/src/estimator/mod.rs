@@ -5,11 +5,11 @@
 //!
 //! | step | file | what |
 //! |---|---|---|
-//! | the front door | `points.rs` ([`radiosity_at_points`], [`irradiance_at_points`]) | one seed per point from its position ([`point_seed`]); the configured gather |
+//! | the front door | `points.rs` ([`radiosity_at_points`], [`irradiance_at_points`]) | one seed per point from its position ([`point_seed`]); rounds to the target, or each point on its own (`pointwise.rs`: no target, or the dissertation's gathers) |
 //! | one point's estimate | `paths.rs` (`PathGather`) | next-event estimation through the lights ([`scene_sampler::lights`]) and cosine rays by MIS, paths continued with Russian roulette, Owen-scrambled Sobol points in two replicates (the standard error) |
 //! | neighbours share paths | `neighbours.rs` | groups of nearby, alike-facing points; every member weighs every member's rays by the multi-sample balance heuristic (unbiased) |
 //! | guided first bounces | `guide.rs` (`--guiding`) | each group's cosine rays warped by a density learned from its earlier rounds, mixed with the cosine density (defensive); off by default |
-//! | blocks | `blocks.rs` ([`shard_points`]) | the groups cut into blocks of at least `--block-points` points, each running its rounds on its own: a point's value depends only on its block, so shards (`--shard`) match a single run |
+//! | blocks | `blocks.rs` (`Blocks`, [`shard_points`]) | the groups formed once per point set and cut into blocks of at least `--block-points` points, each running its rounds on its own: a point's value depends only on its block, so shards (`--shard`) match a single run |
 //! | rounds to the target | `rounds.rs` (`rounds_to_target`) | a pilot round, then rounds up to the next power of two of Sobol points that covers the missing rays, until the 90 % bound of the estimated relative error ([`relative_std_error`]) meets the target or the ray cap |
 //! | pixels | `pixel_rounds.rs` | a pixel image's rays allocated by each pixel's relative σ (Neyman), stopping on the per-pixel relative error |
 //!
@@ -23,6 +23,7 @@ pub(crate) mod neighbours;
 pub(crate) mod paths;
 pub(crate) mod pixel_rounds;
 mod points;
+mod pointwise;
 pub(crate) mod rounds;
 
 pub use blocks::{ShardError, shard_points};

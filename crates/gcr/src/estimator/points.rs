@@ -1,17 +1,18 @@
 //! The front door of every gather: B at surface points and irradiance at any points, one seeding
-//! convention ([`point_seed`]), dispatching to the paths gather ([`super::paths`], in rounds to a
-//! target: [`super::rounds`]) or the dissertation's gathers ([`crate::gather`], the networks).
+//! convention ([`point_seed`]), dispatching to the paths gather in rounds to a target
+//! ([`super::rounds`], over the blocks of [`super::blocks`]) or to each point on its own
+//! ([`super::pointwise`]: the paths gather without a target, or the dissertation's gathers).
 
+use super::blocks::Blocks;
 use super::paths::PathGather;
 use super::rounds::{grouped_rounds, paths_to_target};
 use crate::config::{GatherMode, SolveConfig};
 use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
 use crate::emitters::Emitters;
-use crate::gather::{Gathered, gather};
+use crate::gather::Gathered;
 use crate::solve::Trained;
 use glam::DVec3;
-use rayon::prelude::*;
 
 /// Why radiosity could not be gathered from a solution.
 #[derive(Debug, thiserror::Error)]
@@ -44,33 +45,28 @@ pub fn radiosity_at_points(
     check_base(trained, config)?;
     let frame = domain.frame();
     let paths = path_gather(domain, trained, emitters, config);
-    if let (GatherMode::Paths, Some(target)) = (config.gather, config.paths.target_error) {
-        let seeds: Vec<u64> = points
-            .iter()
-            .map(|&(y, _, _)| point_seed(config.seed, y, frame))
-            .collect();
-        return Ok(paths_to_target(
-            domain, &paths, points, &seeds, target, config,
-        ));
-    }
-    let mine = super::blocks::in_shard(domain, points, false, config);
-    Ok(points
-        .par_iter()
-        .enumerate()
-        .map_init(Vec::new, |scratch, (i, &(y, n, face))| {
-            if mine.as_ref().is_some_and(|m| !m[i]) {
-                return Gathered::default();
-            }
-            let seed = point_seed(config.seed, y, frame);
-            radiosity_at(
-                (domain, trained, emitters, &paths),
-                config,
-                (y, n, face),
-                seed,
-                scratch,
-            )
-        })
-        .collect())
+    let seeds: Vec<u64> = (points.iter())
+        .map(|&(y, _, _)| point_seed(config.seed, y, frame))
+        .collect();
+    // ⟨The blocks of neighbour groups: for the rounds, or to know a shard's points⟩
+    let target = config
+        .paths
+        .target_error
+        .filter(|_| config.gather == GatherMode::Paths);
+    let blocks = (target.is_some() || config.paths.shard.is_some())
+        .then(|| Blocks::new(domain, points, &config.paths));
+    Ok(match (target, blocks) {
+        // ⟨The paths gather to a target: in rounds, block by block⟩
+        (Some(target), Some(blocks)) => {
+            paths_to_target(domain, &paths, (points, &seeds), &blocks, target, config)
+        }
+        // ⟨Otherwise each point on its own by the configured gather (a shard's points only)⟩
+        (_, blocks) => {
+            let mine = blocks.map(|b| b.mask(points.len()));
+            let solution = (domain, trained, emitters, &paths);
+            super::pointwise::radiosity_each(solution, config, (points, &seeds), mine.as_deref())
+        }
+    })
 }
 
 /// Irradiance E(y, n) = ∫ L cos θ dω at any points `(point, unit normal)` — on a surface or in the
@@ -91,34 +87,26 @@ pub fn irradiance_at_points(
     }
     let frame = domain.frame();
     let paths = path_gather(domain, trained, emitters, config);
-    let seeds: Vec<u64> = points
-        .iter()
+    let seeds: Vec<u64> = (points.iter())
         .map(|&(y, _)| point_seed(config.seed ^ IRRADIANCE_SALT, y, frame))
         .collect();
-    Ok(match config.paths.target_error {
-        Some(target) => {
-            // receivers in the air (on no face), white, not emitting: they share paths as
-            // surface points do
-            let receivers: Vec<_> = points
-                .iter()
-                .map(|&(y, n)| (y, n, scene_sampler::NO_FACE))
-                .collect();
+    // receivers in the air (on no face), white, not emitting: they share paths as surface
+    // points do
+    let receivers: Vec<_> = (points.iter())
+        .map(|&(y, n)| (y, n, scene_sampler::NO_FACE))
+        .collect();
+    let target = config.paths.target_error;
+    let blocks = (target.is_some() || config.paths.shard.is_some())
+        .then(|| Blocks::new(domain, &receivers, &config.paths));
+    Ok(match (target, blocks) {
+        (Some(target), Some(blocks)) => {
             let white = |_| ([1.0; BANDS], [0.0; BANDS]);
-            grouped_rounds(domain, &paths, &receivers, white, &seeds, target, config)
+            let at = (&receivers[..], &seeds[..]);
+            grouped_rounds(domain, &paths, at, &blocks, white, target, config)
         }
-        None => {
-            let at: Vec<_> = (points.iter()).map(|&(y, n)| (y, n, 0)).collect();
-            let mine = super::blocks::in_shard(domain, &at, true, config);
-            (0..points.len())
-                .into_par_iter()
-                .map(|i| match mine.as_ref().is_some_and(|m| !m[i]) {
-                    true => Gathered::default(),
-                    false => {
-                        (paths.estimate_irradiance(points[i], seeds[i], 0, config.gather_samples))
-                            .gathered()
-                    }
-                })
-                .collect()
+        (_, blocks) => {
+            let mine = blocks.map(|b| b.mask(points.len()));
+            super::pointwise::irradiance_each(&paths, config, (points, &seeds), mine.as_deref())
         }
     })
 }
@@ -167,43 +155,4 @@ pub fn point_seed(seed: u64, y: DVec3, (origin, diagonal): (DVec3, f64)) -> u64 
         .fold(mix(seed ^ 0x9E37_79B9_7F4A_7C15), |h, c| {
             mix(h ^ (c.round() as i64) as u64)
         })
-}
-
-/// Radiosity at surface point (y, n, face) by the configured gather ([`check_base`] first).
-fn radiosity_at(
-    (domain, trained, emitters, paths): (
-        &Domain,
-        &Trained,
-        &Emitters,
-        &PathGather<impl Fn(DVec3, DVec3) -> Bands>,
-    ),
-    config: &SolveConfig,
-    (y, n, face): (DVec3, DVec3, u32),
-    seed: u64,
-    scratch: &mut Vec<u32>,
-) -> Gathered {
-    let e = domain.emission(face);
-    let reflected = |b: Bands| {
-        let mut out = Gathered::default();
-        for k in 0..BANDS {
-            out.from_networks[k] = b[k].max(0.0);
-            out.radiosity[k] = e[k] + out.from_networks[k];
-        }
-        out
-    };
-    match config.gather {
-        GatherMode::Base => reflected(trained.fem.reflected_from_base(y, n, scratch)),
-        GatherMode::Kernel => reflected(trained.reflected_kernel(y, n)),
-        GatherMode::Rays => gather(
-            domain,
-            emitters,
-            y,
-            n,
-            face,
-            config.gather_samples,
-            seed,
-            &|x, nx, _| trained.reflected_kernel(x, nx),
-        ),
-        GatherMode::Paths => paths.gather((y, n, face), seed),
-    }
 }

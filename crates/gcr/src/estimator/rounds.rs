@@ -2,6 +2,7 @@
 //! confidence bound of the estimated relative error meets the target (or the ray cap), over
 //! groups of neighbouring points that share paths; the error estimate and its χ² bound.
 
+use super::blocks::Blocks;
 use super::guide::{GroupGuide, SpatialGuides, SpatialLearner};
 use super::paths::{PathGather, PointEstimate, REPLICATES};
 use crate::config::{GUIDING_FROM, GatherSamples, Guiding, SolveConfig};
@@ -27,36 +28,40 @@ use std::sync::{Arc, Mutex};
 pub(super) fn paths_to_target(
     domain: &Domain,
     paths: &PathGather<impl Fn(DVec3, DVec3) -> Bands + Sync>,
-    points: &[(DVec3, DVec3, u32)],
-    seeds: &[u64],
+    (points, seeds): (&[(DVec3, DVec3, u32)], &[u64]),
+    blocks: &Blocks,
     target: f64,
     config: &SolveConfig,
 ) -> Vec<Gathered> {
     let material =
         |(y, _, face): (DVec3, DVec3, u32)| (domain.reflectance_at(face, y), domain.emission(face));
-    grouped_rounds(domain, paths, points, material, seeds, target, config)
+    grouped_rounds(
+        domain,
+        paths,
+        (points, seeds),
+        blocks,
+        material,
+        target,
+        config,
+    )
 }
 
-/// [`rounds_to_target`] over the groups of neighbouring `points` ([`super::neighbours::groups`],
-/// at most `PathSettings::neighbours` a group), block by block ([`super::blocks`]: each block's
-/// rounds on their own; only the blocks of the configured shard, the other points left at
-/// `Gathered::default()`), each round of a group by [`PathGather::estimate_group`] with the
-/// members' (ρ, E) from `material`.
+/// [`rounds_to_target`] over the groups of neighbouring `points` with their `seeds`, block by
+/// block ([`Blocks`] of these points: each block's rounds on their own; only the blocks of the
+/// configured shard, the other points left at `Gathered::default()`), each round of a group by
+/// [`PathGather::estimate_group`] with the members' (ρ, E) from `material`.
 pub(super) fn grouped_rounds(
     domain: &Domain,
     paths: &PathGather<impl Fn(DVec3, DVec3) -> Bands + Sync>,
-    points: &[(DVec3, DVec3, u32)],
+    (points, seeds): (&[(DVec3, DVec3, u32)], &[u64]),
+    blocks: &Blocks,
     material: impl Fn((DVec3, DVec3, u32)) -> (Bands, Bands) + Sync,
-    seeds: &[u64],
     target: f64,
     config: &SolveConfig,
 ) -> Vec<Gathered> {
-    let groups = super::neighbours::groups(domain, points, config.paths.neighbours);
-    let blocks = super::blocks::blocks(&groups, config.paths.block_points);
+    let groups = &blocks.groups;
     let mut out = vec![Gathered::default(); points.len()];
-    for block in
-        (super::blocks::of_shard(blocks.len(), config.paths.shard).iter()).map(|&b| &blocks[b])
-    {
+    for block in blocks.mine.iter().map(|&b| &blocks.blocks[b]) {
         // the block's points in their original order (one block: exactly the points given)
         let mut members: Vec<usize> = groups[block.clone()].iter().flatten().copied().collect();
         members.sort_unstable();

@@ -2,6 +2,10 @@
 //! and a function over the kernel domain (s,t) ∈ [0,1]² as a grey image (figs. 4.1b, 4.6b: bright
 //! = small, dark = large, like the dissertation).
 
+use super::OutputError;
+use super::encode::write_png;
+use super::plan::OutputPlan;
+use super::stage::Stage;
 use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::emitters::Emitters;
@@ -10,6 +14,7 @@ use crate::output::tonemap::Exposure;
 use crate::solve::Trained;
 use glam::{DVec2, DVec3};
 use scene_sampler::FlatlandScene;
+use std::time::Instant;
 
 /// Side of the square [`scene_image`] in pixels.
 pub const SCENE_IMAGE_SIZE: u32 = 512;
@@ -17,6 +22,33 @@ pub const SCENE_IMAGE_SIZE: u32 = 512;
 pub const LIGHT_FLOW_PANEL: u32 = 256;
 /// Pixels between the two panels of [`light_flow_image`].
 const LIGHT_FLOW_GAP: u32 = 8;
+
+/// The Flatland step of the output stage: the scene image ([`scene_image`]) and the light-flow
+/// image ([`light_flow_image`], when the solution has a kernel network), staged.
+pub(super) fn write_images(
+    domain: &Domain,
+    (trained, emitters): (&Trained, &Emitters),
+    config: &SolveConfig,
+    plan: &OutputPlan,
+    stage: &mut Stage,
+) -> Result<(), OutputError> {
+    let Some(flat) = domain.scene_flat() else {
+        return Ok(());
+    };
+    let to = Instant::now();
+    let paths = plan.paths();
+    if let Some(path) = &paths.image {
+        let img = scene_image(domain, trained, emitters, config, flat)?;
+        stage.files.write(path, |w| write_png(&img, w))?;
+    }
+    if let Some(path) = &paths.kernel_image {
+        if let Some(img) = light_flow_image(domain, trained) {
+            stage.files.write(path, |w| write_png(&img, w))?;
+        }
+    }
+    stage.metrics.seconds.output += to.elapsed().as_secs_f64();
+    Ok(())
+}
 
 /// A polyline piece with its radiosity, for [`draw_segments`].
 #[derive(Clone, Copy, Debug)]

@@ -1,5 +1,6 @@
-//! Lightmap files: the pages as linear OpenEXR, and a binary glTF of the scene with the
-//! lightmap on a second UV set, as web viewers and engines read it.
+//! The lightmap step of the output stage ([`write_lightmap`]) and its files: the pages as linear
+//! OpenEXR, and a binary glTF of the scene with the lightmap on a second UV set, as web viewers
+//! and engines read it.
 //!
 //! * **`<name>-lightmap-<k>.exr`** beside the .glb: page k, RGB f32, the linear values (irradiance
 //!   E or radiosity B, [`LightmapQuantity`]), row 0 at v = 0 (the image's top row).
@@ -18,13 +19,134 @@
 //!   material. Each face is written as its own three corners (a triangle soup: the lightmap's
 //!   seams need split vertices anyway); back faces of two-sided materials are their own faces.
 
+use super::OutputError;
 use super::gltf_bin::Bin;
+use super::plan::OutputPlan;
+use super::stage::Stage;
+use super::staged::check_target;
 use super::tonemap::srgb_encode;
+use crate::config::SolveConfig;
+use crate::domain::Domain;
+use crate::estimator::GatherStats;
+use crate::gather::Gathered;
 use crate::lightmap::{Lightmap, LightmapQuantity};
+use crate::solve::Trained;
 use scene_sampler::Scene;
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The lightmap step of the output stage: lays out the texels, gathers them (all, or a shard's;
+/// or merges the shards' partial outputs) and stages the .glb and its EXR pages — or, for a
+/// shard, its partial output alone.
+pub(super) fn write_lightmap(
+    domain: &Domain,
+    trained: &Trained,
+    config: &SolveConfig,
+    plan: &OutputPlan,
+    path: &Path,
+    stage: &mut Stage,
+) -> Result<(), OutputError> {
+    let Some(scene) = domain.scene_3d() else {
+        return Err(OutputError::MeshNeeds3d);
+    };
+    let tg = Instant::now();
+    let settings = &plan.lightmap;
+    let texels = crate::lightmap::lay_out_texels(domain, settings)?;
+    let points = texels.points();
+    let print = || super::shards::fingerprint(domain, &points, config, &format!("{settings:?}"));
+    // ⟨The texels' values: gathered (all of them, or a shard's), or the shards' merged⟩
+    let gathered = if plan.lightmap_parts.is_empty() {
+        let _phase = crate::progress::phase("lightmap");
+        crate::lightmap::gather_texels(domain, trained, config, settings, &texels)?
+    } else {
+        merged_texels(&plan.lightmap_parts, &format!("{:016x}", print()))?
+    };
+    if let Some(shard) = config.paths.shard {
+        // ⟨A shard writes its texels' estimates with their indices, nothing else⟩
+        let irradiance = settings.quantity == crate::LightmapQuantity::Irradiance;
+        let mine = crate::shard_points(domain, &points, irradiance, config)?;
+        let theirs: Vec<Gathered> = mine.iter().map(|&i| gathered[i]).collect();
+        stage.gathers.push(GatherStats::of(&theirs));
+        stage.metrics.seconds.gather += tg.elapsed().as_secs_f64();
+        let lines: Vec<String> = gathered.iter().map(super::shards::gathered_line).collect();
+        let kind = super::shards::Kind::Lightmap;
+        let text = super::shards::partial_text(kind, shard, print(), &lines, &mine);
+        let part = super::shards::lightmap_part_path(path, shard);
+        check_target(&part, "lightmap shard", None)?;
+        stage.files.write_bytes(&part, text.as_bytes())?;
+        return Ok(());
+    }
+    stage.metrics.warnings.extend(texels.atlas.note.clone());
+    let lightmap = crate::lightmap::assemble_lightmap(texels, &gathered, settings);
+    stage.gathers.push(lightmap.stats);
+    let (metrics, staged) = (&mut stage.metrics, &mut stage.files);
+    metrics.seconds.gather += tg.elapsed().as_secs_f64();
+    let to = Instant::now();
+    let scale = png_scale(&lightmap);
+    let io = |source| OutputError::Write {
+        path: path.to_path_buf(),
+        source,
+    };
+    let glb = to_lightmap_glb(&lightmap, scene, scale).map_err(io)?;
+    staged.write_bytes(path, &glb)?;
+    let pages = page_paths(path, lightmap.atlas.pages);
+    for (k, page) in pages.iter().enumerate() {
+        check_target(page, "lightmap page", Some("exr"))?;
+        let exr = encode_page_exr(&lightmap, k).map_err(io)?;
+        staged.write_bytes(page, &exr)?;
+    }
+    metrics.lightmap = Some(crate::metrics::LightmapRecord {
+        path: path.display().to_string(),
+        pages: lightmap.atlas.pages,
+        width: lightmap.atlas.width,
+        height: lightmap.atlas.height,
+        texels_per_unit: lightmap.atlas.texels_per_unit,
+        charts: lightmap.atlas.charts,
+        uv_source: if lightmap.atlas.from_input {
+            "input"
+        } else {
+            "unwrapped"
+        },
+        utilization: lightmap.atlas.utilization,
+        texels: lightmap.texels.len(),
+        left_out: lightmap.left_out,
+        png_scale: scale,
+    });
+    metrics.seconds.output += to.elapsed().as_secs_f64();
+    Ok(())
+}
+
+/// The texels' estimates from the partial lightmap outputs `parts` of a sharded bake, merged
+/// ([`super::shards::merge`]) and checked to be of this run (its `fingerprint`).
+fn merged_texels(
+    parts: &[(String, String)],
+    fingerprint: &str,
+) -> Result<Vec<Gathered>, OutputError> {
+    let merged =
+        super::shards::merge(parts).map_err(|e| OutputError::MergeShards(e.to_string()))?;
+    if merged.kind != super::shards::Kind::Lightmap {
+        return Err(OutputError::MergeShards(
+            "these are shards of probes: `gcr merge` joins them".into(),
+        ));
+    }
+    if merged.fingerprint != fingerprint {
+        return Err(OutputError::MergeShards(format!(
+            "the shards have fingerprint {}, this run {fingerprint}: they are of another scene, \
+             lightmap or solve settings (give the options of the shard runs, --shard excepted, \
+             --block-points included)",
+            merged.fingerprint
+        )));
+    }
+    (merged.text.lines().enumerate())
+        .map(|(i, line)| {
+            super::shards::parse_gathered(line).ok_or_else(|| {
+                OutputError::MergeShards(format!("texel {i}: not an estimate: `{line}`"))
+            })
+        })
+        .collect()
+}
 
 /// The EXR page files of a lightmap written to `glb`: `<stem>-lightmap-<k>.exr` beside it.
 pub fn page_paths(glb: &Path, pages: u32) -> Vec<PathBuf> {

@@ -8,37 +8,43 @@ use std::path::PathBuf;
 
 mod autocam;
 mod camera;
+mod encode;
 mod flatland;
 mod glb;
 mod gltf_bin;
-mod hdr;
 mod lightmap;
 mod linear;
 pub mod memory;
 mod mesh;
 mod pixel;
+mod plan;
 mod ply;
 mod probes;
 mod raster;
 pub mod shards;
+mod stage;
 mod staged;
 mod tonemap;
+mod views;
 mod write;
 
 pub use camera::DEFAULT_FOV;
 pub use camera::{CameraChoice, CameraError, ImageMode, ImageSettings, View};
+pub use encode::{write_jpeg, write_png};
 pub use glb::{to_glb, write_glb};
 pub use lightmap::{encode_page_exr, page_paths, png_scale, to_lightmap_glb};
 pub use linear::{LinearImage, render_linear};
 pub use mesh::{UNIFORM_MESH_TRIANGLES, output_mesh, vertex_gather_point};
 pub use pixel::{PixelImage, render_pixels};
+pub use plan::{IMAGE_EXTENSIONS, OutputPaths, OutputPlan};
 pub use probes::{
     ProbePoints, ProbeQuantity, ProbeSettings, gather_probe_shard, gather_probes, place_probes,
 };
 pub use raster::{Image, PinholeCamera, RadianceImage, render_image};
+pub use stage::gather_warnings;
 pub use staged::{StagedFiles, check_target, remove_temporary_files};
 pub use tonemap::Exposure;
-pub use write::{OutputPaths, OutputPlan, gather_warnings, write_outputs};
+pub use write::write_outputs;
 
 /// Why outputs cannot be written (checked before the solve by [`OutputPlan::new`], or met
 /// while writing by [`write_outputs`]).

@@ -9,6 +9,7 @@
 //! other probes.
 
 use super::OutputError;
+use super::stage::Stage;
 use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::emitters::Emitters;
@@ -19,6 +20,26 @@ use glam::DVec3;
 use rayon::prelude::*;
 use scene_sampler::NO_FACE;
 use std::path::Path;
+use std::time::Instant;
+
+/// The probes' step of the output stage: their values gathered ([`probe_values`]; a shard's
+/// partial output for a shard) and staged for `path`.
+pub(super) fn write_probes(
+    domain: &Domain,
+    (trained, emitters): (&Trained, &Emitters),
+    config: &SolveConfig,
+    probes: (&[(DVec3, DVec3, u32)], &ProbeSettings),
+    path: &Path,
+    stage: &mut Stage,
+) -> Result<(), OutputError> {
+    let tg = Instant::now();
+    let _phase = crate::progress::phase("probes");
+    let (text, stats) = probe_values(domain, trained, emitters, config, probes)?;
+    stage.metrics.probe_quantity = probes.1.quantity.name().into();
+    stage.gathers.push(stats);
+    stage.metrics.seconds.gather += tg.elapsed().as_secs_f64();
+    stage.files.write_bytes(path, text.as_bytes())
+}
 
 /// What the probe output holds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

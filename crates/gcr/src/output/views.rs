@@ -1,0 +1,340 @@
+//! The 3-D outputs of a solve: the re-triangulated output mesh, images (mesh-mode from the mesh,
+//! per-pixel from [`super::pixel`]) from given, scene or automatic cameras, one exposure for
+//! every tone-mapped output, the lightmap ([`super::lightmap`]), and their files.
+
+use super::OutputError;
+use super::camera::{CameraChoice, ImageMode, ImageSettings};
+use super::encode::{Format, format_of, write_jpeg, write_png};
+use super::mesh::output_mesh;
+use super::plan::{OutputPaths, OutputPlan};
+use super::raster::{Coverage, PinholeCamera, render_image, render_radiance};
+use super::stage::Stage;
+use super::staged::StagedFiles;
+use super::tonemap::{Exposure, luminance};
+use crate::config::SolveConfig;
+use crate::domain::Domain;
+use crate::mesh::ShadedMesh;
+use crate::metrics::{ImageRecord, Metrics};
+use crate::retriangulate::RetriangulateLimits;
+use crate::solve::Trained;
+use scene_sampler::Scene;
+use std::path::Path;
+use std::time::Instant;
+
+/// Anti-aliasing of the 3-D camera image: sub-samples per pixel side.
+pub(super) const IMAGE_SUPERSAMPLING: u32 = 2;
+
+/// The 3-D outputs: the re-triangulated output mesh (when glTF, PLY, a mesh-mode image or the
+/// automatic camera asks for it), per-pixel images ([`super::pixel`]), one exposure for all of
+/// them (given, else from the mesh's non-emitting triangles, else from the first pixel image's
+/// lit hits), and the files.
+pub(super) fn write_3d(
+    domain: &Domain,
+    trained: &Trained,
+    config: &SolveConfig,
+    plan: &OutputPlan,
+    stage: &mut Stage,
+) -> Result<(), OutputError> {
+    let Some(scene) = domain.scene_3d() else {
+        return Ok(());
+    };
+    let (paths, settings) = (plan.paths(), plan.images());
+    let images = image_jobs(paths, settings);
+    let pixel = settings.mode == ImageMode::Pixel;
+    // ⟨The output mesh, when an output needs it⟩
+    let tg = Instant::now();
+    let mesh = if plan.needs_mesh() {
+        let (mesh, stats) = output_mesh(domain, trained, config, RetriangulateLimits::default())?;
+        stage.gathers.push(stats);
+        stage.metrics.output_vertices = mesh.vertex_count();
+        stage.metrics.output_triangles = mesh.triangle_count();
+        Some(mesh)
+    } else {
+        None
+    };
+    stage.metrics.seconds.gather += tg.elapsed().as_secs_f64();
+    // ⟨Each image's camera (the automatic one from the mesh's brightness, before any exposure
+    // is known: its own)⟩
+    let mesh_exposure = mesh.as_ref().map(|m| match settings.exposure {
+        Some(scale) => Exposure { scale },
+        None => exposure_of_mesh(m, scene),
+    });
+    let jobs = image_cameras(
+        domain,
+        scene,
+        &images,
+        mesh.as_ref().zip(mesh_exposure.as_ref()),
+        settings,
+    );
+    // ⟨Per-pixel images: B gathered at every sub-sample's visible point⟩
+    let tg = Instant::now();
+    let mut rendered = Vec::new();
+    if pixel {
+        for (_, (camera, _)) in &jobs {
+            let size = (settings.width, settings.height, settings.pixel_samples);
+            let img = super::pixel::render_pixels(domain, trained, config, camera, size)?;
+            stage.gathers.push(img.stats);
+            rendered.push(img);
+        }
+    }
+    stage.metrics.seconds.gather += tg.elapsed().as_secs_f64();
+    // ⟨The lightmap: its own gather at the texels, its files⟩
+    if let Some(path) = &paths.lightmap {
+        super::lightmap::write_lightmap(domain, trained, config, plan, path, stage)?;
+    }
+    let (metrics, staged) = (&mut stage.metrics, &mut stage.files);
+    let to = Instant::now();
+    // ⟨One exposure for every tone-mapped output⟩
+    let exposure = match (settings.exposure, &mesh_exposure, rendered.first()) {
+        (Some(scale), _, _) => Exposure { scale },
+        (None, Some(e), _) => *e,
+        (None, None, Some(img)) => Exposure::auto(img.lit()),
+        (None, None, None) => Exposure { scale: 1.0 },
+    };
+    let tone_mapped = paths.mesh.is_some()
+        || paths.ply.is_some()
+        || jobs.iter().any(|(p, _)| format_of(p) != Format::Exr);
+    if tone_mapped {
+        record_exposure(metrics, &exposure, settings);
+    }
+    // ⟨The images, then the meshes⟩
+    for (i, (path, (camera, source))) in jobs.iter().enumerate() {
+        let coverage = match rendered.get(i) {
+            Some(img) => write_pixel_image(img, &exposure, path, staged)?,
+            None => {
+                let mesh = mesh.as_ref().expect("mesh-mode images build the mesh");
+                write_image((mesh, scene), camera, settings, &exposure, path, staged)?
+            }
+        };
+        let what = format!("image `{}`", path.display());
+        metrics.warnings.extend(coverage.warning(&what));
+        metrics
+            .images
+            .push(image_record(path, settings, camera, source, coverage));
+    }
+    if let Some(mesh) = &mesh {
+        if let Some(path) = &paths.mesh {
+            staged.write(path, |w| super::glb::write_glb(mesh, scene, &exposure, w))?;
+        }
+        if let Some(path) = &paths.ply {
+            staged.write(path, |w| super::ply::write_ply(mesh, &exposure, w))?;
+        }
+    }
+    metrics.seconds.output += to.elapsed().as_secs_f64();
+    Ok(())
+}
+
+/// The automatic exposure of a mesh's outputs: from the radiosity of its faces that do not emit.
+pub(super) fn exposure_of_mesh(mesh: &ShadedMesh, scene: &scene_sampler::Scene) -> Exposure {
+    let lit = (mesh.triangles.iter())
+        .zip(&mesh.face_of_triangle)
+        .filter(|(_, f)| scene.faces[**f as usize].emission.is_zero())
+        .map(|(t, _)| mesh.radiosity[t[0] as usize]);
+    Exposure::auto(lit)
+}
+
+/// Records the exposure of the tone-mapped outputs and where it came from.
+fn record_exposure(metrics: &mut Metrics, exposure: &Exposure, settings: &ImageSettings) {
+    metrics.exposure = Some(exposure.scale);
+    metrics.exposure_source = if settings.exposure.is_some() {
+        "given"
+    } else {
+        "auto"
+    }
+    .into();
+}
+
+/// Each image's camera with its source name: the given one, the scene's, or the automatic one
+/// (from the mesh's brightness at its own exposure, before the outputs' exposure is known).
+fn image_cameras<'a>(
+    domain: &Domain,
+    scene: &Scene,
+    images: &[(&'a Path, CameraChoice, &'static str)],
+    mesh: Option<(&ShadedMesh, &Exposure)>,
+    settings: &ImageSettings,
+) -> Vec<(&'a Path, (PinholeCamera, &'static str))> {
+    (images.iter())
+        .map(|&(path, choice, source)| {
+            let camera = camera_of(domain, scene, (choice, source), mesh, settings);
+            (path, camera)
+        })
+        .collect()
+}
+
+/// One image's camera with its source name (`source` for a given camera): the given one, the
+/// scene's, or the automatic one (from `mesh` at its exposure: present whenever
+/// [`is_automatic`]).
+pub(super) fn camera_of(
+    domain: &Domain,
+    scene: &Scene,
+    (choice, source): (CameraChoice, &'static str),
+    mesh: Option<(&ShadedMesh, &Exposure)>,
+    settings: &ImageSettings,
+) -> (PinholeCamera, &'static str) {
+    match choice {
+        CameraChoice::Given(c) => (c, source),
+        CameraChoice::Scene { fov } if scene.camera_given => {
+            let mut c = PinholeCamera::of_scene(scene);
+            c.fov_y_degrees = fov.unwrap_or(c.fov_y_degrees);
+            (c, "scene")
+        }
+        CameraChoice::Scene { fov } | CameraChoice::Automatic { fov } => {
+            let (mesh, exposure) =
+                mesh.expect("the automatic camera's outputs build the mesh (needs_mesh)");
+            automatic(domain, mesh, exposure, settings, fov)
+        }
+    }
+}
+
+/// Writes a per-pixel image: linear radiance for .exr, tone-mapped for PNG and JPEG.
+fn write_pixel_image(
+    img: &super::pixel::PixelImage,
+    exposure: &Exposure,
+    path: &Path,
+    staged: &mut StagedFiles,
+) -> Result<Coverage, OutputError> {
+    let format = format_of(path);
+    let radiance = img.radiance();
+    if format == Format::Exr {
+        let bytes = super::encode::encode_exr(&radiance).map_err(|source| OutputError::Write {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        staged.write_bytes(path, &bytes)?;
+        return Ok(radiance.coverage);
+    }
+    let rgb = image::RgbImage::from_raw(radiance.width, radiance.height, img.tone_mapped(exposure))
+        .expect("a pixel image has w·h RGB pixels");
+    if format == Format::Jpeg {
+        staged.write(path, |out| write_jpeg(&rgb, out))?;
+    } else {
+        staged.write(path, |out| write_png(&rgb, out))?;
+    }
+    Ok(radiance.coverage)
+}
+
+/// The 3-D images to write: the main image with its camera choice, then the views.
+fn image_jobs<'a>(
+    paths: &'a OutputPaths,
+    settings: &'a ImageSettings,
+) -> Vec<(&'a Path, CameraChoice, &'static str)> {
+    let main = paths
+        .image
+        .as_deref()
+        .map(|p| (p, settings.camera, "given"));
+    let views = settings
+        .views
+        .iter()
+        .map(|v| (v.path.as_path(), CameraChoice::Given(v.camera), "view"));
+    main.into_iter().chain(views).collect()
+}
+
+/// The automatic camera ([`super::autocam`]) for the solved mesh, with its source name.
+fn automatic(
+    domain: &Domain,
+    mesh: &ShadedMesh,
+    exposure: &Exposure,
+    settings: &ImageSettings,
+    fov: Option<f64>,
+) -> (PinholeCamera, &'static str) {
+    let Domain::ThreeD(k) = domain else {
+        unreachable!("3-D outputs only for 3-D domains")
+    };
+    let brightness = face_brightness(mesh, exposure, k.scene.faces.len());
+    let aspect = f64::from(settings.width) / f64::from(settings.height);
+    let auto = super::autocam::automatic_camera(k.scene, k.bvh, &brightness, aspect, fov);
+    let source = if auto.inside {
+        "automatic-inside"
+    } else {
+        "automatic-outside"
+    };
+    (auto.camera, source)
+}
+
+/// Per scene face, the mean display luminance (in [0, 1]) of its output triangles.
+fn face_brightness(mesh: &ShadedMesh, exposure: &Exposure, faces: usize) -> Vec<f64> {
+    let mut sum = vec![(0.0, 0usize); faces];
+    for (t, &f) in mesh.triangles.iter().zip(&mesh.face_of_triangle) {
+        let mut b = [0.0; 3];
+        for &v in t {
+            for ch in 0..3 {
+                b[ch] += mesh.radiosity[v as usize][ch] / 3.0;
+            }
+        }
+        if let Some(s) = sum.get_mut(f as usize) {
+            s.0 += luminance(exposure.linear(b));
+            s.1 += 1;
+        }
+    }
+    sum.into_iter()
+        .map(|(s, n)| if n > 0 { s / n as f64 } else { 0.0 })
+        .collect()
+}
+
+/// Renders and stages one image; returns what its sub-samples saw.
+fn write_image(
+    (mesh, scene): (&ShadedMesh, &Scene),
+    camera: &PinholeCamera,
+    settings: &ImageSettings,
+    exposure: &Exposure,
+    path: &Path,
+    staged: &mut StagedFiles,
+) -> Result<Coverage, OutputError> {
+    let (w, h) = (settings.width, settings.height);
+    let format = format_of(path);
+    if format == Format::Exr {
+        let img = render_radiance(mesh, Some(scene), camera, w, h, IMAGE_SUPERSAMPLING);
+        let bytes = super::encode::encode_exr(&img).map_err(|source| OutputError::Write {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        staged.write_bytes(path, &bytes)?;
+        return Ok(img.coverage);
+    }
+    let img = render_image(
+        mesh,
+        Some(scene),
+        camera,
+        exposure,
+        w,
+        h,
+        IMAGE_SUPERSAMPLING,
+    );
+    let coverage = img.coverage;
+    let rgb = image::RgbImage::from_raw(w, h, img.pixels).expect("render fills w·h RGB pixels");
+    if format == Format::Jpeg {
+        staged.write(path, |out| write_jpeg(&rgb, out))?;
+    } else {
+        staged.write(path, |out| write_png(&rgb, out))?;
+    }
+    Ok(coverage)
+}
+
+fn image_record(
+    path: &Path,
+    settings: &ImageSettings,
+    camera: &PinholeCamera,
+    source: &str,
+    coverage: Coverage,
+) -> ImageRecord {
+    ImageRecord {
+        path: path.display().to_string(),
+        format: match format_of(path) {
+            Format::Png => "png",
+            Format::Jpeg => "jpeg",
+            Format::Exr => "exr",
+        }
+        .into(),
+        width: settings.width,
+        height: settings.height,
+        eye: camera.eye.to_array(),
+        target: camera.target.to_array(),
+        up: camera.up.to_array(),
+        fov_y_deg: camera.fov_y_degrees,
+        camera_source: source.into(),
+        front_share: coverage.front,
+        lit_share: coverage.lit,
+        back_share: coverage.back,
+        nothing_share: coverage.nothing,
+    }
+}

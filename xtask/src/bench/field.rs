@@ -14,11 +14,15 @@
 //!   1 %, no networks, paths shared between neighbouring points: what `gcr solve` does for points; `gcr alone`
 //!   the same without the sharing), GCR's gathers from a solve (kernel cells × gather
 //!   rays, ray and paths gathers; one solve per cell count, timed once and added to each gather), our path tracer (fixed paths per point), HR + final gather (16 rays per leaf, as in
-//!   `compare`), and Mitsuba 3 through `xtask/py/mitsuba_field.py` (skipped with a note when `mitsuba` is
-//!   not importable). Every time includes building the scene and its BVH (measured once, added).
+//!   `compare`), Mitsuba 3 through `xtask/py/mitsuba_field.py` (skipped with a note when `mitsuba` is
+//!   not importable), and Blender Cycles' baker without and with its path guiding through
+//!   `xtask/py/cycles_field.py` under the Python that `CYCLES_PYTHON` names (bpy 5.0.1 needs Python
+//!   3.11; skipped with a note when unset or bpy is missing). Every time includes building the scene
+//!   and its BVH (measured once, added); a peer's adds its own scene and sensors or probes.
 //!
 //! `FIELD_SCENES=cornell-box,closed-room` restricts the scenes; `FIELD_N=20000,2000` the point counts;
-//! `FIELD_SOLVERS=gcr-default,pt` the solvers (gcr-default, gcr-alone, gcr-rays, gcr-paths, pt, hr, mitsuba);
+//! `FIELD_SOLVERS=gcr-default,pt` the solvers (gcr-default, gcr-alone, gcr-rays, gcr-paths, pt, hr, mitsuba,
+//! cycles, cycles-guided);
 //! `FIELD_CELLS=300` GCR's cell counts;
 //! `FIELD_CORRECTED=0.25` the fraction of the `paths` gather's rays that get a path-traced correction.
 
@@ -109,7 +113,8 @@ fn plan(quick: bool) -> Plan {
     }
 }
 
-/// Whether `FIELD_SOLVERS` (a comma list of gcr-default, gcr-alone, gcr-rays, gcr-paths, pt, hr, mitsuba; all
+/// Whether `FIELD_SOLVERS` (a comma list of gcr-default, gcr-alone, gcr-rays, gcr-paths, pt, hr, mitsuba,
+/// cycles, cycles-guided; all
 /// when unset)
 /// selects `solver`.
 fn selected(solver: &str) -> bool {
@@ -313,16 +318,28 @@ pub(super) fn run_mitsuba(
     files: &[&Path],
     spp: &[usize],
 ) -> Result<std::result::Result<Vec<u8>, String>> {
+    run_script("python3", script, &["--sampler", sampler], files, spp)
+}
+
+/// Runs `xtask/py/<script>` with `python` and `options`, `files` and the sample counts: its
+/// stdout, or why the peer is missing (the script's exit code 3).
+fn run_script(
+    python: &str,
+    script: &str,
+    options: &[&str],
+    files: &[&Path],
+    spp: &[usize],
+) -> Result<std::result::Result<Vec<u8>, String>> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("py")
         .join(script);
-    let out = std::process::Command::new("python3")
+    let out = std::process::Command::new(python)
         .arg(&path)
-        .args(["--sampler", sampler])
+        .args(options)
         .args(files)
         .args(spp.iter().map(|s| s.to_string()))
         .output()
-        .context("running python3")?;
+        .with_context(|| format!("running {python}"))?;
     if out.status.code() == Some(3) {
         return Ok(Err(String::from_utf8_lossy(&out.stderr).trim().to_string()));
     }
@@ -371,8 +388,43 @@ pub(super) fn read_values(path: &Path) -> Result<Vec<[f64; 3]>> {
         .collect())
 }
 
-/// Mitsuba 3 through `xtask/py/mitsuba_field.py`: one curve, or the reason it was skipped.
-fn mitsuba(
+/// A peer renderer of the field bench, run through its script under `xtask/py/`.
+#[derive(Clone, Copy, PartialEq)]
+enum Peer {
+    /// Mitsuba 3 (`mitsuba_field.py`, `python3`).
+    Mitsuba,
+    /// Blender Cycles (`cycles_field.py`, the Python of `CYCLES_PYTHON`: bpy needs Python 3.11),
+    /// with or without its path guiding (Open PGL).
+    Cycles {
+        /// Whether Cycles' path guiding is on.
+        guided: bool,
+    },
+}
+
+impl Peer {
+    /// The curve's label.
+    fn label(self) -> &'static str {
+        match self {
+            Peer::Mitsuba => "mitsuba 3",
+            Peer::Cycles { guided: false } => "cycles",
+            Peer::Cycles { guided: true } => "cycles guided",
+        }
+    }
+
+    /// Its `FIELD_SOLVERS` name.
+    fn solver(self) -> &'static str {
+        match self {
+            Peer::Mitsuba => "mitsuba",
+            Peer::Cycles { guided: false } => "cycles",
+            Peer::Cycles { guided: true } => "cycles-guided",
+        }
+    }
+}
+
+/// A peer's radiosity at `points` at each of `spp`: one curve, or the reason it was skipped.
+#[allow(clippy::too_many_arguments)]
+fn peer(
+    which: Peer,
     scene: &Scene,
     name: &str,
     points: &[SurfacePoint],
@@ -382,32 +434,50 @@ fn mitsuba(
     setup: f64,
 ) -> Result<std::result::Result<Curve, String>> {
     let dir = std::env::temp_dir().join(format!(
-        "gcr-field-{}-{name}-{}",
+        "gcr-field-{}-{name}-{}-{}",
         std::process::id(),
-        points.len()
+        points.len(),
+        which.solver()
     ));
     std::fs::create_dir_all(&dir)?;
+    // Cycles reads each point's face (its reflectance turns the baked light into B)
+    let with_face = which != Peer::Mitsuba;
     let mut pts = String::new();
     for p in points {
-        writeln!(
-            pts,
-            "{} {} {} {} {} {}",
-            p.point.x, p.point.y, p.point.z, p.normal.x, p.normal.y, p.normal.z
-        )?;
+        let (y, n) = (p.point, p.normal);
+        write!(pts, "{} {} {} {} {} {}", y.x, y.y, y.z, n.x, n.y, n.z)?;
+        if with_face {
+            write!(pts, " {}", p.face)?;
+        }
+        pts.push('\n');
     }
     let (ff, pf, of) = (dir.join("faces.txt"), dir.join("points.txt"), dir.join("b"));
     write_mitsuba_faces(scene, &ff)?;
     std::fs::write(&pf, pts)?;
-    let stdout = match run_mitsuba("mitsuba_field.py", "ldsampler", &[&ff, &pf, &of], spp)? {
+    let files = [ff.as_path(), &pf, &of];
+    let stdout = match which {
+        Peer::Mitsuba => run_mitsuba("mitsuba_field.py", "ldsampler", &files, spp)?,
+        Peer::Cycles { guided } => match std::env::var("CYCLES_PYTHON") {
+            Err(_) => {
+                Err("CYCLES_PYTHON (a Python 3.11 with `pip install bpy==5.0.1`) not set".into())
+            }
+            Ok(python) => {
+                let options: &[&str] = if guided { &["--guiding"] } else { &[] };
+                run_script(&python, "cycles_field.py", options, &files, spp)?
+            }
+        },
+    };
+    let stdout = match stdout {
         Ok(o) => o,
         Err(why) => return Ok(Err(why)),
     };
-    let mut c = Curve::new("mitsuba 3");
+    let mut c = Curve::new(which.label());
     for (spp, seconds) in mitsuba_runs(&stdout)? {
         let values = read_values(Path::new(&format!("{}.{spp}", of.display())))?;
         if values.len() != points.len() {
             bail!(
-                "mitsuba wrote {} values for {} points",
+                "{} wrote {} values for {} points",
+                which.label(),
                 values.len(),
                 points.len()
             );
@@ -647,17 +717,22 @@ fn one(name: &str, n: usize, p: &Plan) -> Result<(Vec<Curve>, String)> {
     curves.push(hr_curve);
 
     let mut note = r.note.clone();
-    if !selected("mitsuba") {
-        return Ok((
-            curves,
-            format!("{note}; scene + BVH {setup:.3} s (in every time)"),
-        ));
-    }
-    match mitsuba(&scene, name, &points, &subset, &r.values, p.spp, setup)? {
-        Ok(c) => curves.push(c),
-        Err(why) => {
-            println!("field: {name} Mitsuba skipped: {why}");
-            write!(note, "; Mitsuba 3 skipped: {why}")?;
+    for which in [
+        Peer::Mitsuba,
+        Peer::Cycles { guided: false },
+        Peer::Cycles { guided: true },
+    ] {
+        if !selected(which.solver()) {
+            continue;
+        }
+        match peer(
+            which, &scene, name, &points, &subset, &r.values, p.spp, setup,
+        )? {
+            Ok(c) => curves.push(c),
+            Err(why) => {
+                println!("field: {name} {} skipped: {why}", which.label());
+                write!(note, "; {} skipped: {why}", which.label())?;
+            }
         }
     }
     Ok((

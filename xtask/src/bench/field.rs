@@ -388,9 +388,10 @@ pub(super) fn read_values(path: &Path) -> Result<Vec<[f64; 3]>> {
         .collect())
 }
 
-/// A peer renderer of the field bench, run through its script under `xtask/py/`.
+/// A peer renderer, run through its scripts under `xtask/py/` (`mitsuba_<what>.py`,
+/// `cycles_<what>.py`).
 #[derive(Clone, Copy, PartialEq)]
-enum Peer {
+pub(super) enum Peer {
     /// Mitsuba 3 (`mitsuba_field.py`, `python3`).
     Mitsuba,
     /// Blender Cycles (`cycles_field.py`, the Python of `CYCLES_PYTHON`: bpy needs Python 3.11),
@@ -402,8 +403,31 @@ enum Peer {
 }
 
 impl Peer {
+    /// Runs its script for `what` (`field`, `irradiance`) with `files` and the sample counts
+    /// (Mitsuba with `sampler`): the script's stdout, or why the peer is missing.
+    pub(super) fn run(
+        self,
+        what: &str,
+        sampler: &str,
+        files: &[&Path],
+        spp: &[usize],
+    ) -> Result<std::result::Result<Vec<u8>, String>> {
+        match self {
+            Peer::Mitsuba => run_mitsuba(&format!("mitsuba_{what}.py"), sampler, files, spp),
+            Peer::Cycles { guided } => match std::env::var("CYCLES_PYTHON") {
+                Err(_) => Ok(Err(
+                    "CYCLES_PYTHON (a Python 3.11 with `pip install bpy==5.0.1`) not set".into(),
+                )),
+                Ok(python) => {
+                    let options: &[&str] = if guided { &["--guiding"] } else { &[] };
+                    run_script(&python, &format!("cycles_{what}.py"), options, files, spp)
+                }
+            },
+        }
+    }
+
     /// The curve's label.
-    fn label(self) -> &'static str {
+    pub(super) fn label(self) -> &'static str {
         match self {
             Peer::Mitsuba => "mitsuba 3",
             Peer::Cycles { guided: false } => "cycles",
@@ -412,7 +436,7 @@ impl Peer {
     }
 
     /// Its `FIELD_SOLVERS` name.
-    fn solver(self) -> &'static str {
+    pub(super) fn solver(self) -> &'static str {
         match self {
             Peer::Mitsuba => "mitsuba",
             Peer::Cycles { guided: false } => "cycles",

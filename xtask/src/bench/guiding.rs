@@ -7,6 +7,7 @@
 //! the Cornell box tests of `crates/gcr/tests/guiding.rs`); `Σd²/Σσ²` between the two runs checks
 //! that they agree (≈ 1 when they differ by their noises alone).
 
+use super::field::Peer;
 use crate::ctx::Ctx;
 use anyhow::Result;
 use gcr::{Gathered, Guiding};
@@ -128,11 +129,16 @@ fn agreement(a: &[Gathered], b: &[Gathered]) -> f64 {
 /// Runs this group and writes `benchmarks-guiding.md` into `ctx.out`.
 pub fn run_group(ctx: &Ctx) -> Result<()> {
     let targets: &[f64] = if ctx.quick { &[0.05] } else { &[0.02, 0.01] };
-    let mut skipped = None;
+    let mut skipped: Vec<String> = Vec::new();
     let mut md = String::from(
         "| scene, points | target | unguided: s, rays/point, est. error | guided (auto): s, rays/point, est. error | time guided / unguided | Σd²/Σσ² |\n|---|---:|---|---|---:|---:|\n",
     );
-    for case in cases(ctx.quick)? {
+    // `GUIDING_CASES=door,sun`: only the cases whose names contain one of these
+    let only = std::env::var("GUIDING_CASES").ok();
+    let wanted = |name: &str| {
+        (only.as_deref()).is_none_or(|o| o.split(',').any(|w| name.contains(w.trim())))
+    };
+    for case in cases(ctx.quick)?.into_iter().filter(|c| wanted(c.name)) {
         for &target in targets {
             let (off, t_off) = run(&case.scene, &case.points, target, Guiding::Off)?;
             let (auto, t_auto) = run(&case.scene, &case.points, target, Guiding::Auto)?;
@@ -155,9 +161,15 @@ pub fn run_group(ctx: &Ctx) -> Result<()> {
             println!("guiding: {} at {:.0} % done", case.name, 100.0 * target);
         }
         if let Some(emitter) = &case.mitsuba {
-            match mitsuba(&case, emitter, ctx.quick)? {
-                Ok(rows) => md += &rows,
-                Err(why) => skipped = Some(why),
+            for peer in [
+                Peer::Mitsuba,
+                Peer::Cycles { guided: false },
+                Peer::Cycles { guided: true },
+            ] {
+                match peer_rows(peer, &case, emitter, ctx.quick)? {
+                    Ok(rows) => md += &rows,
+                    Err(why) => skipped.push(format!("{} skipped: {why}", peer.label())),
+                }
             }
         }
     }
@@ -174,32 +186,49 @@ pub fn run_group(ctx: &Ctx) -> Result<()> {
          point got (65 536 is the cap: the target was not met); `est. error` is the gather's own \
          estimate (relative L2 over the points, standard error). Σd²/Σσ²: the squared \
          differences between the two runs over the variances they claim (≈ 1: they agree). \
-         Mitsuba 3 rows (the hard rooms): `scalar_rgb`, `path`, `multijitter`, the same lights as \
-         its own emitters, two seeds per run (σ from their difference, seconds for both: \
-         `xtask/py/mitsuba_irradiance.py`); its own relative error at that time, and the time \
-         it would take to 2 % and 1 % if its error falls as 1/√spp (extrapolated, not run). \
+         Peer rows (the hard rooms), the same lights as their own emitters, two seeds per run (σ \
+         from their difference, seconds for both): Mitsuba 3 (`scalar_rgb`, `path`, \
+         `multijitter`: `xtask/py/mitsuba_irradiance.py`) and Blender Cycles' baker without and \
+         with its path guiding (Open PGL; CPU, 2 threads, no clamping: \
+         `xtask/py/cycles_irradiance.py`, run under `CYCLES_PYTHON`); their own relative error \
+         at that time, and the time they would take to 2 % and 1 % if the error falls as \
+         1/√spp (extrapolated, not run). `GUIDING_CASES=door,sun` runs only the cases whose \
+         names contain one of the words. \
          Design and what was tried: docs/design/estimator.md, \"Guiding\".\n\n{md}{note}",
         quick = if ctx.quick { " --quick" } else { "" },
         threads = rayon::current_num_threads(),
-        note = skipped.map_or(String::new(), |why| format!("\nMitsuba skipped: {why}.\n")),
+        note = (skipped.iter())
+            .map(|why| format!("\n{why}.\n"))
+            .collect::<String>(),
     );
     std::fs::write(ctx.out.join("benchmarks-guiding.md"), out)?;
     Ok(())
 }
 
-/// Mitsuba 3 at the case's points with `emitter`: a table row per run (or why it was skipped).
-fn mitsuba(
+/// A peer at the case's points with `emitter`: a table row per run (or why it was skipped).
+fn peer_rows(
+    peer: Peer,
     case: &Case,
     emitter: &serde_json::Value,
     quick: bool,
 ) -> Result<std::result::Result<String, String>> {
-    let dir = std::env::temp_dir().join(format!("gcr-guiding-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!(
+        "gcr-guiding-{}-{}",
+        std::process::id(),
+        peer.solver()
+    ));
     std::fs::create_dir_all(&dir)?;
     let file = dir.join("emitters.json");
     std::fs::write(&file, serde_json::to_string(&[emitter])?)?;
     let spp: &[usize] = if quick { &[16] } else { &[256, 2048] };
-    let runs =
-        super::irradiance::mitsuba_lit(&case.scene, &case.points, spp, "multijitter", Some(&file))?;
+    let runs = super::irradiance::peer_lit(
+        peer,
+        &case.scene,
+        &case.points,
+        spp,
+        "multijitter",
+        Some(&file),
+    )?;
     let _ = std::fs::remove_dir_all(&dir);
     let runs = match runs {
         Ok(r) => r,
@@ -218,9 +247,10 @@ fn mitsuba(
         let at = |target: f64| seconds * (e / target).powi(2);
         writeln!(
             rows,
-            "| {}, {}: Mitsuba 3, 2 × {spp} spp | - | {seconds:.1} s, {:.2} % | to 2 %: {:.0} s, to 1 %: {:.0} s (extrapolated) | - | - |",
+            "| {}, {}: {}, 2 × {spp} spp | - | {seconds:.1} s, {:.2} % | to 2 %: {:.0} s, to 1 %: {:.0} s (extrapolated) | - | - |",
             case.name,
             case.points.len(),
+            peer.label(),
             100.0 * e,
             at(0.02),
             at(0.01),

@@ -15,7 +15,7 @@
 //! Each is compared with the reference: relative L2 difference, its own estimated noise ‖σ‖/‖E‖, and
 //! Σ d² / Σ (σ² + σ_ref²) (≈ 1 when two estimates differ by their noise alone).
 
-use super::field::{mitsuba_runs, run_mitsuba, write_mitsuba_faces};
+use super::field::{Peer, mitsuba_runs, write_mitsuba_faces};
 use crate::ctx::Ctx;
 use anyhow::{Result, bail};
 use baselines::Adaptive;
@@ -129,12 +129,15 @@ fn mitsuba(
     points: &[(DVec3, DVec3)],
     spp: &[usize],
 ) -> Result<std::result::Result<Vec<Run>, String>> {
-    mitsuba_lit(scene, points, spp, "ldsampler", None)
+    peer_lit(Peer::Mitsuba, scene, points, spp, "ldsampler", None)
 }
 
-/// [`mitsuba`] with Mitsuba's `sampler` and, beside the scene's emitting faces, the emitters of
-/// the JSON file `emitters` (`xtask/py/mitsuba_irradiance.py --emitters`).
-pub(super) fn mitsuba_lit(
+/// A peer's irradiance at `points` per spp with their seconds, or why it was skipped: Mitsuba 3
+/// with `sampler` or Cycles (`xtask/py/<peer>_irradiance.py`), beside the scene's emitting faces
+/// the emitters of the JSON file `emitters` (`--emitters`: Mitsuba dicts, which the Cycles script
+/// translates).
+pub(super) fn peer_lit(
+    peer: Peer,
     scene: &Scene,
     points: &[(DVec3, DVec3)],
     spp: &[usize],
@@ -142,8 +145,9 @@ pub(super) fn mitsuba_lit(
     emitters: Option<&std::path::Path>,
 ) -> Result<std::result::Result<Vec<Run>, String>> {
     let dir = std::env::temp_dir().join(format!(
-        "gcr-irradiance-{}-{}",
+        "gcr-irradiance-{}-{}-{}",
         std::process::id(),
+        peer.solver(),
         emitters.map_or(0, |e| e.as_os_str().len())
     ));
     std::fs::create_dir_all(&dir)?;
@@ -159,7 +163,7 @@ pub(super) fn mitsuba_lit(
         Some(e) => vec![flag, e, &ff, &pf, &of],
         None => vec![&ff, &pf, &of],
     };
-    let stdout = match run_mitsuba("mitsuba_irradiance.py", sampler, &files, spp)? {
+    let stdout = match peer.run("irradiance", sampler, &files, spp)? {
         Ok(o) => o,
         Err(why) => return Ok(Err(why)),
     };
@@ -176,7 +180,8 @@ pub(super) fn mitsuba_lit(
             .collect();
         if rows.len() != points.len() || rows.iter().any(|r| r.len() != 6) {
             bail!(
-                "mitsuba wrote {} rows for {} points",
+                "{} wrote {} rows for {} points",
+                peer.label(),
                 rows.len(),
                 points.len()
             );

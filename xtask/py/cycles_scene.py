@@ -81,6 +81,17 @@ def mesh_object(name, verts, tris, material_index=None, materials=()):
 
 
 def build_scene(tri, guiding):
+    """An empty Cycles scene (`setup`) with the triangles of `tri` as one mesh, a material per (rho, Ke)."""
+    setup(guiding)
+    keys, index = np.unique(np.round(tri[:, 9:15], 12), axis=0, return_inverse=True)
+    mats = [material(k[:3], k[3:]) for k in keys]
+    verts = tri[:, :9].reshape(-1, 3)
+    tris = np.arange(len(verts)).reshape(-1, 3)
+    return mesh_object("scene", verts, tris, index.ravel(), mats)
+
+
+def setup(guiding):
+    """An empty scene rendered by Cycles as the module docs say, in a black world."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     scene.render.engine = "CYCLES"
@@ -102,11 +113,6 @@ def build_scene(tri, guiding):
     world.use_nodes = True
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
     scene.world = world
-    keys, index = np.unique(np.round(tri[:, 9:15], 12), axis=0, return_inverse=True)
-    mats = [material(k[:3], k[3:]) for k in keys]
-    verts = tri[:, :9].reshape(-1, 3)
-    tris = np.arange(len(verts)).reshape(-1, 3)
-    mesh_object("scene", verts, tris, index.ravel(), mats)
 
 
 def add_probes(pts, diagonal, lift=PROBE_LIFT):

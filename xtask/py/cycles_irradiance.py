@@ -16,7 +16,6 @@ Each point gets a probe (`cycles_scene.py`): Cycles' baker gives E/pi there. Two
 and 1: E is their mean, the standard error half their difference; the seconds are both bakes'.
 Exit code 3 when bpy is not importable.
 """
-import json
 import sys
 import time
 
@@ -28,40 +27,13 @@ except ImportError as e:  # the bench skips Cycles with a note
     sys.exit(3)
 import numpy as np
 
-from cycles_scene import add_lights, add_probes, bake, build_scene  # noqa: E402
+from cycles_scene import bake, run_at_points  # noqa: E402
 
 
-def main():
-    args = sys.argv[1:]
-    guiding = "--guiding" in args
-    args = [a for a in args if a != "--guiding"]
-    emitters = []
-    if "--emitters" in args:
-        i = args.index("--emitters")
-        with open(args[i + 1]) as f:
-            emitters = json.load(f)
-        args = args[:i] + args[i + 2:]
-    faces_path, points_path, out, *spps = args
-    spps = [int(s) for s in spps]
-    t0 = time.perf_counter()
-    tri = np.loadtxt(faces_path, ndmin=2)
-    pts = np.loadtxt(points_path, ndmin=2)
-    lo, hi = tri[:, :9].reshape(-1, 3).min(0), tri[:, :9].reshape(-1, 3).max(0)
-    build_scene(tri, guiding)
-    add_lights(emitters)
-    t_scene = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    probes = add_probes(pts, float(np.linalg.norm(hi - lo)), lift=0.0)
-    t_load = time.perf_counter() - t0
-    for spp in spps:
-        t0 = time.perf_counter()
-        runs = [np.pi * bake(probes, len(pts), spp, seed) for seed in (0, 1)]
-        t_render = time.perf_counter() - t0
-        e, se = 0.5 * (runs[0] + runs[1]), 0.5 * np.abs(runs[0] - runs[1])
-        np.savetxt(f"{out}.{spp}", np.hstack([e, se]), fmt="%.9g")
-        used = "cycles-guided" if guiding else "cycles"
-        print(f"spp={spp} sampler={used} scene={t_scene:.3f} load={t_load:.3f} render={t_render:.3f} "
-              f"import={t0 - t_start:.3f}", flush=True)
+def irradiance(tri, pts, probes, spp):
+    """E = pi * the probe's bake, the mean of seeds 0 and 1, and half their difference (its standard error)."""
+    runs = [np.pi * bake(probes, len(pts), spp, seed) for seed in (0, 1)]
+    return np.hstack([0.5 * (runs[0] + runs[1]), 0.5 * np.abs(runs[0] - runs[1])])
 
 
-main()
+run_at_points(sys.argv[1:], t_start, 0.0, irradiance)

@@ -15,11 +15,14 @@ Lights (`add_lights`), as the Mitsuba dicts the benches write for `mitsuba_irrad
 `{"type": "point", "position": [x, y, z], "intensity": I}` (W/sr; a Blender point light of radius 0 and power
 4 pi I), `{"type": "directional", "direction": [x, y, z], "irradiance": E}` (a Blender sun of strength E and
 angle 0: a delta, as Mitsuba's), `{"type": "constant", "radiance": L}` (the world at L) and
-`{"type": "cie-overcast", "zenith": L_z}` (the CIE overcast sky about +Y, black below the horizon, as an
-equirectangular world texture).
+`{"type": "cie-overcast", "zenith": L_z}` (the CIE overcast sky about +Y, black below the horizon) and
+`{"type": "envmap", "filename": F}` (an equirectangular map in Mitsuba's layout), both resampled into the
+world's equirectangular texture (1024 × 512, nearest texel).
 """
+import json
 import math
 import sys
+import time
 
 import bpy
 import numpy as np
@@ -179,6 +182,8 @@ def add_lights(emitters):
             ob.rotation_quaternion = mathutils_track(e["direction"])
         elif kind == "constant":
             world_texture(lambda d: np.full(d.shape[:-1], scalar(e["radiance"])))
+        elif kind == "envmap":
+            world_texture(equirect_lookup(e["filename"], float(e.get("scale", 1.0))))
         elif kind == "cie-overcast":
             lz = float(e["zenith"])
             world_texture(lambda d: np.where(d[..., 1] > 0, lz * (1 + 2 * d[..., 1]) / 3, 0.0))
@@ -186,6 +191,25 @@ def add_lights(emitters):
             print(f"light type {kind!r} is not translated for Cycles", file=sys.stderr)
             sys.exit(3)
     return scene
+
+
+def equirect_lookup(filename, scale):
+    """Radiance toward directions from an equirectangular EXR or HDR in Mitsuba's `envmap` layout (which
+    scene-sampler's `EnvMap` follows): +Y up, row 0 the zenith, column i at azimuth phi = 2 pi (i + 1/2) / w
+    with d = (sin θ sin φ, cos θ, −sin θ cos φ); nearest texel, as ours."""
+    img = bpy.data.images.load(filename)
+    w, h = img.size
+    # Blender's pixels run from the bottom row up
+    texels = np.asarray(img.pixels[:], dtype=np.float64).reshape(h, w, 4)[::-1, :, :3] * scale
+
+    def radiance(d):
+        theta = np.arccos(np.clip(d[..., 1], -1, 1))
+        phi = np.mod(np.arctan2(d[..., 0], -d[..., 2]), 2 * np.pi)
+        i = np.minimum((phi / (2 * np.pi) * w).astype(int), w - 1)
+        j = np.minimum((theta / np.pi * h).astype(int), h - 1)
+        return texels[j, i]
+
+    return radiance
 
 
 def scalar(v):
@@ -224,7 +248,7 @@ def world_texture(radiance, w=1024, h=512):
     lum = radiance(d).astype(np.float32)
     img = bpy.data.images.new("sky", w, h, float_buffer=True, alpha=False)
     rgba = np.ones((h, w, 4), dtype=np.float32)
-    rgba[..., :3] = lum[..., None]
+    rgba[..., :3] = lum if lum.ndim == 3 else lum[..., None]
     img.pixels.foreach_set(rgba.ravel())
     world = bpy.context.scene.world
     nt = world.node_tree
@@ -234,3 +258,35 @@ def world_texture(radiance, w=1024, h=512):
     bg = nt.nodes["Background"]
     bg.inputs["Strength"].default_value = 1.0
     nt.links.new(tex.outputs["Color"], bg.inputs["Color"])
+
+
+def run_at_points(argv, t_start, lift, values):
+    """The point scripts' main: `[--guiding] [--emitters JSON] FACES POINTS OUT SPP [SPP ...]`. Builds the scene,
+    its lights and a probe per point (`lift` of the diagonal above it); for each SPP writes the rows of
+    `values(tri, pts, probes, spp)` to OUT.<spp> and prints `spp=… sampler=… scene=… load=… render=…`."""
+    guiding = "--guiding" in argv
+    args = [a for a in argv if a != "--guiding"]
+    emitters = []
+    if "--emitters" in args:
+        i = args.index("--emitters")
+        with open(args[i + 1]) as f:
+            emitters = json.load(f)
+        args = args[:i] + args[i + 2:]
+    faces_path, points_path, out, *spps = args
+    t0 = time.perf_counter()
+    tri = np.loadtxt(faces_path, ndmin=2)
+    pts = np.loadtxt(points_path, ndmin=2)
+    lo, hi = tri[:, :9].reshape(-1, 3).min(0), tri[:, :9].reshape(-1, 3).max(0)
+    build_scene(tri, guiding)
+    add_lights(emitters)
+    t_scene = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    probes = add_probes(pts, float(np.linalg.norm(hi - lo)), lift)
+    t_load = time.perf_counter() - t0
+    for spp in [int(s) for s in spps]:
+        t0 = time.perf_counter()
+        rows = values(tri, pts, probes, spp)
+        t_render = time.perf_counter() - t0
+        np.savetxt(f"{out}.{spp}", rows, fmt="%.9g")
+        print(f"spp={spp} sampler={'cycles-guided' if guiding else 'cycles'} scene={t_scene:.3f} "
+              f"load={t_load:.3f} render={t_render:.3f} import={t0 - t_start:.3f}", flush=True)

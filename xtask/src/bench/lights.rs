@@ -8,7 +8,7 @@
 //!   environment map read by both from one EXR file),
 //!   `multijitter` (unbiased), skipped with a note without `mitsuba`;
 //! * Blender Cycles — `xtask/py/cycles_irradiance.py --emitters`, the same dicts as Blender lights
-//!   and worlds (`xtask/py/cycles_scene.py`; no environment map: skipped with a note), under the
+//!   and worlds (`xtask/py/cycles_scene.py`), under the
 //!   Python of `CYCLES_PYTHON`.
 //!
 //! Writes `benchmarks-lights.md`. Spot lights are left out: Mitsuba's spot falloff is not glTF's
@@ -189,8 +189,8 @@ pub fn run(ctx: &Ctx) -> Result<()> {
          `multijitter`, two seeds per run (σ from their difference), at each point a tiny white \
          square seen by a radiancemeter (`xtask/py/mitsuba_irradiance.py`); Blender Cycles' baker \
          (bpy 5.0.1, CPU, 2 threads, no clamping) with the same lights as Blender lights and \
-         worlds, two seeds per run, at each point a tiny white probe (`xtask/py/cycles_irradiance.py`; \
-         no environment map yet). `its noise`: the \
+         worlds (the skies and the map resampled into its 1024 × 512 world texture), two seeds per \
+         run, at each point a tiny white probe (`xtask/py/cycles_irradiance.py`). `its noise`: the \
          estimate's own ‖σ‖/‖E_ref‖; Σd²/Σσ² ≈ 1 when an estimate differs from the reference by the \
          two noises alone. The relative L2 is dominated by the brightest points (the sun patch, \
          the window).\n\n{md}{note}",

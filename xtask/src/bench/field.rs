@@ -739,6 +739,8 @@ fn one(name: &str, n: usize, p: &Plan) -> Result<(Vec<Curve>, String)> {
         }
     }
     curves.push(hr_curve);
+    // solvers `FIELD_SOLVERS` left out have no runs: no row, no line in the plot
+    curves.retain(|c| !c.points.is_empty());
 
     let mut note = r.note.clone();
     for which in [

@@ -50,7 +50,7 @@ fn encode(encoder: impl image::ImageEncoder, img: &image::RgbImage) -> std::io::
         })
 }
 
-/// An image's file format, from its extension (checked by [`OutputPlan::with_images`]).
+/// An image's file format, from its extension (checked by [`super::OutputPlan::with_images`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Format {
     Png,

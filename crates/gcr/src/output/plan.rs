@@ -61,7 +61,7 @@ impl OutputPaths {
 }
 
 /// Outputs checked against a domain, with the probes read and snapped onto its surfaces: what
-/// [`write_outputs`] needs, built before the solve.
+/// [`super::write_outputs`] needs, built before the solve.
 #[derive(Clone, Debug)]
 pub struct OutputPlan {
     paths: OutputPaths,

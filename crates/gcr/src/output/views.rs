@@ -163,7 +163,7 @@ fn image_cameras<'a>(
 
 /// One image's camera with its source name (`source` for a given camera): the given one, the
 /// scene's, or the automatic one (from `mesh` at its exposure: present whenever
-/// [`is_automatic`]).
+/// [`super::plan::is_automatic`]).
 pub(super) fn camera_of(
     domain: &Domain,
     scene: &Scene,

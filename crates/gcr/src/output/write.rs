@@ -19,8 +19,8 @@ use std::time::Instant;
 /// Gathers, renders and writes every output of `plan` for a solution, and returns the run's
 /// metrics: `trained.metrics` completed with the scene name, the gather, the output mesh, the
 /// gather and output times, the total time since `started` and the peak memory (these are what
-/// the metrics file holds). All files are written through [`StagedFiles`]: on an error no target
-/// is created or changed.
+/// the metrics file holds). All files are written through [`super::StagedFiles`]: on an error
+/// no target is created or changed.
 pub fn write_outputs(
     domain: &Domain,
     trained: &Trained,

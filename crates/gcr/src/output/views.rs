@@ -193,24 +193,41 @@ fn write_pixel_image(
     path: &Path,
     staged: &mut StagedFiles,
 ) -> Result<Coverage, OutputError> {
-    let format = format_of(path);
     let radiance = img.radiance();
-    if format == Format::Exr {
-        let bytes = super::encode::encode_exr(&radiance).map_err(|source| OutputError::Write {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        staged.write_bytes(path, &bytes)?;
+    if format_of(path) == Format::Exr {
+        stage_exr(&radiance, path, staged)?;
         return Ok(radiance.coverage);
     }
     let rgb = image::RgbImage::from_raw(radiance.width, radiance.height, img.tone_mapped(exposure))
         .expect("a pixel image has w·h RGB pixels");
-    if format == Format::Jpeg {
-        staged.write(path, |out| write_jpeg(&rgb, out))?;
-    } else {
-        staged.write(path, |out| write_png(&rgb, out))?;
-    }
+    stage_tone_mapped(&rgb, path, staged)?;
     Ok(radiance.coverage)
+}
+
+/// Stages linear radiance as OpenEXR for `path`.
+fn stage_exr(
+    img: &super::raster::RadianceImage,
+    path: &Path,
+    staged: &mut StagedFiles,
+) -> Result<(), OutputError> {
+    let bytes = super::encode::encode_exr(img).map_err(|source| OutputError::Write {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    staged.write_bytes(path, &bytes)
+}
+
+/// Stages a tone-mapped image for `path`: JPEG for .jpg and .jpeg, PNG otherwise.
+fn stage_tone_mapped(
+    rgb: &image::RgbImage,
+    path: &Path,
+    staged: &mut StagedFiles,
+) -> Result<(), OutputError> {
+    if format_of(path) == Format::Jpeg {
+        staged.write(path, |out| write_jpeg(rgb, out))
+    } else {
+        staged.write(path, |out| write_png(rgb, out))
+    }
 }
 
 /// The 3-D images to write: the main image with its camera choice, then the views.
@@ -281,14 +298,9 @@ fn write_image(
     staged: &mut StagedFiles,
 ) -> Result<Coverage, OutputError> {
     let (w, h) = (settings.width, settings.height);
-    let format = format_of(path);
-    if format == Format::Exr {
+    if format_of(path) == Format::Exr {
         let img = render_radiance(mesh, Some(scene), camera, w, h, IMAGE_SUPERSAMPLING);
-        let bytes = super::encode::encode_exr(&img).map_err(|source| OutputError::Write {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        staged.write_bytes(path, &bytes)?;
+        stage_exr(&img, path, staged)?;
         return Ok(img.coverage);
     }
     let img = render_image(
@@ -302,11 +314,7 @@ fn write_image(
     );
     let coverage = img.coverage;
     let rgb = image::RgbImage::from_raw(w, h, img.pixels).expect("render fills w·h RGB pixels");
-    if format == Format::Jpeg {
-        staged.write(path, |out| write_jpeg(&rgb, out))?;
-    } else {
-        staged.write(path, |out| write_png(&rgb, out))?;
-    }
+    stage_tone_mapped(&rgb, path, staged)?;
     Ok(coverage)
 }
 

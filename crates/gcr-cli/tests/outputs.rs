@@ -249,6 +249,44 @@ fn a_lightmap_bake_writes_the_glb_and_its_pages() {
     let exr = image::open(d.join("room-lightmap-0.exr")).expect("an EXR page");
     assert_eq!(exr.width(), 128);
 
+    // The PNG page × MOZ_lightmap.intensity, sRGB-decoded, is the EXR page within one 8-bit step,
+    // the brightest texel included (nothing clips), and the material is Lambertian as solved.
+    let exr = exr.to_rgb32f();
+    let bytes = std::fs::read(&glb).unwrap();
+    let length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let root: serde_json::Value = serde_json::from_slice(&bytes[20..20 + length]).unwrap();
+    let json = &root["materials"][0]["extensions"];
+    let intensity = json["MOZ_lightmap"]["intensity"].as_f64().unwrap();
+    assert_eq!(json["KHR_materials_specular"]["specularFactor"], 0.0);
+    let decode = |v: u8| {
+        let v = f64::from(v) / 255.0;
+        if v <= 0.04045 {
+            v / 12.92
+        } else {
+            ((v + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let png = &images[0];
+    assert_eq!(png.format, gltf::image::Format::R8G8B8);
+    let peak = exr.pixels().flat_map(|p| p.0).fold(0.0f32, f32::max);
+    for (i, p) in exr.pixels().enumerate() {
+        for c in 0..3 {
+            let (want, code) = (f64::from(p.0[c]), png.pixels[3 * i + c]);
+            let got = decode(code) * intensity;
+            let step =
+                (decode(code.saturating_add(1)) - decode(code.saturating_sub(1))) * intensity;
+            assert!(
+                (got - want).abs() <= step,
+                "texel {i}: {got} from the PNG, {want} in the EXR"
+            );
+        }
+    }
+    let brightest = png.pixels.iter().copied().max().unwrap();
+    assert_eq!(
+        brightest, 255,
+        "the brightest texel maps to 1 (peak {peak})"
+    );
+
     let bad = dir("out", "lightmap-bad");
     let target = s(&bad.join("x.glb"));
     let o = gcr(&[

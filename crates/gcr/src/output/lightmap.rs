@@ -8,13 +8,14 @@
 //!   primitive per (part, page) with `POSITION`, `NORMAL` (the face's), `TEXCOORD_1` (the
 //!   lightmap coordinates; glTF's v = 0 is the image's top row, as the atlas has it; the same
 //!   accessor serves as `TEXCOORD_0`, which glTF requires before a `TEXCOORD_1`); materials
-//!   carry the part's mean albedo as `baseColorFactor`, its emitted radiance as `emissiveFactor`
+//!   carry the part's mean albedo as `baseColorFactor` (Lambertian: `KHR_materials_specular`
+//!   with `specularFactor` 0), its emitted radiance as `emissiveFactor`
 //!   × `KHR_materials_emissive_strength` (in the lightmap's linear units), and the page as an
 //!   8-bit PNG through the
 //!   **`MOZ_lightmap`** extension (Mozilla Hubs' convention: `{"index": texture, "texCoord": 1,
-//!   "intensity": s}`), sRGB-encoded like glTF's colour textures, scaled so that its 95th
-//!   percentile is 0.8 (`intensity` = 1 / that scale restores the linear value; `asset.extras`
-//!   records it too). A viewer that knows the extension sets `material.lightMap` with
+//!   "intensity": s}`), sRGB-encoded like glTF's colour textures, scaled so that the brightest
+//!   texel's largest channel is 1 ([`png_scale`]: nothing clips; `intensity` = 1 / that scale
+//!   restores the linear value; `asset.extras` records it too). A viewer that knows the extension sets `material.lightMap` with
 //!   `lightMapIntensity = intensity` on `uv1` (three.js); one that does not shows the plain
 //!   material. Each face is written as its own three corners (a triangle soup: the lightmap's
 //!   seams need split vertices anyway); back faces of two-sided materials are their own faces.
@@ -178,19 +179,17 @@ pub fn encode_page_exr(lightmap: &Lightmap, k: usize) -> std::io::Result<Vec<u8>
     Ok(buf.into_inner())
 }
 
-/// The scale of the 8-bit pages: 0.8 at the 95th percentile of the texels' luminance (1 when
-/// every texel is dark).
+/// The scale of the 8-bit pages: 1 at the brightest texel's largest channel, so that no texel
+/// clips (1 when every texel is dark). An 8-bit page is a display format: clipping at a lower
+/// percentile flattened the hot spots near a light (the Cornell box's walls beside the light
+/// read up to 25 % dark in three.js at the 95th percentile → 0.8 scale this replaced); the EXR
+/// pages keep the full range.
 pub fn png_scale(lightmap: &Lightmap) -> f64 {
-    let mut lum: Vec<f64> = (lightmap.pages.iter().flatten())
-        .map(|p| 0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2]))
-        .filter(|l| *l > 0.0)
-        .collect();
-    if lum.is_empty() {
-        return 1.0;
-    }
-    let k = ((lum.len() - 1) as f64 * 0.95) as usize;
-    let (_, p95, _) = lum.select_nth_unstable_by(k, f64::total_cmp);
-    if *p95 > 0.0 { 0.8 / *p95 } else { 1.0 }
+    let peak = (lightmap.pages.iter().flatten())
+        .flat_map(|p| p.iter().map(|&c| f64::from(c)))
+        .filter(|c| c.is_finite())
+        .fold(0.0, f64::max);
+    if peak > 0.0 { 1.0 / peak } else { 1.0 }
 }
 
 /// Page `k` as an 8-bit sRGB PNG of `value × scale`.
@@ -211,12 +210,15 @@ fn encode_page_png(lightmap: &Lightmap, k: usize, scale: f64) -> std::io::Result
 
 /// A part's material: its mean albedo, its emitted radiance L = E/π (as `emissiveFactor` × the
 /// `KHR_materials_emissive_strength`, in the scene's units like the lightmap's linear values), and
-/// the lightmap page.
+/// the lightmap page. `KHR_materials_specular` with `specularFactor` 0 says the surface is the
+/// Lambertian one that was solved: glTF's default dielectric keeps a 4 % Fresnel layer whose
+/// energy three.js takes from the diffuse (the view read 1.3–3.6 % darker than gcr's pixels).
 fn material(rho: [f64; 3], emission: [f64; 3], page: u32, scale: f64) -> Value {
     let mut m = json!({
         "pbrMetallicRoughness": {"baseColorFactor": [rho[0], rho[1], rho[2], 1.0],
             "metallicFactor": 0.0, "roughnessFactor": 1.0},
-        "extensions": {"MOZ_lightmap": {"index": page, "texCoord": 1, "intensity": 1.0 / scale}},
+        "extensions": {"MOZ_lightmap": {"index": page, "texCoord": 1, "intensity": 1.0 / scale},
+            "KHR_materials_specular": {"specularFactor": 0.0}},
     });
     let radiance = emission.map(|e| e / std::f64::consts::PI);
     let peak = radiance.iter().copied().fold(0.0, f64::max);
@@ -227,9 +229,10 @@ fn material(rho: [f64; 3], emission: [f64; 3], page: u32, scale: f64) -> Value {
     m
 }
 
-/// The extensions the file uses: `MOZ_lightmap`, and the emissive strength when a face emits.
+/// The extensions the file uses: `MOZ_lightmap`, `KHR_materials_specular` (no specular layer),
+/// and the emissive strength when a face emits.
 fn extensions_used(scene: &Scene) -> Vec<&'static str> {
-    let mut used = vec!["MOZ_lightmap"];
+    let mut used = vec!["MOZ_lightmap", "KHR_materials_specular"];
     if scene.faces.iter().any(|f| !f.emission.is_zero()) {
         used.push("KHR_materials_emissive_strength");
     }

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Cycles' bake of a gcr lightmap's own texels, compared with gcr's pages (issue 33).
 
-Usage: cycles_lightmap.py [--guiding] GLB METRICS SPP [SPP ...]
+Usage: cycles_lightmap.py [--guiding] [--reference REF.glb REF_METRICS] GLB METRICS SPP [SPP ...]
 
 GLB:     a lightmap written by `gcr solve SCENE --lightmap GLB --metrics METRICS` (the default quantity,
          irradiance E); its linear pages `<stem>-lightmap-<k>.exr` beside it.
@@ -20,6 +20,17 @@ noises alone, and the ratio of the sums (a bias). One line per SPP:
 `spp=… texels=… dark_in_cycles=… render=<s> cycles_error=… gcr_error=… difference=… ratio=… mean_ratio=…`.
 Texels that straddle an edge are where the two may differ beyond noise: gcr moves a texel centre that falls
 inside geometry to the visible surface and super-samples texels that edges cross; Cycles bakes the centre.
+
+With `--reference`: a gcr bake of the same atlas to a tighter target (`gcr solve SCENE --lightmap REF.glb
+--target-error 0.005 --metrics REF_METRICS` with GLB's other options: the layout is a function of the scene and
+the options) is the converged answer. Each SPP is then one bake (seed 0), timed, and the same bake denoised as
+Blender's users denoise bakes (the compositor's Denoise node, Open Image Denoise, HDR, on the baked image, which
+was baked with Blender's default 16-texel margin so that the denoiser sees no black around the charts), timed on
+its own; each, and gcr's GLB, is compared with the reference over the texels all of them hold:
+`error = sqrt(‖E − E_ref‖² / ‖E_ref‖² − e_ref²)`, the reference's own estimated error taken out, and the bias
+(ratio of sums). One line per SPP: `spp=… bake=<s> denoise=<s> cycles_error=… denoised_error=… gcr_error=…
+cycles_mean_ratio=… denoised_mean_ratio=… gcr_mean_ratio=…`. The denoiser's error is mostly bias (blur across
+shadow edges and chart edges), which no seed difference shows: hence the reference.
 Exit code 3 when bpy is not importable.
 """
 import json
@@ -91,10 +102,60 @@ def lightmap_scene(doc, binary):
     return np.asarray(rows), np.asarray(uvs), np.asarray(pages)
 
 
+def read_pages(glb, w, h, n_pages):
+    """gcr's linear pages beside GLB, as (h, w, 3) arrays (Blender's row order: bottom first)."""
+    stem = os.path.splitext(glb)[0]
+    pages = []
+    for k in range(n_pages):
+        img = bpy.data.images.load(os.path.abspath(f"{stem}-lightmap-{k}.exr"))
+        pages.append(np.asarray(img.pixels[:], dtype=np.float64).reshape(h, w, 4)[..., :3])
+    return pages
+
+
+def denoiser(images):
+    """A compositor that runs the Denoise node (OIDN, HDR) on an image, and the function that applies it
+    to every page (in place) and returns the seconds it took."""
+    scene = bpy.context.scene
+    tree = bpy.data.node_groups.new("denoise", "CompositorNodeTree")
+    tree.interface.new_socket("Image", in_out="OUTPUT", socket_type="NodeSocketColor")
+    source = tree.nodes.new("CompositorNodeImage")
+    node = tree.nodes.new("CompositorNodeDenoise")
+    node.inputs["HDR"].default_value = True
+    out = tree.nodes.new("NodeGroupOutput")
+    tree.links.new(source.outputs["Image"], node.inputs["Image"])
+    tree.links.new(node.outputs["Image"], out.inputs[0])
+    scene.compositing_node_group = tree
+    render = scene.render
+    render.resolution_x, render.resolution_y = images[0].size
+    render.resolution_percentage = 100
+    render.image_settings.file_format = "OPEN_EXR"
+    render.image_settings.color_depth = "32"
+    path = os.path.join(os.environ.get("TMPDIR", "/tmp"), f"gcr-denoised-{os.getpid()}.exr")
+    render.filepath = path
+
+    def run():
+        t0 = time.perf_counter()
+        for img in images:
+            source.image = img
+            bpy.ops.render.render(write_still=True)  # no render layer: the compositor alone
+            result = bpy.data.images.load(path)
+            img.pixels.foreach_set(np.asarray(result.pixels[:], dtype=np.float32))
+            bpy.data.images.remove(result)
+        os.remove(path)
+        return time.perf_counter() - t0
+
+    return run
+
+
 def main():
     args = sys.argv[1:]
     guiding = "--guiding" in args
     args = [a for a in args if a != "--guiding"]
+    reference = None
+    if "--reference" in args:
+        i = args.index("--reference")
+        reference = args[i + 1: i + 3]
+        del args[i: i + 3]
     glb, metrics, *spps = args
     doc, binary = read_glb(glb)
     tri, uvs, pages = lightmap_scene(doc, binary)
@@ -103,11 +164,7 @@ def main():
     gcr_error = m.get("relative_std_error") or 0.0
     record = m["lightmap"]
     w, h, n_pages = record["width"], record["height"], record["pages"]
-    stem = os.path.splitext(glb)[0]
-    ours = []
-    for k in range(n_pages):
-        img = bpy.data.images.load(os.path.abspath(f"{stem}-lightmap-{k}.exr"))
-        ours.append(np.asarray(img.pixels[:], dtype=np.float64).reshape(h, w, 4)[..., :3])
+    ours = read_pages(glb, w, h, n_pages)
     setup(guiding)
     # the scene as one mesh with the lightmap coordinates, each page's image on its faces
     keys, index = np.unique(np.round(np.hstack([tri[:, 9:15], pages[:, None]]), 12), axis=0,
@@ -135,17 +192,21 @@ def main():
     bake.use_clear = True
     bake.use_pass_direct = bake.use_pass_indirect = True
     bake.use_pass_color = False
-    for spp in [int(s) for s in spps]:
+
+    def bake_pages(spp, seed, margin):
         scene.cycles.samples = spp
+        scene.cycles.seed = seed
+        for img in images:
+            img.pixels.foreach_set(np.zeros(w * h * 4, dtype=np.float32))
+        bpy.ops.object.bake(type="DIFFUSE", pass_filter={"DIRECT", "INDIRECT"}, margin=margin, use_clear=False)
+        return [np.asarray(img.pixels[:], dtype=np.float64).reshape(h, w, 4) for img in images]
+
+    if reference:
+        compare_with_reference(reference, ours, [int(s) for s in spps], images, bake_pages, w, h, n_pages)
+        return
+    for spp in [int(s) for s in spps]:
         t0 = time.perf_counter()
-        runs = []
-        for seed in (0, 1):
-            scene.cycles.seed = seed
-            for img in images:
-                img.pixels.foreach_set(np.zeros(w * h * 4, dtype=np.float32))
-            bpy.ops.object.bake(type="DIFFUSE", pass_filter={"DIRECT", "INDIRECT"}, margin=0,
-                                use_clear=False)
-            runs.append([np.asarray(img.pixels[:], dtype=np.float64).reshape(h, w, 4) for img in images])
+        runs = [bake_pages(spp, seed, 0) for seed in (0, 1)]
         seconds = time.perf_counter() - t0
         covered = np.concatenate([(a[..., 3] > 0.5) & (b[..., 3] > 0.5) for a, b in zip(*runs)]).ravel()
         cyc = np.pi * 0.5 * np.concatenate([a[..., :3] + b[..., :3] for a, b in zip(*runs)]).reshape(-1, 3)
@@ -167,5 +228,40 @@ def main():
               f"dark_in_cycles={dark} render={seconds:.3f} cycles_error={cycles_error:.5f} "
               f"gcr_error={gcr_error:.5f} difference={difference:.5f} ratio={ratio:.3f} "
               f"mean_ratio={g.sum() / cyc.sum():.5f}", flush=True)
+
+
+def compare_with_reference(reference, ours, spps, images, bake_pages, w, h, n_pages):
+    """Cycles' bake, raw and denoised, and gcr's, each against a converged gcr bake (module docs)."""
+    ref_glb, ref_metrics = reference
+    with open(ref_metrics) as f:
+        rm = json.load(f)
+    lm = rm["lightmap"]
+    if (lm["width"], lm["height"], lm["pages"]) != (w, h, n_pages):
+        raise SystemExit("the reference's atlas is not GLB's: bake it with the same options")
+    ref_error = rm.get("relative_std_error") or 0.0
+    ref = np.concatenate(read_pages(ref_glb, w, h, n_pages)).reshape(-1, 3)
+    g = np.concatenate(ours).reshape(-1, 3)
+    # the texels Cycles covers (margin 0) and bakes lit: the others are where gcr moves texels
+    covered = np.concatenate([p[..., 3] > 0.5 for p in bake_pages(1, 0, 0)]).ravel()
+    denoise = denoiser(images)
+
+    def error(e, keep):
+        d2 = ((e[keep] - ref[keep]) ** 2).sum() / (ref[keep] ** 2).sum()
+        return np.sqrt(max(d2 - ref_error ** 2, 0.0)), e[keep].sum() / ref[keep].sum()
+
+    for spp in spps:
+        t0 = time.perf_counter()
+        raw = bake_pages(spp, 0, 16)
+        seconds = time.perf_counter() - t0
+        cyc = np.pi * np.concatenate([p[..., :3] for p in raw]).reshape(-1, 3)
+        denoise_seconds = denoise()
+        den = np.pi * np.concatenate(
+            [np.asarray(img.pixels[:], dtype=np.float64).reshape(h, w, 4)[..., :3] for img in images]).reshape(-1, 3)
+        keep = covered & (cyc.sum(axis=1) > 0) & (ref.sum(axis=1) > 0)
+        (ce, cr), (de, dr), (ge, gr) = error(cyc, keep), error(den, keep), error(g, keep)
+        print(f"spp={spp} texels={int(keep.sum())} bake={seconds:.3f} denoise={denoise_seconds:.3f} "
+              f"reference_error={ref_error:.5f} cycles_error={ce:.5f} denoised_error={de:.5f} gcr_error={ge:.5f} "
+              f"cycles_mean_ratio={cr:.5f} denoised_mean_ratio={dr:.5f} gcr_mean_ratio={gr:.5f}", flush=True)
+
 
 main()

@@ -2,6 +2,7 @@
 
 mod breaking;
 mod compare;
+mod daylit;
 mod fem;
 mod field;
 mod gauss;
@@ -40,6 +41,7 @@ const GROUPS: &[Group] = &[
     ("rtrace", radiance::run),
     ("rays", rays::run),
     ("guiding", guiding::run_group),
+    ("daylit", daylit::run),
 ];
 
 /// Runs every group whose name contains `only` (all when `None`).

@@ -21,9 +21,10 @@ noises alone, and the ratio of the sums (a bias). One line per SPP:
 Texels that straddle an edge are where the two may differ beyond noise: gcr moves a texel centre that falls
 inside geometry to the visible surface and super-samples texels that edges cross; Cycles bakes the centre.
 
-With `--reference`: a gcr bake of the same atlas to a tighter target (`gcr solve SCENE --lightmap REF.glb
---target-error 0.005 --metrics REF_METRICS` with GLB's other options: the layout is a function of the scene and
-the options) is the converged answer. Each SPP is then one bake (seed 0), timed, and the same bake denoised as
+With `--reference`: a gcr bake of the same atlas to a tighter target with another seed (`gcr solve SCENE
+--lightmap REF.glb --target-error 0.005 --seed 2 --metrics REF_METRICS` with GLB's other options: the layout is a
+function of the scene and the options; with the same seed the default bake's rays are the reference's first ones,
+and the two errors would be correlated) is the converged answer. Each SPP is then one bake (seed 0), timed, and the same bake denoised as
 Blender's users denoise bakes (the compositor's Denoise node, Open Image Denoise, HDR, on the baked image, which
 was baked with Blender's default 16-texel margin so that the denoiser sees no black around the charts), timed on
 its own; each, and gcr's GLB, is compared with the reference over the texels all of them hold:

@@ -5,6 +5,7 @@
 //   gcr solve cornell-box --lightmap cb.glb --image cb.exr --image-mode pixel
 //   node xtask/js/lightmap-view/view.mjs cb.glb view.png --reference cb.exr \
 //       --eye 0.278,0.273,-0.8 --target 0.278,0.273,0 --fov 39.3076 [--size 512x512] [--exposure E]
+//       [--dump PREFIX]   (both luminance images as float32, PREFIX.three.f32 and PREFIX.gcr.f32)
 //
 // The camera is the one gcr prints for the image (Mitsuba's look_at convention, which is
 // three.js' lookAt: both look down the view direction with the given up). Needs Chromium

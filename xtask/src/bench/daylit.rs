@@ -26,7 +26,7 @@
 //! `DAYLIT_N=2000` sets N (default 20 000); `DAYLIT_CASES=sun,atrium` runs the cases whose names
 //! contain one of the words; `DAYLIT_SOLVERS=gcr,mitsuba,cycles` the solvers.
 
-use super::field::Peer;
+use super::field::{Peer, cache_dir, rel_l2};
 use super::gcr::Curve;
 use super::irradiance::{Estimates, gcr_gathered, peer_lit, reference_irradiance};
 use crate::ctx::Ctx;
@@ -37,7 +37,7 @@ use glam::DVec3;
 use scene_sampler::{Lighting, Scene, SceneBvh, SurfaceSampler};
 use std::fmt::Write;
 use std::hash::{Hash, Hasher};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 /// A case: its name, the scene with its lights, and the lights as Mitsuba 3 emitters.
@@ -57,11 +57,7 @@ const SUBSET: usize = 1000;
 fn lit(stem: &str, lighting: serde_json::Value) -> Result<Scene> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
     let mut scene = scene_sampler::load(root.join(format!("{stem}.obj")))?.into_3d()?;
-    let file = std::env::temp_dir().join(format!("gcr-daylit-{}-{stem}.json", std::process::id()));
-    std::fs::write(&file, serde_json::to_string(&lighting)?)?;
-    let lights = Lighting::read(&file)?.lights();
-    let _ = std::fs::remove_file(&file);
-    scene.add_lights(lights?);
+    scene.add_lights(serde_json::from_value::<Lighting>(lighting)?.lights()?);
     Ok(scene)
 }
 
@@ -138,8 +134,7 @@ fn reference(
             x.to_bits().hash(&mut h);
         }
     }
-    let target = std::env::var("CARGO_TARGET_DIR").unwrap_or_else(|_| "target".into());
-    let dir = PathBuf::from(target).join("field-refs");
+    let dir = cache_dir();
     let file = dir.join(format!("daylit-{:016x}.txt", h.finish()));
     let parse = |text: &str| -> Option<Estimates> {
         let rows: Vec<Vec<f64>> = (text.lines().skip(1))
@@ -176,27 +171,18 @@ fn reference(
 
 /// The reference's own noise, `‖σ_ref‖₂/‖E_ref‖₂` over the subset's points and the bands.
 fn noise(r: &Estimates) -> f64 {
-    let (mut v, mut n) = (0.0, 0.0);
-    for (m, s) in r.mean.iter().zip(&r.se) {
-        for k in 0..3 {
-            v += s[k] * s[k];
-            n += m[k] * m[k];
-        }
-    }
-    (v / n).sqrt()
+    let noisy: Vec<[f64; 3]> = (r.mean.iter().zip(&r.se))
+        .map(|(m, s)| [0, 1, 2].map(|k| m[k] + s[k]))
+        .collect();
+    rel_l2(&noisy, &r.mean)
 }
 
 /// `‖a − r‖₂/‖r‖₂` over the subset's points and the bands, the reference's own noise taken out
 /// (`√(d² − noise²)`: independent noises add in squares).
 fn error(a: &[[f64; 3]], r: &Estimates) -> f64 {
-    let (mut d, mut n) = (0.0, 0.0);
-    for (x, y) in a.iter().zip(&r.mean) {
-        for k in 0..3 {
-            d += (x[k] - y[k]).powi(2);
-            n += y[k] * y[k];
-        }
-    }
-    (d / n - noise(r).powi(2)).max(0.0).sqrt()
+    (rel_l2(a, &r.mean).powi(2) - noise(r).powi(2))
+        .max(0.0)
+        .sqrt()
 }
 
 /// Seconds `curve` takes to `target`: interpolated, else (`extrapolate`) from its last run as

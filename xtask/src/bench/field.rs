@@ -130,7 +130,7 @@ fn corrected_fraction() -> f64 {
 }
 
 /// `‖v − r‖₂ / ‖r‖₂` over points and bands.
-fn rel_l2(v: &[[f64; 3]], r: &[[f64; 3]]) -> f64 {
+pub(super) fn rel_l2(v: &[[f64; 3]], r: &[[f64; 3]]) -> f64 {
     let (mut n, mut d) = (0.0, 0.0);
     for (a, b) in v.iter().zip(r) {
         for k in 0..3 {
@@ -147,7 +147,8 @@ struct Reference {
     note: String,
 }
 
-fn cache_dir() -> PathBuf {
+/// Where the benches cache their references: `$CARGO_TARGET_DIR/field-refs` (default `target/`).
+pub(super) fn cache_dir() -> PathBuf {
     let target = std::env::var("CARGO_TARGET_DIR").unwrap_or_else(|_| "target".into());
     Path::new(&target).join("field-refs")
 }

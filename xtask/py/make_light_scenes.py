@@ -12,6 +12,10 @@
   plane (0.8 m) is in the east room, lit only through the gap (hard indirect light).
 * uplight-room.obj/.mtl, uplight-room.pts, uplight-room.lights.json — a 6 x 3 x 6 m room with a
   spot light near the floor aimed at the ceiling (60 deg cone): the ceiling patch lights the room.
+* many-rooms.obj/.mtl, many-rooms.pts — 20 rooms of 4 x 2.8 x 4 m in a 5 x 4 grid (0.1 m
+  partitions, a 0.9 x 2.1 m door in each), a 0.6 x 0.6 m ceiling lamp (emissive) in every other room
+  (a checkerboard: 10 lamps), work planes at 0.8 m in every room: many lamps in many rooms, and rooms
+  lit only through their doors (issues 31 and 32). No lighting file: the lamps are its emitters.
 * grille-lamp.gltf — a 6 x 3 x 6 m room split by a floor-to-ceiling grille (alphaMode MASK stripes,
   doubleSided), a KHR_lights_punctual point light on one side and a spot on the other.
 
@@ -282,8 +286,82 @@ def grille_lamp():
         json.dump(gltf, f, indent=1)
 
 
+def many_rooms(nx=5, nz=4, size=4.0, wall=0.1, height=2.8, door=(0.9, 2.1), lamp=0.6):
+    """Rooms in an nx x nz grid at pitch size + wall; the room (i, j) spans x in
+    [i*pitch + wall, (i+1)*pitch], z in [j*pitch + wall, (j+1)*pitch]; doors centred in every wall
+    between two rooms, with jambs, a lintel and a floor strip in the wall's thickness."""
+    o = Obj()
+    pitch = size + wall
+    (dw, dh) = door
+    for i in range(nx):
+        for j in range(nz):
+            x0, x1 = i * pitch + wall, (i + 1) * pitch
+            z0, z1 = j * pitch + wall, (j + 1) * pitch
+            o.box_rect("floor", 1, 0.0, (x0, z0), (x1, z1), (0, 1, 0))
+            o.box_rect("ceiling", 1, height, (x0, z0), (x1, z1), (0, -1, 0))
+            # walls: (axis, value, normal, span lo..hi along the other horizontal axis, has door)
+            for axis, value, normal, (a0, a1), door_here in (
+                (0, x0, (1, 0, 0), (z0, z1), i > 0),
+                (0, x1, (-1, 0, 0), (z0, z1), i < nx - 1),
+                (2, z0, (0, 0, 1), (x0, x1), j > 0),
+                (2, z1, (0, 0, -1), (x0, x1), j < nz - 1),
+            ):
+                # box_rect's two coordinates are the other axes in order: (y, z) for x, (x, y) for z
+                def rect(lo_a, hi_a, lo_y, hi_y):
+                    if axis == 0:
+                        o.box_rect("wall", 0, value, (lo_y, lo_a), (hi_y, hi_a), normal)
+                    else:
+                        o.box_rect("wall", 2, value, (lo_a, lo_y), (hi_a, hi_y), normal)
+                if not door_here:
+                    rect(a0, a1, 0.0, height)
+                    continue
+                m = 0.5 * (a0 + a1)
+                d0, d1 = m - dw / 2, m + dw / 2
+                rect(a0, d0, 0.0, height)
+                rect(d1, a1, 0.0, height)
+                rect(d0, d1, dh, height)
+            if (i + j) % 2 == 0:
+                cx, cz = 0.5 * (x0 + x1), 0.5 * (z0 + z1)
+                o.box_rect("lamp", 1, height - 0.01, (cx - lamp / 2, cz - lamp / 2),
+                           (cx + lamp / 2, cz + lamp / 2), (0, -1, 0))
+    # the doorways in the partitions' thickness: jambs, lintel, floor strip
+    for i in range(nx):
+        for j in range(nz):
+            if i < nx - 1:  # the door east of room (i, j): x in [(i+1)*pitch, (i+1)*pitch + wall]
+                xa, xb = (i + 1) * pitch, (i + 1) * pitch + wall
+                m = j * pitch + wall + size / 2
+                d0, d1 = m - dw / 2, m + dw / 2
+                o.box_rect("wall", 2, d0, (xa, 0.0), (xb, dh), (0, 0, 1))
+                o.box_rect("wall", 2, d1, (xa, 0.0), (xb, dh), (0, 0, -1))
+                o.box_rect("wall", 1, dh, (xa, d0), (xb, d1), (0, -1, 0))
+                o.box_rect("floor", 1, 0.0, (xa, d0), (xb, d1), (0, 1, 0))
+            if j < nz - 1:  # the door south of room (i, j): z in [(j+1)*pitch, (j+1)*pitch + wall]
+                za, zb = (j + 1) * pitch, (j + 1) * pitch + wall
+                m = i * pitch + wall + size / 2
+                d0, d1 = m - dw / 2, m + dw / 2
+                o.box_rect("wall", 0, d0, (0.0, za), (dh, zb), (1, 0, 0))
+                o.box_rect("wall", 0, d1, (0.0, za), (dh, zb), (-1, 0, 0))
+                o.box_rect("wall", 1, dh, (d0, za), (d1, zb), (0, -1, 0))
+                o.box_rect("floor", 1, 0.0, (d0, za), (d1, zb), (0, 1, 0))
+    o.write("many-rooms", f"{nx * nz} rooms of {size:g} x {height:g} x {size:g} (y up) in a {nx} x {nz} grid, "
+            "doors between neighbours, a ceiling lamp in every other room",
+            {"floor": 0.3, "wall": 0.6, "ceiling": 0.8, "lamp": 0.0})
+    with open("scenes/many-rooms.mtl", "a") as f:
+        f.write("Ke 10 10 10\n")
+    with open("scenes/many-rooms.pts", "w") as f:
+        f.write("# work planes at 0.8 m in every room, 10 x 10 each: x y z nx ny nz\n")
+        for i in range(nx):
+            for j in range(nz):
+                for a in range(10):
+                    for b in range(10):
+                        x = i * pitch + wall + 0.2 + 0.4 * a
+                        z = j * pitch + wall + 0.2 + 0.4 * b
+                        f.write(f"{x:g} 0.8 {z:g} 0 1 0\n")
+
+
 atrium()
 sun_patch_room()
 grille_lamp()
 door_gap()
 uplight_room()
+many_rooms()

@@ -115,7 +115,11 @@ fn walk(
             rng.random::<f64>(),
             rng.random::<f64>(),
         );
-        match lights.pick(u0) {
+        let here = Receiver {
+            p: at.point,
+            n: at.normal,
+        };
+        match lights.pick(&here, u0) {
             Some(Pick::Light(light, probability)) => {
                 // ⟨a light other than a face, through the light interface⟩
                 let d = other_light(bvh, &at, light, probability, [u1, u2]);
@@ -123,8 +127,7 @@ fn walk(
                     out[b] += throughput[b] * d[b];
                 }
             }
-            Some(Pick::Face(ef)) if ef != at.face => {
-                let p_e = lights.face_density(ef);
+            Some(Pick::Face(ef, p_e)) if ef != at.face => {
                 let e = &scene.faces[ef as usize];
                 let s = u1.sqrt();
                 let x = e.point(s * (1.0 - u2), s * u2);
@@ -168,7 +171,7 @@ fn walk(
         if !nf.emission.is_zero() {
             let w = PowerHeuristic::ONE_EACH.cosine(
                 geometry(at.point, at.normal, next.point, next.normal),
-                lights.face_density(next.face),
+                lights.face_density(&here, next.face),
             );
             for b in 0..3 {
                 out[b] += throughput[b] * w * nf.emission.0[b];

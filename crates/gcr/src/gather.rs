@@ -80,10 +80,11 @@ pub fn gather(
     if !emitters.is_empty() && samples.direct > 0 {
         for i in 0..samples.direct {
             let u0 = (i as f64 + rng.random::<f64>()) / samples.direct as f64;
-            let Some(pick) = emitters.lights().pick(u0) else {
-                break;
+            // (a draw may find no light for this receiver where another draw does: go on)
+            let Some(pick) = emitters.lights().pick(&Receiver { p: y, n }, u0) else {
+                continue;
             };
-            if matches!(pick, Pick::Face(ef) if ef == face) {
+            if matches!(pick, Pick::Face(ef, _) if ef == face) {
                 continue;
             }
             let u = [rng.random::<f64>(), rng.random::<f64>()];
@@ -128,13 +129,14 @@ pub fn gather(
     out
 }
 
-/// The direct light per unit ρ that one shadow ray to the point `u` of emitter `ef` brings to the
-/// receiver (y, n, face), weighted by [`Mis::light`] with `mis.n_c·q(x − y)` cosine rays toward
-/// the emitter point x (q = 1 but for a guided bounce); None when they do not see each other.
+/// The direct light per unit ρ that one shadow ray to the point `u` of emitter `ef` (drawn with
+/// area density `p_e`) brings to the receiver (y, n, face), weighted by [`Mis::light_density`]
+/// with `mis.n_c·q(x − y)` cosine rays toward the emitter point x (q = 1 but for a guided
+/// bounce); None when they do not see each other.
 fn shadow_ray(
     domain: &Domain,
     mis: &Mis,
-    ef: u32,
+    (ef, p_e): (u32, f64),
     u: [f64; 2],
     (y, n, face): (DVec3, DVec3, u32),
     q: impl Fn(DVec3) -> f64,
@@ -144,7 +146,7 @@ fn shadow_ray(
         n_c: mis.n_c * q(x - y),
         ..*mis
     };
-    let (w, e) = (guided.light(g, ef), domain.emission(ef));
+    let (w, e) = (guided.light_density(g, p_e), domain.emission(ef));
     Some(e.map(|e| w * e))
 }
 
@@ -174,7 +176,7 @@ pub(crate) fn light_ray_scaled(
     q: impl Fn(DVec3) -> f64,
 ) -> Option<Bands> {
     match pick {
-        Pick::Face(ef) => shadow_ray(domain, mis, ef, u, receiver, q),
+        Pick::Face(ef, density) => shadow_ray(domain, mis, (ef, density), u, receiver, q),
         Pick::Light(light, probability) => {
             other_light_ray(domain, mis, light, probability, u, receiver, q)
         }
@@ -267,7 +269,11 @@ pub(crate) fn cosine_ray(
     let e = domain.emission(fx);
     let mut direct = [0.0; BANDS];
     if e.iter().any(|v| *v != 0.0) {
-        let w = mis.cosine(geometry(domain, cx, -n.dot(d), d), fx);
+        let w = mis.cosine(
+            geometry(domain, cx, -n.dot(d), d),
+            &Receiver { p: y, n },
+            fx,
+        );
         if w > 0.0 {
             direct = e.map(|e| w * e);
         }
@@ -289,12 +295,13 @@ pub(crate) struct Mis<'a> {
 }
 
 impl Mis<'_> {
-    /// The emitter technique's area density p_e at a point of `face` (0 without emitters).
-    fn p_e(&self, face: u32) -> f64 {
+    /// The emitter technique's area density p_e at a point of `face` for the receiver `at` (0
+    /// without emitters).
+    fn p_e(&self, at: &Receiver, face: u32) -> f64 {
         if self.emitters.is_empty() {
             0.0
         } else {
-            self.emitters.lights().face_density(face)
+            self.emitters.lights().face_density(at, face)
         }
     }
 
@@ -305,20 +312,15 @@ impl Mis<'_> {
         }
     }
 
-    /// Weight per unit emission of an emitter point with geometry term `g`, drawn by emitter
-    /// sampling ([`PowerHeuristic::light`]).
-    pub(crate) fn light(&self, g: f64, face: u32) -> f64 {
-        self.heuristic().light(g, self.p_e(face))
-    }
-
     /// Weight per unit emission of an emitter point hit by a cosine ray
     /// ([`PowerHeuristic::cosine`]; 1/n_c where g is infinite at an edge).
-    pub(crate) fn cosine(&self, g: f64, face: u32) -> f64 {
-        self.heuristic().cosine(g, self.p_e(face))
+    pub(crate) fn cosine(&self, g: f64, at: &Receiver, face: u32) -> f64 {
+        self.heuristic().cosine(g, self.p_e(at, face))
     }
 
-    /// [`Mis::light`] for a light sample with cosine density `g` and light density `p` in the
-    /// light's own measure ([`scene_sampler::LightSample`]).
+    /// The weight per unit emission of a light sample ([`PowerHeuristic::light`]) with cosine
+    /// density `g` and light density `p` in the light's own measure
+    /// ([`scene_sampler::LightSample`]; an emitting face's area density from its pick).
     pub(crate) fn light_density(&self, g: f64, p: f64) -> f64 {
         self.heuristic().light(g, p)
     }

@@ -77,8 +77,8 @@ pub use flatland::{FlatView, FlatlandScene, Segment};
 pub use kernel::{FlatKernelSample, FlatKernelSampler, KernelSample, KernelSampler, Samples};
 pub use light_options::{DEFAULT_GROUND_REFLECTANCE, LightOptions, Lit, PortalCorners};
 pub use lights::{
-    EmitterTable, EnvMap, Light, LightSample, LightSet, Lighting, Pick, PointLight, Portal,
-    Portals, Receiver, ShadowTarget, Sky, SkyModel, Sun,
+    EmitterTable, EnvMap, Light, LightBounds, LightSample, LightSet, LightTree, Lighting, Pick,
+    PointLight, Portal, Portals, Receiver, ShadowTarget, Sky, SkyModel, Sun,
 };
 pub use load::{
     load, load_flatland, load_gltf, load_obj, load_or_builtin, load_or_builtin_with, load_with,

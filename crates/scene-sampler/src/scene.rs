@@ -721,11 +721,20 @@ impl EmitterTable {
 }
 
 impl LightSet {
-    /// The lights of a 3-D scene: its emitting faces and [`Scene::lights`].
+    /// The lights of a 3-D scene: its emitting faces and [`Scene::lights`], with a light tree
+    /// over the faces and the lights that have a position.
     pub fn of_scene(scene: &Scene) -> Self {
         let (lo, hi) = scene.bounds;
-        Self::new(
-            EmitterTable::of_scene(scene),
+        let faces = EmitterTable::of_scene(scene);
+        let bounds = (0..faces.len())
+            .map(|i| {
+                let f = &scene.faces[faces.get(i).0 as usize];
+                crate::LightBounds::face(f.v, f.normal, f.area * f.emission.mean())
+            })
+            .collect();
+        Self::with_tree(
+            faces,
+            bounds,
             scene.lights.clone(),
             0.5 * (hi - lo).length(),
         )

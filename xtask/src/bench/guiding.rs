@@ -44,6 +44,19 @@ fn grid(
     out
 }
 
+/// `n` × `n` points at 0.8 m in each room of `scenes/many-rooms.obj` (5 × 4 rooms of 4 m at a
+/// pitch of 4.1 m), facing up.
+fn many_rooms_points(n: usize) -> Vec<(DVec3, DVec3)> {
+    let mut out = Vec::new();
+    for i in 0..5 {
+        for j in 0..4 {
+            let (x0, z0) = (4.1 * i as f64 + 0.1, 4.1 * j as f64 + 0.1);
+            out.extend(grid((x0, x0 + 4.0, n), (z0, z0 + 4.0, n), 0.8, DVec3::Y));
+        }
+    }
+    out
+}
+
 /// A shipped scene with its lighting file (`scenes/<stem>.obj`, `scenes/<stem>.lights.json`).
 fn shipped(stem: &str) -> Result<Scene> {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
@@ -86,6 +99,16 @@ fn cases(quick: bool) -> Result<Vec<Case>> {
             scene: shipped("uplight-room")?,
             points: grid((0.05, 5.95, a), (0.05, 5.95, b), 0.8, DVec3::Y),
             mitsuba: None,
+        },
+        Case {
+            name: "many rooms: work planes in 20 rooms, 10 lamps",
+            scene: scene_sampler::load(
+                std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/many-rooms.obj"),
+            )?
+            .into_3d()?,
+            points: many_rooms_points(if quick { 2 } else { 10 }),
+            // the lamps are emitting faces: no emitter beside the mesh's
+            mitsuba: Some(serde_json::json!([])),
         },
         Case {
             name: "cornell-box: above the blocks",
@@ -181,8 +204,9 @@ pub fn run_group(ctx: &Ctx) -> Result<()> {
          and with the program's default `--guiding auto`, which guides when the pilot round \
          predicts at least 16 384 rays per point to the target and is otherwise exactly \
          unguided (same bits, same time up to noise). The scenes: `scenes/door-gap.obj`, \
-         `scenes/sun-patch-room.obj`, `scenes/uplight-room.obj` with their lighting files \
-         (`xtask/py/make_light_scenes.py`), and two built-ins. `rays/point` is the most any \
+         `scenes/sun-patch-room.obj`, `scenes/uplight-room.obj` with their lighting files, \
+         `scenes/many-rooms.obj` (its lamps are emitting faces; `xtask/py/make_light_scenes.py`), \
+         and two built-ins. `rays/point` is the most any \
          point got (65 536 is the cap: the target was not met); `est. error` is the gather's own \
          estimate (relative L2 over the points, standard error). Σd²/Σσ²: the squared \
          differences between the two runs over the variances they claim (≈ 1: they agree). \
@@ -219,7 +243,12 @@ fn peer_rows(
     ));
     std::fs::create_dir_all(&dir)?;
     let file = dir.join("emitters.json");
-    std::fs::write(&file, serde_json::to_string(&[emitter])?)?;
+    // one emitter, or a list of them (empty: the mesh's emitting faces only)
+    let list = match emitter {
+        serde_json::Value::Array(list) => list.clone(),
+        one => vec![one.clone()],
+    };
+    std::fs::write(&file, serde_json::to_string(&list)?)?;
     let spp: &[usize] = if quick { &[16] } else { &[256, 2048] };
     let runs = super::irradiance::peer_lit(
         peer,

@@ -51,7 +51,9 @@ use crate::gather::{Mis, emitter_geometry, geometry_3d, light_ray_scaled};
 use glam::DVec3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use scene_sampler::{KernelSampler, NO_FACE, Pick, Receiver, cosine_hemisphere};
+use scene_sampler::{
+    KernelSampler, LightSet, NO_FACE, Pick, Receiver, SceneBvh, SurfacePoint, cosine_hemisphere,
+};
 use std::f64::consts::PI;
 
 /// A group's members lie within twice the radius of a disc that holds a full group at the points'
@@ -182,6 +184,48 @@ impl Group<'_> {
             })
             .sum();
         self.c as f64 * g
+    }
+
+    /// G·V from every member to the hit x of member `a`'s cosine ray (into `weight`; the caster
+    /// sees x: its ray hit it), and the mixture's density there, Σ G·V·q (q the guide's toward x
+    /// from each member; the caster's is its ray's `q`).
+    fn mixture(
+        &self,
+        bvh: &SceneBvh,
+        hit: &SurfacePoint,
+        (a, q): (usize, f64),
+        weight: &mut [f64],
+    ) -> f64 {
+        let (x, nx) = (hit.point, hit.normal);
+        let mut total = 0.0;
+        for (k, &(yk, nk, fk)) in self.members.iter().enumerate() {
+            let geo = geometry_3d(yk, nk, x, nx);
+            let seen =
+                k == a || (geo > 0.0 && bvh.visible(hit, &Domain::surface_point_3d(yk, nk, fk)));
+            weight[k] = if seen { geo } else { 0.0 };
+            total += match (seen, self.guide) {
+                (false, _) => 0.0,
+                (true, None) => weight[k],
+                (true, Some(_)) if k == a => weight[k] * q,
+                (true, Some(_)) => weight[k] * self.q(nk, x - yk),
+            };
+        }
+        total
+    }
+
+    /// The power heuristic's weight, for member `k`, of the shared cosine technique (count
+    /// density `shared` at the point) that hit a point of the emitting `face`, against k's own
+    /// shadow rays (their density depends on the member: the light tree's choice); 0 where
+    /// `shared` is 0.
+    fn hit_weight(&self, lights: &LightSet, k: usize, face: u32, shared: f64) -> f64 {
+        if shared == 0.0 {
+            return 0.0;
+        }
+        let (p, n, _) = self.members[k];
+        power(
+            self.n_e as f64 * lights.face_density(&Receiver { p, n }, face),
+            shared,
+        )
     }
 
     /// The guide's density q for a ray along `d` (not necessarily unit) from a member with
@@ -316,8 +360,8 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
         for (k, &(y, n, face)) in g.members.iter().enumerate() {
             for i in 0..g.n_e {
                 let a = g.qmc(g.first, k, i).set(0);
-                let ef = match lights.pick(a[0]) {
-                    Some(Pick::Face(ef)) => ef,
+                let (ef, density) = match lights.pick(&Receiver { p: y, n }, a[0]) {
+                    Some(Pick::Face(ef, density)) => (ef, density),
                     Some(pick) => {
                         let u = [a[1], a[2]];
                         let q = |d: DVec3| g.q(n, d);
@@ -337,7 +381,7 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
                     continue;
                 };
                 let f = &kernel.scene.faces[ef as usize];
-                let a = g.n_e as f64 * lights.face_density(ef);
+                let a = g.n_e as f64 * density;
                 if a <= 0.0 {
                     continue;
                 }
@@ -405,31 +449,18 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
                 if nx.dot(y - x) <= 0.0 {
                     continue;
                 }
-                // G·V for every member (the caster sees x: its ray hit it), and the mixture's
-                // density Σ G·V·q (q the guide's toward x from each member; the caster's is q)
-                let mut total = 0.0;
-                for (k, &(yk, nk, fk)) in g.members.iter().enumerate() {
-                    let geo = geometry_3d(yk, nk, x, nx);
-                    let seen = k == a
-                        || (geo > 0.0 && bvh.visible(&hit, &Domain::surface_point_3d(yk, nk, fk)));
-                    weight[k] = if seen { geo } else { 0.0 };
-                    total += match (seen, g.guide) {
-                        (false, _) => 0.0,
-                        (true, None) => weight[k],
-                        (true, Some(_)) if k == a => weight[k] * q,
-                        (true, Some(_)) => weight[k] * g.q(nk, x - yk),
-                    };
-                }
+                let total = g.mixture(bvh, &hit, (a, q), &mut weight);
                 if !(total > 0.0 && total.is_finite()) {
                     continue;
                 }
+                // an emitter's light at x for member k, weighted against k's own shadow rays
                 let e = scene.faces[hit.face as usize].emission.0;
-                let mis = if e.iter().any(|v| *v != 0.0) {
-                    let a = g.n_e as f64 * lights.face_density(hit.face);
-                    power(a, g.shared_density(x, nx))
+                let shared = if e.iter().any(|v| *v != 0.0) {
+                    g.shared_density(x, nx)
                 } else {
                     0.0
                 };
+                let mis = |k: usize| g.hit_weight(lights, k, hit.face, shared);
                 let vertex = Vertex {
                     p: x,
                     n: nx,
@@ -438,11 +469,12 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
                 let first = SobolRay::path_vertex(sb, sobol.set(2));
                 let guides = spatial.as_mut().map(|(g, r)| (*g, &mut **r));
                 let l = self.reflected(&vertex, Some(first), &mut rng, guides);
-                let t: Bands = std::array::from_fn(|b| l[b] + mis * e[b]);
-                if let Some(l) = learner.as_deref_mut() {
-                    l.add(u, q, luminance(&t));
+                let with_light = |m: f64| -> Bands { std::array::from_fn(|b| l[b] + m * e[b]) };
+                if let Some(learn) = learner.as_deref_mut() {
+                    learn.add(u, q, luminance(&with_light(mis(a))));
                 }
                 for (k, &w) in weight.iter().enumerate().filter(|(_, w)| **w > 0.0) {
+                    let t = if shared == 0.0 { l } else { with_light(mis(k)) };
                     add(out, rho, (k, i % g.replicates), t, w / (g.c as f64 * total));
                 }
             }

@@ -541,8 +541,12 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         (u0, u): (f64, [f64; 2]),
         q: impl Fn(DVec3) -> f64,
     ) -> Bands {
-        match self.emitters.lights().pick(u0) {
-            Some(Pick::Face(ef)) if ef == z.face => [0.0; BANDS],
+        match self
+            .emitters
+            .lights()
+            .pick(&Receiver { p: z.p, n: z.n }, u0)
+        {
+            Some(Pick::Face(ef, _)) if ef == z.face => [0.0; BANDS],
             Some(pick) => light_ray_scaled(self.domain, mis, pick, u, (z.p, z.n, z.face), q)
                 .unwrap_or_default(),
             None => [0.0; BANDS],

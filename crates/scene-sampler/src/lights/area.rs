@@ -80,6 +80,21 @@ impl EmitterTable {
         Some(self.faces[d.sample(u)])
     }
 
+    /// The number of emitting faces.
+    pub fn len(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// The position of `face` among the emitting faces (ascending), if it emits.
+    pub fn position(&self, face: u32) -> Option<usize> {
+        self.faces.binary_search(&face).ok()
+    }
+
+    /// The `i`-th emitting face (ascending) and its measure.
+    pub fn get(&self, i: usize) -> (u32, f64) {
+        (self.faces[i], self.measure[i])
+    }
+
     /// An emitter face drawn by area from `u ∈ [0,1)`; `None` when nothing emits.
     pub fn pick_by_area(&self, u: f64) -> Option<u32> {
         let d = self.by_area.as_ref()?;

@@ -19,6 +19,10 @@
 //! | point and spot lights (glTF `KHR_lights_punctual`) | `point.rs` ([`PointLight`]) | a point (delta) |
 //! | environment map: an equirectangular `.hdr`/`.exr` | `envmap.rs` ([`EnvMap`]) | solid angle |
 //!
+//! Light selection ([`LightSet`], `selection.rs`) draws the lights at infinity by power and the
+//! lights with a position — emitting faces, point and spot lights — from a light tree
+//! (`tree.rs`, [`LightTree`]) by a bound of what each can send to the receiver.
+//!
 //! A scene holds its lights other than faces in [`crate::Scene::lights`] as `Arc<dyn Light>`; a new
 //! light type is its own file implementing [`Light`] and one line that creates it (the lighting
 //! options, a loader). [`LightSet`] (`selection.rs`) draws among the faces and the other lights.
@@ -43,6 +47,7 @@ mod portal;
 mod selection;
 mod sky;
 mod sun;
+mod tree;
 
 pub use area::{EmitterTable, geometry};
 pub use envmap::EnvMap;
@@ -52,6 +57,7 @@ pub use portal::{Portal, Portals};
 pub use selection::{LightSet, Pick};
 pub use sky::{Sky, SkyModel};
 pub use sun::Sun;
+pub use tree::{LightBounds, LightTree};
 
 use crate::Bands;
 use glam::DVec3;
@@ -123,6 +129,12 @@ pub trait Light: Debug + Send + Sync + RefUnwindSafe {
 
     /// Whether the light is a delta (a point, or a direction): no cosine ray ever reaches it.
     fn is_delta(&self) -> bool;
+
+    /// Where the light is and where it shines, for the light tree ([`LightTree`]): `None` for a
+    /// light at infinity (the sun, a sky, an environment map), which is drawn by power alone.
+    fn bounds(&self) -> Option<LightBounds> {
+        None
+    }
 
     /// The light's power for light selection, as flux (exitance × area): an infinite light's
     /// flux through a disc of the scene's bounding radius `radius`.

@@ -4,7 +4,7 @@
 //! spot's axis, t = clamp((cd − cos θ_outer)/(cos θ_inner − cos θ_outer), 0, 1), the factor is t²
 //! (the glTF extension's reference implementation). A delta light: only shadow rays reach it.
 
-use super::{Light, LightSample, Receiver, ShadowTarget, toward};
+use super::{Light, LightBounds, LightSample, Receiver, ShadowTarget, toward};
 use crate::{BANDS, Bands};
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -115,6 +115,14 @@ impl Light for PointLight {
 
     fn is_delta(&self) -> bool {
         true
+    }
+
+    fn bounds(&self) -> Option<LightBounds> {
+        let power = self.power(0.0);
+        Some(match self.spot {
+            None => LightBounds::point(self.position, power),
+            Some(s) => LightBounds::spot(self.position, power, s.axis, s.cos_inner, s.cos_outer),
+        })
     }
 
     fn power(&self, _radius: f64) -> f64 {

@@ -12,7 +12,8 @@ Open PGL's path guiding on (surface guiding, Cycles' default training). The worl
 says otherwise.
 
 Lights (`add_lights`), as the Mitsuba dicts the benches write for `mitsuba_irradiance.py`:
-`{"type": "point", "position": [x, y, z], "intensity": I}` (W/sr; a Blender point light of radius 0 and power
+`{"type": "point", "position": [x, y, z], "intensity": I}` (W/sr, a number or Mitsuba's
+{"type": "rgb", "value": [r, g, b]}; a Blender point light of radius 0 and power
 4 pi I), `{"type": "directional", "direction": [x, y, z], "irradiance": E}` (a Blender sun of strength E and
 angle 0: a delta, as Mitsuba's), `{"type": "constant", "radiance": L}` (the world at L) and
 `{"type": "cie-overcast", "zenith": L_z}` (the CIE overcast sky about +Y, black below the horizon) and
@@ -170,7 +171,9 @@ def add_lights(emitters):
             light = bpy.data.lights.new(f"point{i}", "POINT")
             light.shadow_soft_size = 0.0
             light.use_soft_falloff = False
-            light.energy = 4 * math.pi * scalar(e["intensity"])
+            rgb = colour(e["intensity"])
+            light.energy = 4 * math.pi * max(rgb)
+            light.color = [c / max(rgb) for c in rgb] if max(rgb) > 0 else [1.0, 1.0, 1.0]
             place(light, e["position"])
         elif kind == "directional":
             light = bpy.data.lights.new(f"sun{i}", "SUN")
@@ -218,6 +221,14 @@ def scalar(v):
         value = v["value"]
         return float(np.mean(value)) if isinstance(value, list) else float(value)
     return float(v)
+
+
+def colour(v):
+    """A Mitsuba spectrum given as a number or {"type": "rgb", "value": [r, g, b]}: its RGB."""
+    if isinstance(v, dict):
+        value = v["value"]
+        return [float(x) for x in value] if isinstance(value, list) else [float(value)] * 3
+    return [float(v)] * 3
 
 
 def place(light, position):

@@ -248,8 +248,11 @@ def grille_lamp():
                                                 len(uvs) * 4, "VEC2", 5126)
         return p
 
-    # a bar period: two texels open (alpha 0), two solid light grey
-    mask = png(4, 1, [bytes([0, 0, 0, 0] * 2 + [230, 230, 230, 255] * 2)])
+    # a bar period: 32 texels open (alpha 0), 32 solid, all of one light grey: the bilinear alpha
+    # crosses the 0.5 cut-off exactly at the half period (at every mip level down to 2 texels) and
+    # the colour is the same everywhere, so the grille is exactly 12 bars z in [0.5 k + 0.25,
+    # 0.5 k + 0.5] of one reflectance (the daylit bench gives the peers these bars as geometry)
+    mask = png(64, 1, [bytes([230, 230, 230, 0] * 32 + [230, 230, 230, 255] * 32)])
     gltf = {
         "asset": {"version": "2.0", "generator": "xtask/py/make_light_scenes.py"},
         "extensionsUsed": ["KHR_lights_punctual"],

@@ -8,7 +8,9 @@
 //!   window, given as a delta direction (0° across) because Mitsuba's `directional` is one; the
 //!   atrium (`scenes/atrium.obj`, open to the sky through its roof) under the CIE overcast sky of
 //!   10 000 lux with its roof opening as the portal (`scenes/atrium.lights.json`). Black ground
-//!   everywhere (Mitsuba's overcast map is black below the horizon).
+//!   everywhere (Mitsuba's overcast map is black below the horizon). The grille room
+//!   (`scenes/grille-lamp.gltf`, an alpha-masked grille and a glTF point lamp; [`grille_room`]),
+//!   whose grille the peers get as solid bars.
 //! * **Points**: N points spread area-uniformly over every face (`SurfaceSampler::spread`, an R2
 //!   set), lifted 2·10⁻³ of the diagonal along the face's normal, irradiance E over the
 //!   hemisphere of that normal (a receiver: Mitsuba's and Cycles' tiny white probes need the air).
@@ -40,11 +42,13 @@ use std::hash::{Hash, Hasher};
 use std::path::Path;
 use std::time::Instant;
 
-/// A case: its name, the scene with its lights, and the lights as Mitsuba 3 emitters.
+/// A case: its name, the scene with its lights, and the lights as Mitsuba 3 emitters; `peers`:
+/// the geometry the peers get when it is not the scene's own (cut-outs made solid geometry).
 struct Case {
     name: &'static str,
     scene: Scene,
     emitters: serde_json::Value,
+    peers: Option<Scene>,
 }
 
 /// The targets of gcr's runs and of the table.
@@ -76,6 +80,7 @@ fn cases() -> Result<Vec<Case>> {
                     "portals": [[[1.2, 0.9, 5.0], [2.8, 0.9, 5.0], [2.8, 2.1, 5.0], [1.2, 2.1, 5.0]]]}),
             )?,
             emitters: serde_json::json!([{"type": "cie-overcast", "zenith": zenith}]),
+            peers: None,
         },
         Case {
             name: "sun patch room, sun 80 000 lux at 30°",
@@ -86,6 +91,7 @@ fn cases() -> Result<Vec<Case>> {
             )?,
             emitters: serde_json::json!([{"type": "directional",
                 "direction": (-sun).to_array(), "irradiance": 80_000.0}]),
+            peers: None,
         },
         Case {
             name: "atrium, CIE overcast 10 000 lux",
@@ -95,8 +101,106 @@ fn cases() -> Result<Vec<Case>> {
                     "portals": [[[3.0, 8.0, 3.0], [7.0, 8.0, 3.0], [7.0, 8.0, 7.0], [3.0, 8.0, 7.0]]]}),
             )?,
             emitters: serde_json::json!([{"type": "cie-overcast", "zenith": zenith}]),
+            peers: None,
         },
+        grille_room()?,
     ])
+}
+
+/// The grille room (`scenes/grille-lamp.gltf`): a 6 × 3 × 6 m room split by a double-sided
+/// grille cut out by an alpha mask (glTF `MASK`), lit by its `KHR_lights_punctual` point lamp
+/// (300 cd, colour (1, 0.9, 0.8)). Its spot is left out: Mitsuba's and Cycles' spot falloffs are
+/// not glTF's (the spot is checked against exact values in `crates/gcr/tests/lights.rs`). The
+/// peers get the grille as what its mask cuts: 12 bars z ∈ [0.5k + 0.25, 0.5k + 0.5], 1 mm thick,
+/// of the grille's reflectance (the mask is made so that this is exact:
+/// `xtask/py/make_light_scenes.py`).
+fn grille_room() -> Result<Case> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    let mut scene = scene_sampler::load(root.join("grille-lamp.gltf"))?.into_3d()?;
+    scene
+        .lights
+        .retain(|l| l.describe().starts_with("point light"));
+    anyhow::ensure!(
+        scene.lights.len() == 1,
+        "grille-lamp.gltf: one point lamp expected"
+    );
+    let grille = (scene.faces.iter().enumerate())
+        .find(|(_, f)| f.cutout.is_some())
+        .map(|(i, f)| (i as u32, f.object))
+        .ok_or_else(|| anyhow::anyhow!("grille-lamp.gltf has no cut-out face"))?;
+    // the bars' reflectance: the grille's at a solid point (z = 0.375, the middle of the first bar)
+    let rho = scene.rho_at(grille.0, DVec3::new(3.0, 1.5, 0.375));
+    let mut faces: Vec<scene_sampler::Face> = scene
+        .faces
+        .iter()
+        .filter(|f| f.cutout.is_none())
+        .cloned()
+        .collect();
+    let t = 0.0005;
+    let quad = |faces: &mut Vec<scene_sampler::Face>, c: [DVec3; 4]| {
+        for tri in [[c[0], c[1], c[2]], [c[0], c[2], c[3]]] {
+            faces.push(scene_sampler::Face::new(
+                tri,
+                rho,
+                scene_sampler::Spectrum::ZERO,
+                grille.1,
+                grille.1,
+            ));
+        }
+    };
+    let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    for k in 0..12 {
+        let (z0, z1) = (0.5 * k as f64 + 0.25, 0.5 * k as f64 + 0.5);
+        // ±x sides (counter-clockwise seen from outside), then the bar's edges facing ±z
+        quad(
+            &mut faces,
+            [
+                p(3.0 + t, 0.0, z0),
+                p(3.0 + t, 3.0, z0),
+                p(3.0 + t, 3.0, z1),
+                p(3.0 + t, 0.0, z1),
+            ],
+        );
+        quad(
+            &mut faces,
+            [
+                p(3.0 - t, 0.0, z0),
+                p(3.0 - t, 0.0, z1),
+                p(3.0 - t, 3.0, z1),
+                p(3.0 - t, 3.0, z0),
+            ],
+        );
+        quad(
+            &mut faces,
+            [
+                p(3.0 - t, 0.0, z0),
+                p(3.0 - t, 3.0, z0),
+                p(3.0 + t, 3.0, z0),
+                p(3.0 + t, 0.0, z0),
+            ],
+        );
+        if z1 < 6.0 {
+            quad(
+                &mut faces,
+                [
+                    p(3.0 - t, 0.0, z1),
+                    p(3.0 + t, 0.0, z1),
+                    p(3.0 + t, 3.0, z1),
+                    p(3.0 - t, 3.0, z1),
+                ],
+            );
+        }
+    }
+    let objects = scene.objects.clone();
+    let mut bars = Scene::new("grille-lamp-bars", "daylit bench", faces, objects, None)?;
+    bars.lights = scene.lights.clone();
+    Ok(Case {
+        name: "grille room, point lamp 300 cd (glTF)",
+        scene,
+        emitters: serde_json::json!([{"type": "point", "position": [1.5, 2.4, 3.0],
+            "intensity": {"type": "rgb", "value": [300.0, 270.0, 240.0]}}]),
+        peers: Some(bars),
+    })
 }
 
 /// Whether the comma list in `var` (everything when unset) has a word contained in `name`.
@@ -265,7 +369,8 @@ pub fn run(ctx: &Ctx) -> Result<()> {
             if !wanted("DAYLIT_SOLVERS", peer.solver()) {
                 continue;
             }
-            match peer_lit(peer, &case.scene, &pts, spp, "multijitter", Some(&emitters))? {
+            let geometry = case.peers.as_ref().unwrap_or(&case.scene);
+            match peer_lit(peer, geometry, &pts, spp, "multijitter", Some(&emitters))? {
                 Ok(runs) => {
                     let mut c = Curve::new(peer.label());
                     for (spp, seconds, est) in runs {

@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
 """Cycles' bake of a gcr lightmap's own texels, compared with gcr's pages (issue 33).
 
-Usage: cycles_lightmap.py [--guiding] [--reference REF.glb REF_METRICS] GLB METRICS SPP [SPP ...]
+Usage: cycles_lightmap.py [--guiding] [--emitters JSON] [--reference REF.glb REF_METRICS] GLB METRICS SPP [SPP ...]
 
 GLB:     a lightmap written by `gcr solve SCENE --lightmap GLB --metrics METRICS` (the default quantity,
          irradiance E); its linear pages `<stem>-lightmap-<k>.exr` beside it.
 METRICS: that run's metrics (its `relative_std_error`: gcr's own estimate of its error).
+--emitters JSON: the scene's lights other than its emitting faces (a sun, a sky, point lights), as the list of
+         Mitsuba dicts `cycles_scene.py`'s `add_lights` reads (the .glb holds only the faces).
 
 The scene is rebuilt from the .glb itself (`POSITION`, `TEXCOORD_1`; each primitive's material: albedo
 `baseColorFactor`, emitted radiance `emissiveFactor` × `KHR_materials_emissive_strength`) as `cycles_scene.py`
@@ -47,7 +49,7 @@ except ImportError as e:
     sys.exit(3)
 import numpy as np
 
-from cycles_scene import material, mesh_object, setup  # noqa: E402
+from cycles_scene import add_lights, material, mesh_object, setup  # noqa: E402
 
 COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}
 
@@ -152,6 +154,12 @@ def main():
     args = sys.argv[1:]
     guiding = "--guiding" in args
     args = [a for a in args if a != "--guiding"]
+    emitters = []
+    if "--emitters" in args:
+        i = args.index("--emitters")
+        with open(args[i + 1]) as f:
+            emitters = json.load(f)
+        del args[i: i + 2]
     reference = None
     if "--reference" in args:
         i = args.index("--reference")
@@ -167,6 +175,7 @@ def main():
     w, h, n_pages = record["width"], record["height"], record["pages"]
     ours = read_pages(glb, w, h, n_pages)
     setup(guiding)
+    add_lights(emitters)
     # the scene as one mesh with the lightmap coordinates, each page's image on its faces
     keys, index = np.unique(np.round(np.hstack([tri[:, 9:15], pages[:, None]]), 12), axis=0,
                             return_inverse=True)

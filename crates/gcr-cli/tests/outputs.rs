@@ -210,6 +210,46 @@ fn a_successful_solve_writes_exactly_its_outputs() {
     assert!(json.contains("\"stopped_by\": \"unused\""), "{json}");
 }
 
+/// A lightmap's .glb keeps the materials of an OBJ object with several `usemtl` (the sun patch
+/// room is one object: floor 0.4, walls 0.7, ceiling 0.8); one primitive per part and page with
+/// the mean albedo made Cycles' bake of the written file 1.7× too bright off the sun patch.
+#[test]
+fn a_lightmap_keeps_each_material_of_an_object() {
+    let d = dir("out", "lightmap-materials");
+    let glb = d.join("room.glb");
+    let o = gcr(&[
+        "solve",
+        "scenes/sun-patch-room.obj",
+        "--sun",
+        "180,30,80000",
+        "--quality",
+        "draft",
+        "--quiet",
+        "--lightmap",
+        &s(&glb),
+        "--lightmap-size",
+        "64",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let bytes = std::fs::read(&glb).unwrap();
+    let length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let root: serde_json::Value = serde_json::from_slice(&bytes[20..20 + length]).unwrap();
+    let mut albedos: Vec<f64> = (root["materials"].as_array().unwrap().iter())
+        .map(|m| {
+            m["pbrMetallicRoughness"]["baseColorFactor"][0]
+                .as_f64()
+                .unwrap()
+        })
+        .collect();
+    albedos.sort_by(f64::total_cmp);
+    albedos.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    let want = [0.4, 0.7, 0.8];
+    assert_eq!(albedos.len(), 3, "{albedos:?}");
+    for (a, w) in albedos.iter().zip(want) {
+        assert!((a - w).abs() < 1e-6, "{albedos:?}");
+    }
+}
+
 /// `--lightmap out.glb`: the .glb (TEXCOORD_1 on every primitive, the page as a PNG through
 /// MOZ_lightmap) and its linear EXR page beside it, the lightmap in the metrics; bad lightmap
 /// settings and a Flatland scene are refused before the solve, writing nothing.

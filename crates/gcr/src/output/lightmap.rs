@@ -5,10 +5,10 @@
 //! * **`<name>-lightmap-<k>.exr`** beside the .glb: page k, RGB f32, the linear values (irradiance
 //!   E or radiosity B, [`LightmapQuantity`]), row 0 at v = 0 (the image's top row).
 //! * **The .glb**: one node per scene object (world coordinates, identity transform), one
-//!   primitive per (part, page) with `POSITION`, `NORMAL` (the face's), `TEXCOORD_1` (the
+//!   primitive per (part, page, material) with `POSITION`, `NORMAL` (the face's), `TEXCOORD_1` (the
 //!   lightmap coordinates; glTF's v = 0 is the image's top row, as the atlas has it; the same
 //!   accessor serves as `TEXCOORD_0`, which glTF requires before a `TEXCOORD_1`); materials
-//!   carry the part's mean albedo as `baseColorFactor` (Lambertian: `KHR_materials_specular`
+//!   carry the faces' albedo (a textured part's mean) as `baseColorFactor` (Lambertian: `KHR_materials_specular`
 //!   with `specularFactor` 0), its emitted radiance as `emissiveFactor`
 //!   × `KHR_materials_emissive_strength` (in the lightmap's linear units), and the page as an
 //!   8-bit PNG through the
@@ -239,6 +239,9 @@ fn extensions_used(scene: &Scene) -> Vec<&'static str> {
     used
 }
 
+/// A primitive's faces: (part, page, the exact albedo and emission bits of untextured faces).
+type GroupKey = (u32, u32, Option<([u64; 3], [u64; 3])>);
+
 /// The lightmapped scene as a .glb (module docs); `scale` is the PNG pages' ([`png_scale`]).
 pub fn to_lightmap_glb(lightmap: &Lightmap, scene: &Scene, scale: f64) -> std::io::Result<Vec<u8>> {
     let mut bin = Bin::default();
@@ -254,15 +257,23 @@ pub fn to_lightmap_glb(lightmap: &Lightmap, scene: &Scene, scale: f64) -> std::i
     let textures: Vec<Value> = (0..images.len())
         .map(|k| json!({"source": k, "sampler": 0}))
         .collect();
-    // ⟨Faces by object, then (part, page)⟩
-    let mut groups: BTreeMap<u32, BTreeMap<(u32, u32), Vec<usize>>> = BTreeMap::new();
+    // ⟨Faces by object, then (part, page, material): faces of one albedo and emission share a
+    // primitive (an OBJ object with several `usemtl` is several); textured faces, whose ρ is their
+    // own texture's mean, share one per part and page with the mean⟩
+    let mut groups: BTreeMap<u32, BTreeMap<GroupKey, Vec<usize>>> = BTreeMap::new();
     for (f, uv) in lightmap.atlas.faces.iter().enumerate() {
         if let Some(uv) = uv {
             let face = &scene.faces[f];
+            let material = (face.texture.is_none()).then(|| {
+                (
+                    face.rho.0.map(f64::to_bits),
+                    face.emission.0.map(f64::to_bits),
+                )
+            });
             groups
                 .entry(face.object)
                 .or_default()
-                .entry((face.part, uv.page))
+                .entry((face.part, uv.page, material))
                 .or_default()
                 .push(f);
         }
@@ -270,7 +281,7 @@ pub fn to_lightmap_glb(lightmap: &Lightmap, scene: &Scene, scale: f64) -> std::i
     let (mut nodes, mut meshes, mut materials) = (Vec::new(), Vec::new(), Vec::new());
     for (object, parts) in &groups {
         let mut primitives = Vec::new();
-        for (&(_, page), faces) in parts {
+        for (&(_, page, _), faces) in parts {
             let (mut pos, mut nrm, mut uv1) = (Vec::new(), Vec::new(), Vec::new());
             let (mut rho, mut emission) = ([0.0f64; 3], [0.0f64; 3]);
             for &f in faces {

@@ -210,6 +210,13 @@ fn a_successful_solve_writes_exactly_its_outputs() {
     assert!(json.contains("\"stopped_by\": \"unused\""), "{json}");
 }
 
+/// The JSON chunk of a .glb.
+fn glb_json(path: &std::path::Path) -> serde_json::Value {
+    let bytes = std::fs::read(path).unwrap();
+    let length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    serde_json::from_slice(&bytes[20..20 + length]).unwrap()
+}
+
 /// A lightmap's .glb keeps the materials of an OBJ object with several `usemtl` (the sun patch
 /// room is one object: floor 0.4, walls 0.7, ceiling 0.8); one primitive per part and page with
 /// the mean albedo made Cycles' bake of the written file 1.7× too bright off the sun patch.
@@ -231,9 +238,7 @@ fn a_lightmap_keeps_each_material_of_an_object() {
         "64",
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let bytes = std::fs::read(&glb).unwrap();
-    let length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
-    let root: serde_json::Value = serde_json::from_slice(&bytes[20..20 + length]).unwrap();
+    let root = glb_json(&glb);
     let mut albedos: Vec<f64> = (root["materials"].as_array().unwrap().iter())
         .map(|m| {
             m["pbrMetallicRoughness"]["baseColorFactor"][0]
@@ -292,9 +297,7 @@ fn a_lightmap_bake_writes_the_glb_and_its_pages() {
     // The PNG page × MOZ_lightmap.intensity, sRGB-decoded, is the EXR page within one 8-bit step,
     // the brightest texel included (nothing clips), and the material is Lambertian as solved.
     let exr = exr.to_rgb32f();
-    let bytes = std::fs::read(&glb).unwrap();
-    let length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
-    let root: serde_json::Value = serde_json::from_slice(&bytes[20..20 + length]).unwrap();
+    let root = glb_json(&glb);
     let json = &root["materials"][0]["extensions"];
     let intensity = json["MOZ_lightmap"]["intensity"].as_f64().unwrap();
     assert_eq!(json["KHR_materials_specular"]["specularFactor"], 0.0);

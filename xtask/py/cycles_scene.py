@@ -217,10 +217,7 @@ def equirect_lookup(filename, scale):
 
 def scalar(v):
     """A Mitsuba spectrum given as a number or {"type": "rgb", "value": [r, g, b]}: its grey value."""
-    if isinstance(v, dict):
-        value = v["value"]
-        return float(np.mean(value)) if isinstance(value, list) else float(value)
-    return float(v)
+    return float(np.mean(colour(v)))
 
 
 def colour(v):

@@ -78,10 +78,13 @@ impl LightSet {
     ) -> Self {
         debug_assert_eq!(face_bounds.len(), faces.len());
         let mut leaves = face_bounds;
-        let mut others = Vec::new();
+        let (mut others, mut bounded_power) = (Vec::new(), 0.0);
         for (j, l) in lights.iter().enumerate() {
             match l.bounds() {
-                Some(b) => leaves.push(b),
+                Some(b) => {
+                    leaves.push(b);
+                    bounded_power += finite_power(&**l, radius);
+                }
                 None => {
                     // a light at infinity: never a leaf (zero power keeps the indices aligned)
                     leaves.push(LightBounds::point(DVec3::ZERO, 0.0));
@@ -90,18 +93,12 @@ impl LightSet {
             }
         }
         let tree = LightTree::new(&leaves);
-        if tree.as_ref().is_some_and(LightTree::is_leaf)
-            && lights.iter().all(|l| l.bounds().is_none())
-        {
+        if tree.as_ref().is_some_and(LightTree::is_leaf) && others.len() == lights.len() {
             // one leaf of faces (a rectangular lamp): the tree would draw them by power
             return Self::new(faces, lights, radius);
         }
         let group = if tree.is_some() {
-            faces.power()
-                + (lights.iter())
-                    .filter(|l| l.bounds().is_some())
-                    .map(|l| finite_power(&**l, radius))
-                    .sum::<f64>()
+            faces.power() + bounded_power
         } else {
             0.0
         };
@@ -151,10 +148,7 @@ impl LightSet {
     /// does not emit.
     pub fn face_density(&self, at: &Receiver, face: u32) -> f64 {
         let Some(tree) = &self.tree else {
-            if self.select.is_none() {
-                // faces only: the table's density itself (bit for bit)
-                return self.faces.power_density(face);
-            }
+            // by power (faces only: the share is 1, the table's density itself)
             return self.group_share * self.faces.power_density(face);
         };
         let Some(i) = self.faces.position(face) else {
@@ -167,12 +161,12 @@ impl LightSet {
     /// within the group); `None` when nothing gives light, or nothing the draw leads to can light
     /// the receiver.
     pub fn pick(&self, at: &Receiver, u: f64) -> Option<Pick<'_>> {
-        let by_power = |u: f64, share: f64| {
+        let by_power = |u: f64| {
             let f = self.faces.pick_by_power(u)?;
-            Some(Pick::Face(f, share * self.faces.power_density(f)))
+            Some(Pick::Face(f, self.face_density(at, f)))
         };
         let Some(select) = &self.select else {
-            return by_power(u, 1.0);
+            return by_power(u);
         };
         let (i, v) = select.sample_remapped(u);
         if i > 0 {
@@ -180,7 +174,7 @@ impl LightSet {
             return Some(Pick::Light(l, select.probability(i)));
         }
         let Some(tree) = &self.tree else {
-            return by_power(v, self.group_share);
+            return by_power(v);
         };
         let (leaf, p) = tree.sample(at, v)?;
         let n = self.faces.len();

@@ -12,7 +12,8 @@ if __name__ == "__main__":
     t1 = []
     for _ in range(5):
         t = time.perf_counter(); single(); t1.append(time.perf_counter() - t)
-    os.environ["RAYON_NUM_THREADS"] = "1"
+    if os.environ.get("WORKER_THREADS"):  # rayon's threads in each worker; default every core
+        os.environ["RAYON_NUM_THREADS"] = os.environ["WORKER_THREADS"]
     from dask.distributed import Client, LocalCluster
     t = time.perf_counter()
     cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)

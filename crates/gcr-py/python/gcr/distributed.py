@@ -20,7 +20,9 @@ of the paths gather). A lightmap the same way: ``bake_lightmap(client, "level.gl
 ``Solution.write(lightmap=..., ...)`` writes, byte for byte (each worker bakes its shard's texels
 with ``Solution.write(shard=...)``; the client merges them with ``from_shards``). Any Dask cluster works (``dask-jobqueue`` on Slurm or PBS,
 ``dask-kubernetes``); the scene's files must be readable at the same path on every worker.
-Dask is imported only when this module is used (``pip install "dask[distributed]"``).
+Dask is imported only when this module is used (``pip install "dask[distributed]"``). Give each
+worker one Dask thread and leave the gather's threads at their default (every core): the last
+shard then runs on the cores the others left (docs/design/sharding.md).
 """
 
 from __future__ import annotations

@@ -93,6 +93,24 @@ impl Blocks {
         out
     }
 
+    /// The points (indices, ascending) of the shard's blocks ([`Self::points`]) among `count`,
+    /// checked: an error when `settings` ask for a shard that has no block.
+    pub(crate) fn estimated(
+        &self,
+        count: usize,
+        settings: &PathSettings,
+    ) -> Result<Vec<usize>, ShardError> {
+        if let (Some(shard), true) = (settings.shard, self.mine.is_empty()) {
+            return Err(ShardError::Empty {
+                shard,
+                blocks: self.blocks.len(),
+                points: count,
+                block_points: settings.block_points,
+            });
+        }
+        Ok(self.points())
+    }
+
     /// Whether each of `count` points is in the shard's blocks.
     pub(crate) fn mask(&self, count: usize) -> Vec<bool> {
         let mut mine = vec![false; count];
@@ -122,16 +140,7 @@ pub fn shard_points(
         }
         false => points,
     };
-    let blocks = Blocks::new(domain, points, &config.paths);
-    if let (Some(shard), true) = (config.paths.shard, blocks.mine.is_empty()) {
-        return Err(ShardError::Empty {
-            shard,
-            blocks: blocks.blocks.len(),
-            points: points.len(),
-            block_points: config.paths.block_points,
-        });
-    }
-    Ok(blocks.points())
+    Blocks::new(domain, points, &config.paths).estimated(points.len(), &config.paths)
 }
 
 /// A shard that cannot be formed.

@@ -27,5 +27,8 @@ mod pointwise;
 pub(crate) mod rounds;
 
 pub use blocks::{ShardError, shard_points};
-pub use points::{GatherError, irradiance_at_points, point_seed, radiosity_at_points};
+pub use points::{
+    GatherError, irradiance_at_points, irradiance_at_shard, point_seed, radiosity_at_points,
+    radiosity_at_shard,
+};
 pub use rounds::{GatherStats, relative_std_error};

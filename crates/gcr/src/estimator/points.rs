@@ -29,6 +29,9 @@ pub enum GatherError {
          surface points only"
     )]
     IrradianceNeedsPaths(&'static str),
+    /// The configured shard has no block ([`super::shard_points`]).
+    #[error(transparent)]
+    Shard(#[from] super::ShardError),
 }
 
 /// Radiosity at many surface points `(point, normal, face)` in parallel by the configured gather.
@@ -42,6 +45,20 @@ pub fn radiosity_at_points(
     config: &SolveConfig,
     points: &[(DVec3, DVec3, u32)],
 ) -> Result<Vec<Gathered>, GatherError> {
+    radiosity_at_shard(domain, trained, emitters, config, points).map(|(gathered, _)| gathered)
+}
+
+/// [`radiosity_at_points`] and the indices (ascending) of the points estimated: those of the
+/// shard `config` asks for ([`super::shard_points`], the others left at `Gathered::default()`;
+/// an error when it has no block), else every one. The groups and blocks are formed once for
+/// both.
+pub fn radiosity_at_shard(
+    domain: &Domain,
+    trained: &Trained,
+    emitters: &Emitters,
+    config: &SolveConfig,
+    points: &[(DVec3, DVec3, u32)],
+) -> Result<(Vec<Gathered>, Vec<usize>), GatherError> {
     check_base(trained, config)?;
     let frame = domain.frame();
     let paths = path_gather(domain, trained, emitters, config);
@@ -55,7 +72,8 @@ pub fn radiosity_at_points(
         .filter(|_| config.gather == GatherMode::Paths);
     let blocks = (target.is_some() || config.paths.shard.is_some())
         .then(|| Blocks::new(domain, points, &config.paths));
-    Ok(match (target, blocks) {
+    let estimated = estimated(blocks.as_ref(), points.len(), config)?;
+    let gathered = match (target, blocks) {
         // ⟨The paths gather to a target: in rounds, block by block⟩
         (Some(target), Some(blocks)) => {
             paths_to_target(domain, &paths, (points, &seeds), &blocks, target, config)
@@ -66,7 +84,21 @@ pub fn radiosity_at_points(
             let solution = (domain, trained, emitters, &paths);
             super::pointwise::radiosity_each(solution, config, (points, &seeds), mine.as_deref())
         }
-    })
+    };
+    Ok((gathered, estimated))
+}
+
+/// The points (indices, ascending) a gather of `count` points estimates: the configured shard's
+/// ([`Blocks::estimated`]; an error when it has no block), else every one.
+fn estimated(
+    blocks: Option<&Blocks>,
+    count: usize,
+    config: &SolveConfig,
+) -> Result<Vec<usize>, GatherError> {
+    match (config.paths.shard, blocks) {
+        (Some(_), Some(blocks)) => Ok(blocks.estimated(count, &config.paths)?),
+        _ => Ok((0..count).collect()),
+    }
 }
 
 /// Irradiance E(y, n) = ∫ L cos θ dω at any points `(point, unit normal)` — on a surface or in the
@@ -82,6 +114,18 @@ pub fn irradiance_at_points(
     config: &SolveConfig,
     points: &[(DVec3, DVec3)],
 ) -> Result<Vec<Gathered>, GatherError> {
+    irradiance_at_shard(domain, trained, emitters, config, points).map(|(gathered, _)| gathered)
+}
+
+/// [`irradiance_at_points`] and the indices (ascending) of the points estimated, as
+/// [`radiosity_at_shard`].
+pub fn irradiance_at_shard(
+    domain: &Domain,
+    trained: &Trained,
+    emitters: &Emitters,
+    config: &SolveConfig,
+    points: &[(DVec3, DVec3)],
+) -> Result<(Vec<Gathered>, Vec<usize>), GatherError> {
     if config.gather != GatherMode::Paths {
         return Err(GatherError::IrradianceNeedsPaths(config.gather.name()));
     }
@@ -98,7 +142,8 @@ pub fn irradiance_at_points(
     let target = config.paths.target_error;
     let blocks = (target.is_some() || config.paths.shard.is_some())
         .then(|| Blocks::new(domain, &receivers, &config.paths));
-    Ok(match (target, blocks) {
+    let estimated = estimated(blocks.as_ref(), points.len(), config)?;
+    let gathered = match (target, blocks) {
         (Some(target), Some(blocks)) => {
             let white = |_| ([1.0; BANDS], [0.0; BANDS]);
             let at = (&receivers[..], &seeds[..]);
@@ -108,7 +153,8 @@ pub fn irradiance_at_points(
             let mine = blocks.map(|b| b.mask(points.len()));
             super::pointwise::irradiance_each(&paths, config, (points, &seeds), mine.as_deref())
         }
-    })
+    };
+    Ok((gathered, estimated))
 }
 
 /// The paths gather of a solution, its networks' reflected radiosity as C.

@@ -28,7 +28,7 @@ pub use texels::Texel;
 use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::emitters::Emitters;
-use crate::estimator::{GatherStats, irradiance_at_points, radiosity_at_points};
+use crate::estimator::{GatherStats, irradiance_at_shard, radiosity_at_shard};
 use crate::gather::Gathered;
 use crate::solve::Trained;
 
@@ -125,7 +125,7 @@ pub fn bake_lightmap(
     settings: &LightmapSettings,
 ) -> Result<Lightmap, LightmapError> {
     let texels = lay_out_texels(domain, settings)?;
-    let gathered = gather_texels(domain, trained, config, settings, &texels)?;
+    let (gathered, _) = gather_texels(domain, trained, config, settings, &texels)?;
     Ok(assemble_lightmap(texels, &gathered, settings))
 }
 
@@ -177,25 +177,24 @@ pub fn lay_out_texels(
     })
 }
 
-/// Step 3: the estimate at every texel (with a shard in `config`, at the shard's texels only,
-/// the others left at `Gathered::default()`: [`crate::shard_points`]).
+/// Step 3: the estimate at every texel, and the indices (ascending) of the texels estimated:
+/// with a shard in `config`, the shard's texels only, the others left at `Gathered::default()`
+/// ([`crate::shard_points`]); else every one.
 pub fn gather_texels(
     domain: &Domain,
     trained: &Trained,
     config: &SolveConfig,
     settings: &LightmapSettings,
     texels: &LightmapTexels,
-) -> Result<Vec<Gathered>, LightmapError> {
+) -> Result<(Vec<Gathered>, Vec<usize>), LightmapError> {
     let emitters = Emitters::new(domain);
     let at = texels.points();
     Ok(match settings.quantity {
         LightmapQuantity::Irradiance => {
             let at: Vec<_> = at.iter().map(|&(p, n, _)| (p, n)).collect();
-            irradiance_at_points(domain, trained, &emitters, config, &at)?
+            irradiance_at_shard(domain, trained, &emitters, config, &at)?
         }
-        LightmapQuantity::Radiosity => {
-            radiosity_at_points(domain, trained, &emitters, config, &at)?
-        }
+        LightmapQuantity::Radiosity => radiosity_at_shard(domain, trained, &emitters, config, &at)?,
     })
 }
 

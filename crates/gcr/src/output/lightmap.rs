@@ -58,16 +58,16 @@ pub(super) fn write_lightmap(
     let points = texels.points();
     let print = || super::shards::fingerprint(domain, &points, config, &format!("{settings:?}"));
     // ⟨The texels' values: gathered (all of them, or a shard's), or the shards' merged⟩
-    let gathered = if plan.lightmap_parts.is_empty() {
+    let (gathered, mine) = if plan.lightmap_parts.is_empty() {
         let _phase = crate::progress::phase("lightmap");
         crate::lightmap::gather_texels(domain, trained, config, settings, &texels)?
     } else {
-        merged_texels(&plan.lightmap_parts, &format!("{:016x}", print()))?
+        let merged = merged_texels(&plan.lightmap_parts, &format!("{:016x}", print()))?;
+        let every = (0..merged.len()).collect();
+        (merged, every)
     };
     if let Some(shard) = config.paths.shard {
         // ⟨A shard writes its texels' estimates with their indices, nothing else⟩
-        let irradiance = settings.quantity == crate::LightmapQuantity::Irradiance;
-        let mine = crate::shard_points(domain, &points, irradiance, config)?;
         let theirs: Vec<Gathered> = mine.iter().map(|&i| gathered[i]).collect();
         stage.gathers.push(GatherStats::of(&theirs));
         stage.metrics.seconds.gather += tg.elapsed().as_secs_f64();

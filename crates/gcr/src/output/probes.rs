@@ -13,7 +13,7 @@ use super::stage::Stage;
 use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::emitters::Emitters;
-use crate::estimator::{GatherStats, irradiance_at_points, radiosity_at_points};
+use crate::estimator::{GatherStats, irradiance_at_shard, radiosity_at_shard};
 use crate::gather::Gathered;
 use crate::solve::Trained;
 use glam::DVec3;
@@ -210,7 +210,7 @@ fn wrong_dimension(source: &str, dim: usize) -> OutputError {
     )))
 }
 
-/// The probes' values ([`radiosity_at_points`] or [`irradiance_at_points`]; daylight factors in
+/// The probes' values ([`crate::radiosity_at_points`] or [`crate::irradiance_at_points`]; daylight factors in
 /// percent, their standard errors too), in the probes' order, and what the gather measured.
 pub fn gather_probes(
     domain: &Domain,
@@ -234,22 +234,17 @@ pub fn gather_probe_shard(
     (probes, settings): (&[(DVec3, DVec3, u32)], &ProbeSettings),
 ) -> Result<(Vec<Gathered>, GatherStats, Vec<usize>), OutputError> {
     let (quantity, outdoor) = (settings.quantity, settings.outdoor_illuminance);
-    let mut gathered = match quantity {
-        ProbeQuantity::Radiosity => radiosity_at_points(domain, trained, emitters, config, probes)?,
+    let (mut gathered, mine) = match quantity {
+        ProbeQuantity::Radiosity => radiosity_at_shard(domain, trained, emitters, config, probes)?,
         ProbeQuantity::Irradiance | ProbeQuantity::DaylightFactor => {
             let at: Vec<(DVec3, DVec3)> = probes.iter().map(|&(y, n, _)| (y, n)).collect();
-            irradiance_at_points(domain, trained, emitters, config, &at)?
+            irradiance_at_shard(domain, trained, emitters, config, &at)?
         }
     };
     // a shard's probes only ([`crate::shard_points`]); the others were not estimated
-    let (stats, mine) = match config.paths.shard {
-        None => (GatherStats::of(&gathered), (0..gathered.len()).collect()),
-        Some(_) => {
-            let irradiance = quantity != ProbeQuantity::Radiosity;
-            let mine = crate::shard_points(domain, probes, irradiance, config)?;
-            let theirs: Vec<Gathered> = mine.iter().map(|&i| gathered[i]).collect();
-            (GatherStats::of(&theirs), mine)
-        }
+    let stats = match config.paths.shard {
+        None => GatherStats::of(&gathered),
+        Some(_) => GatherStats::of(&mine.iter().map(|&i| gathered[i]).collect::<Vec<_>>()),
     };
     // daylight factors in percent of the outdoor illuminance (checked positive by `validate`)
     if let (ProbeQuantity::DaylightFactor, Some(e)) = (quantity, outdoor) {

@@ -59,7 +59,8 @@ pub struct MergeArgs {
 
 /// `gcr solve`.
 #[derive(Args)]
-#[command(group = clap::ArgGroup::new("shardable").args(["probes", "lightmap"]).multiple(true))]
+#[command(group = clap::ArgGroup::new("shardable").args(["probes", "lightmap", "image"]).multiple(true))]
+#[command(group = clap::ArgGroup::new("mergeable").args(["lightmap", "image"]).multiple(true))]
 pub struct SolveArgs {
     /// Scene file or built-in name.
     pub scene: String,
@@ -242,15 +243,16 @@ pub struct SolveArgs {
         requires = "lightmap"
     )]
     pub lightmap_quantity: gcr::LightmapQuantity,
-    /// Take the lightmap's texels from the partial outputs of `--shard` runs
-    /// (<NAME>.shard-I-of-N.txt, every shard once) instead of gathering them, and write the files
-    /// a single run writes, byte for byte; give the shard runs' options, --shard excepted.
+    /// Take the lightmap's texels, or the per-pixel image's pixels, from the partial outputs of
+    /// `--shard` runs (<NAME>.shard-I-of-N.txt, every shard once) instead of gathering them, and
+    /// write the files a single run writes, byte for byte; give the shard runs' options, --shard
+    /// excepted.
     #[arg(
         long,
         help_heading = "Lightmaps",
         value_name = "PARTS",
         num_args = 1..,
-        requires = "lightmap",
+        requires = "mergeable",
         conflicts_with = "shard"
     )]
     pub from_shards: Vec<PathBuf>,
@@ -263,11 +265,13 @@ pub struct SolveArgs {
     /// Where to write the probes' values (`r g b` per line, in the probe file's order).
     #[arg(help_heading = "Probes and work planes", long, requires = "probes")]
     pub probe_out: Option<PathBuf>,
-    /// Estimate only shard INDEX of COUNT of the probes and of the lightmap's texels (0 <= INDEX
-    /// < COUNT; e.g. a Slurm array or Kubernetes indexed job's index): the probes with their
-    /// indices to --probe-out, joined by `gcr merge` (docs/guide/probes.md, "Sharded runs"); the
-    /// texels to <NAME>.shard-INDEX-of-COUNT.txt beside --lightmap's NAME.glb, joined by
-    /// --from-shards (docs/guide/lightmaps.md, "Sharded bakes"). Byte for byte the single run's.
+    /// Estimate only shard INDEX of COUNT of the probes, of the lightmap's texels and of a
+    /// per-pixel image's pixels (0 <= INDEX < COUNT; e.g. a Slurm array or Kubernetes indexed
+    /// job's index): the probes with their indices to --probe-out, joined by `gcr merge`
+    /// (docs/guide/probes.md, "Sharded runs"); the texels to <NAME>.shard-INDEX-of-COUNT.txt
+    /// beside --lightmap's NAME.glb, the pixels beside --image's NAME.exr (--image-mode pixel,
+    /// a fixed camera), joined by --from-shards (docs/guide/lightmaps.md, "Sharded bakes";
+    /// docs/guide/images.md, "Sharded images"). Byte for byte the single run's.
     #[arg(
         help_heading = "Probes and work planes",
         long,

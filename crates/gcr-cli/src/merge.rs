@@ -10,12 +10,18 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     check_target(&args.probe_out, "probe", None)?;
     let parts = shards::read_parts(&args.parts)?;
     let merged = shards::merge(&parts).context("merging the shards")?;
-    if merged.kind == shards::Kind::Lightmap {
-        anyhow::bail!(
+    match merged.kind {
+        shards::Kind::Lightmap => anyhow::bail!(
             "these are a lightmap's shards: they are merged by the solve that lays the atlas \
              out, `gcr solve SCENE --lightmap OUT.glb … --from-shards PARTS…` with the shards' \
              options (docs/guide/lightmaps.md, \"Sharded bakes\")"
-        );
+        ),
+        shards::Kind::Image => anyhow::bail!(
+            "these are an image's shards: they are merged by the solve that writes the image, \
+             `gcr solve SCENE --image OUT.exr … --from-shards PARTS…` with the shards' options \
+             (docs/guide/images.md, \"Sharded images\")"
+        ),
+        shards::Kind::Probes => {}
     }
     let mut staged = StagedFiles::new();
     staged.write_bytes(&args.probe_out, merged.text.as_bytes())?;

@@ -1,7 +1,8 @@
 //! Issue 34, sharded runs: `gcr solve --shard I/N` writes its probes' lines with their indices,
 //! and `gcr merge` joins the shards into exactly the bytes of the single run (radiosity and
 //! irradiance, with blocks small enough that every shard holds several); a lightmap's texels
-//! likewise, merged by `gcr solve --from-shards` into the single run's .glb and EXR pages; what
+//! likewise, merged by `gcr solve --from-shards` into the single run's .glb and EXR pages, and a
+//! per-pixel image's pixels into the single run's EXR and PNG; what
 //! cannot be a shard is refused before the solve, and what cannot be merged is refused naming
 //! the file.
 
@@ -126,8 +127,28 @@ fn what_cannot_be_a_shard_is_refused_before_the_solve() {
     let img = d.join("i.png");
     fails(
         &with(&["--shard", "0/2", "--image", s(&img)]),
-        "--shard splits the probes (--probes, --probe-out) and a lightmap's texels (--lightmap) \
-         and nothing else: an image",
+        "--shard splits the probes (--probes, --probe-out), a lightmap's texels (--lightmap) and \
+         the pixels of one per-pixel image from a fixed camera",
+    );
+    let pixel = [
+        "--shard",
+        "0/2",
+        "--image",
+        s(&img),
+        "--image-mode",
+        "pixel",
+    ];
+    fails(
+        &with(&[&pixel[..], &["--auto-camera"]].concat()),
+        "needs the whole solution; run it without --shard",
+    );
+    fails(
+        &with(&[&pixel[..], &["--gather", "rays"]].concat()),
+        "an image by a gather other than the default",
+    );
+    fails(
+        &with(&[&pixel[..], &["--view", "0,0.3,-1;0.3,0.3,0=v.png"]].concat()),
+        "a --view image",
     );
     let o = gcr(&["solve", "cornell-box", "--shard", "0/2"]);
     assert_eq!(
@@ -273,5 +294,87 @@ fn lightmap_shards_merge_into_the_single_bake() {
         );
         assert!(!other.exists() && !probe_out.exists());
     }
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// A per-pixel image from the scene's camera rendered in three shards of rows and merged by
+/// `--from-shards` is the single run's EXR (and PNG, its exposure from the merged pixels), byte
+/// for byte; other settings, a missing shard and `gcr merge` on image shards are refused.
+#[test]
+fn image_shards_merge_into_the_single_image() {
+    let d = dir("shards", "image");
+    let render = |out: &Path, more: &[&str]| {
+        let mut args = vec![
+            "solve",
+            "cornell-box",
+            "--image",
+            s(out),
+            "--image-mode",
+            "pixel",
+            "--resolution",
+            "24x20",
+            "--block-points",
+            "48",
+            "--quality",
+            "draft",
+        ];
+        args.extend(more);
+        gcr(&args)
+    };
+    for ext in ["exr", "png"] {
+        let single = d.join(format!("single.{ext}"));
+        ok(&render(&single, &[]));
+        let img = d.join(format!("img.{ext}"));
+        for i in [1, 2, 0] {
+            ok(&render(&img, &["--shard", &format!("{i}/3")]));
+        }
+        assert!(!img.exists(), "a shard writes its part, not the image");
+        let part = |i: usize| d.join(format!("img.shard-{i}-of-3.txt"));
+        let (p0, p1, p2) = (part(0), part(1), part(2));
+        let head = std::fs::read_to_string(&p1).unwrap();
+        assert!(
+            head.starts_with("# gcr image shard 1/3 of 480 pixels, fingerprint "),
+            "{head}"
+        );
+        // strips of 48 pixels: 2 rows each, every third from the shard's on
+        let first: usize = head
+            .lines()
+            .nth(1)
+            .unwrap()
+            .split(' ')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert_eq!(first, 48);
+        let all = ["--from-shards", s(&p2), s(&p0), s(&p1)];
+        ok(&render(&img, &all));
+        assert!(
+            std::fs::read(&img).unwrap() == std::fs::read(&single).unwrap(),
+            "{ext}: the merged image differs from the single run's"
+        );
+        let other = d.join(format!("other.{ext}"));
+        let mut wider = all.to_vec();
+        wider.extend(["--fov", "50"]);
+        fails(&render(&other, &wider), "the shards have fingerprint");
+        fails(
+            &render(&other, &["--from-shards", s(&p0), s(&p1)]),
+            "shard 2/3 is missing",
+        );
+        assert!(!other.exists());
+    }
+    let probe_out = d.join("p.txt");
+    let part = |i: usize| d.join(format!("img.shard-{i}-of-3.txt"));
+    fails(
+        &gcr(&[
+            "merge",
+            s(&part(0)),
+            s(&part(1)),
+            s(&part(2)),
+            "--probe-out",
+            s(&probe_out),
+        ]),
+        "these are an image's shards",
+    );
     let _ = std::fs::remove_dir_all(d);
 }

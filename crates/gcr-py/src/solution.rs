@@ -214,11 +214,13 @@ impl Solution {
     /// ``metrics`` (JSON), ``probes`` (a probe file) with ``probe_out`` (and
     /// ``probe_quantity``, ``probe_tolerance``), ``kernel_image`` (Flatland), ``views``
     /// (``(path, eye, target[, up[, fov]])`` each), and the camera and image options of
-    /// :meth:`image`. ``shard=(index, count)`` bakes one shard of the lightmap's texels and of the
-    /// probes, as ``gcr solve --shard`` (the lightmap's part goes to ``NAME.shard-I-of-N.txt``
-    /// beside ``lightmap``'s ``NAME.glb``, the probes' to ``probe_out``); ``from_shards`` (paths
-    /// of a lightmap's parts) takes the lightmap's texels from them, as ``--from-shards``: with
-    /// the solve's ``block_points``, the files are the single bake's, byte for byte.
+    /// :meth:`image`. ``shard=(index, count)`` bakes one shard of the lightmap's texels, of the
+    /// probes and of a per-pixel image's pixels (``image_mode="pixel"``, a fixed camera), as
+    /// ``gcr solve --shard`` (the lightmap's part goes to ``NAME.shard-I-of-N.txt`` beside
+    /// ``lightmap``'s ``NAME.glb``, the image's beside ``image``, the probes' to ``probe_out``);
+    /// ``from_shards`` (paths of a lightmap's or an image's parts) takes the texels or pixels
+    /// from them, as ``--from-shards``: with the solve's ``block_points``, the files are the
+    /// single run's, byte for byte.
     /// Every output is checked before anything is computed, and the files are
     /// written all at once: either every one reaches its target or none is created or changed.
     /// Returns the run's metrics (the metrics file's contents) as a dict. Raises

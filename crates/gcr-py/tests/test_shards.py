@@ -2,7 +2,8 @@
 solve gives them, and `gcr.distributed` runs the shards on a local Dask cluster of worker
 processes, byte for byte against the single run (and against `gcr solve --shard` + `gcr merge`);
 a lightmap baked in shards (`Solution.write(shard=...)`, `from_shards`, and
-`gcr.distributed.bake_lightmap`) is the single bake's files, byte for byte.
+`gcr.distributed.bake_lightmap`) is the single bake's files, byte for byte, and so is a per-pixel
+image (`gcr.distributed.render_image`).
 """
 
 from __future__ import annotations
@@ -76,11 +77,21 @@ def test_a_dask_cluster_gives_the_single_runs_bytes(single, gcr_bin, tmp_path):
             client, "cornell-box", str(dask_dir / "room.glb"), shards=3, block_points=LM_BLOCK,
             write=LM_OPTS, solve={"quality": "draft"}, timeout=120,
         )
+        # and a per-pixel image
+        gcr.distributed.render_image(
+            client, "cornell-box", str(dask_dir / "view.exr"), shards=3, block_points=IMG_BLOCK,
+            write=IMG_OPTS, solve={"quality": "draft"}, timeout=120,
+        )
     cli_dir = tmp_path / "cli"
     cli_dir.mkdir()
     subprocess.run(
         [gcr_bin, "solve", "cornell-box", "--lightmap", cli_dir / "room.glb", "--quality", "draft",
          "--block-points", str(LM_BLOCK), "--lightmap-density", str(LM_OPTS["lightmap_density"])],
+        check=True, capture_output=True,
+    )
+    subprocess.run(
+        [gcr_bin, "solve", "cornell-box", "--image", cli_dir / "view.exr", "--image-mode", "pixel",
+         "--resolution", "24x20", "--quality", "draft", "--block-points", str(IMG_BLOCK)],
         check=True, capture_output=True,
     )
     assert same_files(dask_dir, cli_dir)
@@ -104,6 +115,8 @@ def test_a_dask_cluster_gives_the_single_runs_bytes(single, gcr_bin, tmp_path):
 
 LM_BLOCK = 128
 LM_OPTS = {"lightmap_density": 30}
+IMG_BLOCK = 48
+IMG_OPTS = {"resolution": (24, 20)}
 
 
 def same_files(a, b) -> bool:
@@ -129,6 +142,20 @@ def test_a_lightmap_baked_in_shards_is_the_single_bake(tmp_path):
     with pytest.raises(ValueError, match="0 <= index < count"):
         solution.write(lightmap=tmp_path / "x.glb", shard=(3, 3), **LM_OPTS)
     assert not (tmp_path / "x.glb").exists()
+
+
+def test_an_image_rendered_in_shards_is_the_single_image(tmp_path):
+    solution = gcr.solve(gcr.Scene.load("cornell-box"), quality="draft", block_points=IMG_BLOCK)
+    opts = {"image_mode": "pixel", **IMG_OPTS}
+    solution.write(image=tmp_path / "single.exr", **opts)
+    for k in (1, 0):
+        solution.write(image=tmp_path / "view.exr", shard=(k, 2), **opts)
+    assert not (tmp_path / "view.exr").exists()
+    parts = [tmp_path / f"view.shard-{k}-of-2.txt" for k in range(2)]
+    solution.write(image=tmp_path / "view.exr", from_shards=parts, **opts)
+    assert (tmp_path / "view.exr").read_bytes() == (tmp_path / "single.exr").read_bytes()
+    with pytest.raises(gcr.GcrError, match="from the automatic camera"):
+        solution.write(image=tmp_path / "x.exr", shard=(0, 2), auto_camera=True, **opts)
 
 
 def test_unaligned_arrays_are_read_as_aligned_ones(single):

@@ -18,7 +18,9 @@ equals ``gcr.solve(gcr.Scene.load("building.glb", sky=...), block_points=2000)
 of the paths gather). A lightmap the same way: ``bake_lightmap(client, "level.glb",
 "out/level.glb", shards=16, block_points=4096, write={"lightmap_density": 40})`` writes the files
 ``Solution.write(lightmap=..., ...)`` writes, byte for byte (each worker bakes its shard's texels
-with ``Solution.write(shard=...)``; the client merges them with ``from_shards``). Any Dask cluster works (``dask-jobqueue`` on Slurm or PBS,
+with ``Solution.write(shard=...)``; the client merges them with ``from_shards``), and a per-pixel
+image from a fixed camera: ``render_image(client, "hall.glb", "hall.exr", shards=16,
+block_points=1024, write={"resolution": (1920, 1080)})``. Any Dask cluster works (``dask-jobqueue`` on Slurm or PBS,
 ``dask-kubernetes``); the scene's files must be readable at the same path on every worker.
 Dask is imported only when this module is used (``pip install "dask[distributed]"``). Give each
 worker one Dask thread and leave the gather's threads at their default (every core): the last
@@ -37,7 +39,7 @@ import numpy as np
 
 import gcr
 
-__all__ = ["bake_lightmap", "shard_values"]
+__all__ = ["bake_lightmap", "render_image", "shard_values"]
 
 
 def shard_values(
@@ -110,13 +112,54 @@ def bake_lightmap(
     :func:`shard_values`. Each worker returns its shard's part as text, so no file system is
     shared; the client lays the atlas out again and writes the files.
     """
+    settings = _settings(scene, load, solve, block_points)
+    return _sharded_write(client, settings, ("lightmap", lightmap), shards, write or {}, timeout)
+
+
+def render_image(
+    client: Any,
+    scene: str,
+    image: str,
+    *,
+    shards: int,
+    block_points: int,
+    write: dict[str, Any] | None = None,
+    load: dict[str, Any] | None = None,
+    solve: dict[str, Any] | None = None,
+    timeout: float | None = None,
+) -> dict[str, Any]:
+    """Writes the per-pixel image ``image`` (.exr, .png, .jpg) as ``gcr.solve(gcr.Scene.load(
+    scene, **load), block_points=block_points, **solve).write(image=image, image_mode="pixel",
+    **write)`` writes it, byte for byte, its pixels estimated as ``shards`` shards on the Dask
+    ``client``'s workers (the blocks are strips of whole rows of at least ``block_points``
+    pixels; a row or a few balance the shards best and cost the rounds little); returns the
+    metrics of the writing run. ``write``: the camera and image options of
+    :meth:`gcr.Solution.write`, a fixed camera (``camera_eye`` and ``camera_target``, or the
+    scene's: not ``auto_camera``), ``resolution``, ``exposure``; the rest as :func:`shard_values`.
+    """
+    settings = _settings(scene, load, solve, block_points)
+    write = {"image_mode": "pixel", **(write or {})}
+    return _sharded_write(client, settings, ("image", image), shards, write, timeout)
+
+
+def _sharded_write(
+    client: Any,
+    settings: str,
+    target: tuple[str, str],
+    shards: int,
+    write: dict[str, Any],
+    timeout: float | None,
+) -> dict[str, Any]:
+    """The output ``target`` (``(keyword, path)`` of :meth:`gcr.Solution.write`: a lightmap or an
+    image) written from ``shards`` shards run on the workers, each returning its part as text."""
     from dask.distributed import wait
 
     if shards < 1:
         raise ValueError(f"shards {shards}: at least 1")
-    settings = _settings(scene, load, solve, block_points)
+    key, path = target
+    suffix = os.path.splitext(str(path))[1] or ".out"
     futures = [
-        client.submit(_lightmap_shard, settings, (i, shards), write or {}, pure=False)
+        client.submit(_part, settings, (key, suffix), (i, shards), write, pure=False)
         for i in range(shards)
     ]
     wait(futures, timeout=timeout)
@@ -127,7 +170,7 @@ def bake_lightmap(
             parts.append(os.path.join(d, f"part-{i}-of-{shards}.txt"))
             with open(parts[-1], "w", encoding="utf-8") as f:
                 f.write(text)
-        return _solution(settings).write(lightmap=lightmap, from_shards=parts, **(write or {}))
+        return _solution(settings).write(**{key: path}, from_shards=parts, **write)
 
 
 def _settings(scene: str, load: dict | None, solve: dict | None, block_points: int) -> str:
@@ -148,11 +191,13 @@ def _shard(settings: str, at: tuple, shard: tuple[int, int], quantity: str, tole
         )
 
 
-def _lightmap_shard(settings: str, shard: tuple[int, int], write: dict) -> str:
-    """One lightmap shard on a worker: its part (``Solution.write(shard=...)``) as text."""
+def _part(settings: str, target: tuple[str, str], shard: tuple[int, int], write: dict) -> str:
+    """One shard of a lightmap or an image on a worker: its part (``Solution.write(shard=...)``,
+    ``NAME.shard-I-of-N.txt``) as text. ``target``: the output's keyword and file extension."""
+    key, suffix = target
     with _reported(shard), tempfile.TemporaryDirectory() as d:
-        _solution(settings).write(lightmap=os.path.join(d, "lightmap.glb"), shard=shard, **write)
-        part = os.path.join(d, f"lightmap.shard-{shard[0]}-of-{shard[1]}.txt")
+        _solution(settings).write(**{key: os.path.join(d, "out" + suffix)}, shard=shard, **write)
+        part = os.path.join(d, f"out.shard-{shard[0]}-of-{shard[1]}.txt")
         with open(part, encoding="utf-8") as f:
             return f.read()
 

@@ -17,7 +17,7 @@
 //! kernel, rays: they read the networks and are not corrected) are in [`crate::gather`] and are
 //! reached through the same front door.
 
-mod blocks;
+pub(crate) mod blocks;
 pub(crate) mod guide;
 pub(crate) mod neighbours;
 pub(crate) mod paths;

@@ -58,11 +58,11 @@ pub(super) fn write_lightmap(
     let points = texels.points();
     let print = || super::shards::fingerprint(domain, &points, config, &format!("{settings:?}"));
     // ⟨The texels' values: gathered (all of them, or a shard's), or the shards' merged⟩
-    let (gathered, mine) = if plan.lightmap_parts.is_empty() {
+    let (gathered, mine) = if !plan.merges(super::shards::Kind::Lightmap) {
         let _phase = crate::progress::phase("lightmap");
         crate::lightmap::gather_texels(domain, trained, config, settings, &texels)?
     } else {
-        let merged = merged_texels(&plan.lightmap_parts, &format!("{:016x}", print()))?;
+        let merged = plan.merged_shards(super::shards::Kind::Lightmap, print())?;
         let every = (0..merged.len()).collect();
         (merged, every)
     };
@@ -74,7 +74,7 @@ pub(super) fn write_lightmap(
         let lines: Vec<String> = gathered.iter().map(super::shards::gathered_line).collect();
         let kind = super::shards::Kind::Lightmap;
         let text = super::shards::partial_text(kind, shard, print(), &lines, &mine);
-        let part = super::shards::lightmap_part_path(path, shard);
+        let part = super::shards::part_path(path, shard);
         check_target(&part, "lightmap shard", None)?;
         stage.files.write_bytes(&part, text.as_bytes())?;
         return Ok(());
@@ -117,36 +117,6 @@ pub(super) fn write_lightmap(
     });
     metrics.seconds.output += to.elapsed().as_secs_f64();
     Ok(())
-}
-
-/// The texels' estimates from the partial lightmap outputs `parts` of a sharded bake, merged
-/// ([`super::shards::merge`]) and checked to be of this run (its `fingerprint`).
-fn merged_texels(
-    parts: &[(String, String)],
-    fingerprint: &str,
-) -> Result<Vec<Gathered>, OutputError> {
-    let merged =
-        super::shards::merge(parts).map_err(|e| OutputError::MergeShards(e.to_string()))?;
-    if merged.kind != super::shards::Kind::Lightmap {
-        return Err(OutputError::MergeShards(
-            "these are shards of probes: `gcr merge` joins them".into(),
-        ));
-    }
-    if merged.fingerprint != fingerprint {
-        return Err(OutputError::MergeShards(format!(
-            "the shards have fingerprint {}, this run {fingerprint}: they are of another scene, \
-             lightmap or solve settings (give the options of the shard runs, --shard excepted, \
-             --block-points included)",
-            merged.fingerprint
-        )));
-    }
-    (merged.text.lines().enumerate())
-        .map(|(i, line)| {
-            super::shards::parse_gathered(line).ok_or_else(|| {
-                OutputError::MergeShards(format!("texel {i}: not an estimate: `{line}`"))
-            })
-        })
-        .collect()
 }
 
 /// The EXR page files of a lightmap written to `glb`: `<stem>-lightmap-<k>.exr` beside it.

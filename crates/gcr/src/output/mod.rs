@@ -77,14 +77,17 @@ pub enum OutputError {
     /// A shard that cannot be formed ([`crate::shard_points`]).
     #[error(transparent)]
     Shard(#[from] crate::ShardError),
-    /// A shard asked for outputs other than probes and a lightmap, or for neither.
+    /// A shard (or an image merged from shards) asked for outputs other than probes, a lightmap
+    /// and a per-pixel image from a fixed camera, or for none.
     #[error(
-        "--shard splits the probes (--probes, --probe-out) and a lightmap's texels (--lightmap) \
-         and nothing else: {0} needs the whole solution; run it without --shard"
+        "--shard splits the probes (--probes, --probe-out), a lightmap's texels (--lightmap) and \
+         the pixels of one per-pixel image from a fixed camera (--image with --image-mode pixel \
+         and --camera-eye/--camera-target or the scene's camera) and nothing else: {0} needs the \
+         whole solution; run it without --shard"
     )]
     ShardOutput(&'static str),
-    /// Lightmap shards that cannot be merged, or merged into another run.
-    #[error("merging the lightmap's shards: {0}")]
+    /// Lightmap or image shards that cannot be merged, or merged into another run.
+    #[error("merging the shards: {0}")]
     MergeShards(String),
     /// Probes without a probe output, or the other way round.
     #[error("probes and a probe output go together: give both or neither")]

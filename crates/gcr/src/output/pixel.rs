@@ -26,7 +26,7 @@ use crate::config::GatherMode;
 use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::emitters::Emitters;
-use crate::estimator::paths::{FirstHit, PathGather};
+use crate::estimator::paths::{FirstHit, PathGather, PointEstimate};
 use crate::estimator::{GatherError, GatherStats, radiosity_at_points};
 use crate::gather::Gathered;
 use glam::DVec3;
@@ -60,8 +60,11 @@ pub struct PixelImage {
     lit: Vec<bool>,
     /// What the sub-samples (footprints: the pixel centres) saw.
     coverage: Coverage,
-    /// What the gather measured at the hits.
+    /// What the gather measured at the hits (with a shard: at its pixels).
     pub stats: GatherStats,
+    /// With a shard (footprints only): every pixel's estimate (the others' left at
+    /// `Gathered::default()`) and the shard's pixels (ascending), for its partial output.
+    pub(super) shard: Option<(Vec<Gathered>, Vec<usize>)>,
 }
 
 /// Seen fractions of a list of sub-samples; `lit(k, i)`: whether sub-sample `k`, which sees the
@@ -93,14 +96,28 @@ pub fn render_pixels(
     trained: &Trained,
     config: &SolveConfig,
     camera: &PinholeCamera,
+    size: (u32, u32, u32),
+) -> Result<PixelImage, GatherError> {
+    render_pixel_shard(domain, trained, config, camera, size, None)
+}
+
+/// [`render_pixels`], with the pixels' estimates taken from `merged` (one per pixel, merged from
+/// shards: `super::shards`) instead of gathered when given; with a shard in `config`, only its
+/// pixels estimated ([`PixelImage::shard`]).
+pub(super) fn render_pixel_shard(
+    domain: &Domain,
+    trained: &Trained,
+    config: &SolveConfig,
+    camera: &PinholeCamera,
     (width, height, spp): (u32, u32, u32),
+    merged: Option<Vec<Gathered>>,
 ) -> Result<PixelImage, GatherError> {
     let Domain::ThreeD(k) = domain else {
         return Ok(PixelImage::empty(width, height, spp));
     };
     let _phase = crate::progress::phase("pixels");
     if config.gather == GatherMode::Paths && !config.reads_networks() {
-        return Ok(render_footprints(domain, config, camera, (width, height)));
+        return render_footprints(domain, config, camera, (width, height), merged);
     }
     let (scene, bvh) = (k.scene, k.bvh);
     let spp = spp.max(1);
@@ -168,6 +185,7 @@ pub fn render_pixels(
             relative_std_error: crate::relative_std_error(&pixels),
             ..GatherStats::of(&gathered)
         },
+        shard: None,
     })
 }
 
@@ -181,9 +199,10 @@ fn render_footprints(
     config: &SolveConfig,
     camera: &PinholeCamera,
     (width, height): (u32, u32),
-) -> PixelImage {
+    merged: Option<Vec<Gathered>>,
+) -> Result<PixelImage, GatherError> {
     let Domain::ThreeD(k) = domain else {
-        return PixelImage::empty(width, height, 1);
+        return Ok(PixelImage::empty(width, height, 1));
     };
     let (scene, bvh) = (k.scene, k.bvh);
     let aspect = f64::from(width) / f64::from(height);
@@ -240,21 +259,20 @@ fn render_footprints(
         };
         gather.estimate_footprint(&receiver, seed(p), first, rays)
     };
-    let rays = (config.gather_samples.direct).max(config.gather_samples.indirect);
-    let gathered: Vec<Gathered> = match config.paths.target_error {
-        Some(target) => crate::estimator::pixel_rounds::allocated_rounds(
-            n,
-            &estimate,
-            rays,
-            target,
-            config.paths.max_rays,
-        ),
-        None => (0..n)
-            .into_par_iter()
-            .map(|p| estimate(p, 0, rays).gathered())
-            .collect(),
+    // ⟨In strips of rows, each to the target on its own (a shard's only), or from the shards⟩
+    let strips = PixelStrips::new(width, height, config);
+    let mine = strips.mine(config)?;
+    let gathered = match merged {
+        // the caller checked its length (`super::views`)
+        Some(merged) => merged,
+        None => strips.gather(&mine, &estimate, config),
     };
-    PixelImage {
+    let shard = config.paths.shard.map(|_| {
+        let mine: Vec<usize> = (mine.iter()).flat_map(|&s| strips.pixels(s)).collect();
+        let stats = GatherStats::of(&mine.iter().map(|&p| gathered[p]).collect::<Vec<_>>());
+        (mine, stats)
+    });
+    Ok(PixelImage {
         width,
         height,
         spp: 1,
@@ -262,14 +280,104 @@ fn render_footprints(
         radiosity: gathered.iter().map(|g| g.radiosity).collect(),
         lit,
         coverage: coverage_of(&centres, |p, _| positive(&gathered[p])),
-        stats: GatherStats {
-            // what the rounds ran to: the per-pixel relative error (estimator::pixel_rounds)
-            relative_std_error: crate::estimator::pixel_rounds::pixel_error(
-                &gathered,
-                crate::estimator::pixel_rounds::relative_floor(&gathered),
-            ),
-            ..GatherStats::of(&gathered)
+        stats: match &shard {
+            Some((_, stats)) => *stats,
+            None => GatherStats {
+                // what the rounds ran to: the per-pixel relative error (estimator::pixel_rounds)
+                relative_std_error: crate::estimator::pixel_rounds::pixel_error(
+                    &gathered,
+                    crate::estimator::pixel_rounds::relative_floor(&gathered),
+                ),
+                ..GatherStats::of(&gathered)
+            },
         },
+        shard: shard.map(|(mine, _)| (gathered, mine)),
+    })
+}
+
+/// The blocks of a footprint image: strips of whole rows, each of at least
+/// [`crate::PathSettings::block_points`] pixels, each run to the target on its own (its own
+/// pilot, allocation and stopping test: `pixel_rounds`), so that a pixel's value depends only on
+/// its strip and a shard (every N-th strip, as the probes' blocks) computes the single run's
+/// values. By default one strip, the whole image, as before strips existed.
+struct PixelStrips {
+    width: usize,
+    pixels: usize,
+    /// Rows per strip (the last may have fewer).
+    rows: usize,
+}
+
+impl PixelStrips {
+    fn new(width: u32, height: u32, config: &SolveConfig) -> Self {
+        let (width, height) = (width as usize, height as usize);
+        Self {
+            width,
+            pixels: width * height,
+            rows: config
+                .paths
+                .block_points
+                .div_ceil(width.max(1))
+                .clamp(1, height.max(1)),
+        }
+    }
+
+    /// How many strips there are.
+    fn count(&self) -> usize {
+        self.pixels.div_ceil(self.width * self.rows).max(1)
+    }
+
+    /// The pixels of strip `s`.
+    fn pixels(&self, s: usize) -> std::ops::Range<usize> {
+        let size = self.width * self.rows;
+        s * size..((s + 1) * size).min(self.pixels)
+    }
+
+    /// The strips (ascending) `config`'s shard computes; every strip without a shard; an error
+    /// when the shard has none.
+    fn mine(&self, config: &SolveConfig) -> Result<Vec<usize>, GatherError> {
+        let mine = crate::estimator::blocks::of_shard(self.count(), config.paths.shard);
+        match config.paths.shard {
+            Some(shard) if mine.is_empty() => Err(crate::ShardError::Empty {
+                shard,
+                blocks: self.count(),
+                points: self.pixels,
+                block_points: config.paths.block_points,
+            }
+            .into()),
+            _ => Ok(mine),
+        }
+    }
+
+    /// Every pixel's estimate (those of strips not in `mine` left at `Gathered::default()`):
+    /// each strip of `mine` in rounds to the target on its own, else every pixel with the first
+    /// round's rays.
+    fn gather(
+        &self,
+        mine: &[usize],
+        estimate: &(dyn Fn(usize, usize, usize) -> PointEstimate + Sync),
+        config: &SolveConfig,
+    ) -> Vec<Gathered> {
+        let rays = (config.gather_samples.direct).max(config.gather_samples.indirect);
+        let mut gathered = vec![Gathered::default(); self.pixels];
+        for &s in mine {
+            let strip = self.pixels(s);
+            let at = |i: usize, first: usize, rays: usize| estimate(strip.start + i, first, rays);
+            let values: Vec<Gathered> = match config.paths.target_error {
+                Some(target) => crate::estimator::pixel_rounds::allocated_rounds(
+                    strip.len(),
+                    &at,
+                    rays,
+                    target,
+                    config.paths.max_rays,
+                ),
+                None => (strip.clone())
+                    .into_par_iter()
+                    .map(|p| estimate(p, 0, rays).gathered())
+                    .collect(),
+            };
+            gathered[strip].copy_from_slice(&values);
+        }
+        gathered
     }
 }
 
@@ -316,6 +424,7 @@ impl PixelImage {
             radiosity: Vec::new(),
             lit: Vec::new(),
             stats: GatherStats::default(),
+            shard: None,
         }
     }
 

@@ -6,10 +6,12 @@ use super::OutputError;
 use super::camera::{CameraChoice, ImageMode, ImageSettings};
 use super::encode::{Format, format_of};
 use super::probes::{ProbeSettings, read_probes};
+use super::shards::{Kind, Merged, merge, merged_estimates};
 use super::staged::check_target;
 use crate::config::{GatherMode, SolveConfig};
 use crate::domain::Domain;
 use crate::estimator::GatherError;
+use crate::gather::Gathered;
 use crate::lightmap::LightmapSettings;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
@@ -69,9 +71,9 @@ pub struct OutputPlan {
     probes: Vec<(DVec3, DVec3, u32)>,
     pub(super) probe_settings: ProbeSettings,
     pub(super) lightmap: LightmapSettings,
-    /// The partial lightmap outputs (name, text) whose texels the lightmap takes instead of
-    /// gathering them (`--from-shards`; `super::shards`).
-    pub(super) lightmap_parts: Vec<(String, String)>,
+    /// The merged shards (`--from-shards`; `super::shards`) whose estimates the lightmap's texels
+    /// or the image's pixels take instead of gathering them.
+    from_shards: Option<Merged>,
     /// The scene brings its own camera (a built-in's or a glTF camera node).
     scene_camera: bool,
     /// The scene is a Flatland scene.
@@ -120,8 +122,8 @@ impl OutputPlan {
 
     /// The whole plan of a run, checked before its solve as `gcr solve` and Python's
     /// `Solution.write` check it: [`OutputPlan::with_options`], the lightmap settings and the
-    /// parts of a sharded lightmap to merge ([`OutputPlan::with_lightmap`],
-    /// [`OutputPlan::with_lightmap_parts`]), then what `config` can compute and the machine hold
+    /// parts of a sharded lightmap or image to merge ([`OutputPlan::with_lightmap`],
+    /// [`OutputPlan::with_shards`]), then what `config` can compute and the machine hold
     /// ([`OutputPlan::check_config`]) and its shard ([`OutputPlan::check_shard`]).
     pub fn checked(
         domain: &Domain,
@@ -131,7 +133,7 @@ impl OutputPlan {
     ) -> Result<Self, OutputError> {
         let plan = Self::with_options(domain, paths, images, probe_settings)?
             .with_lightmap(lightmap)?
-            .with_lightmap_parts(parts, config)?;
+            .with_shards(parts, config)?;
         plan.check_config(config)?;
         plan.check_shard(domain, config)?;
         Ok(plan)
@@ -216,7 +218,7 @@ impl OutputPlan {
             probes,
             probe_settings,
             lightmap: LightmapSettings::default(),
-            lightmap_parts: Vec::new(),
+            from_shards: None,
             scene_camera: domain.scene_3d().is_some_and(|s| s.camera_given),
             flatland: domain.scene_flat().is_some(),
         })
@@ -230,20 +232,30 @@ impl OutputPlan {
         if irradiance && !self.probes.is_empty() && config.gather != GatherMode::Paths {
             return Err(GatherError::IrradianceNeedsPaths(config.gather.name()).into());
         }
-        // ⟨A shard writes its probes' and its lightmap texels' values and nothing else
-        // (`super::shards`)⟩
-        if config.paths.shard.is_some() {
+        // ⟨A shard writes its probes', its lightmap texels' and its pixels' values and nothing
+        // else (`super::shards`); an image merged from shards is a shard's image⟩
+        if config.paths.shard.is_some() || self.merges(Kind::Image) {
             let p = &self.paths;
+            let footprints = config.gather == GatherMode::Paths && !config.reads_networks();
             let other = [
+                (!self.images.views.is_empty(), "a --view image"),
                 (
-                    p.image.is_some() || !self.images.views.is_empty(),
-                    "an image",
+                    p.image.is_some() && self.images.mode != ImageMode::Pixel,
+                    "an image in mesh mode",
+                ),
+                (
+                    p.image.is_some() && is_automatic(self.images.camera, self.scene_camera),
+                    "an image from the automatic camera",
+                ),
+                (
+                    p.image.is_some() && !footprints,
+                    "an image by a gather other than the default",
                 ),
                 (p.mesh.is_some() || p.ply.is_some(), "a mesh"),
                 (p.kernel_image.is_some(), "a kernel image"),
                 (
-                    p.probe_out.is_none() && p.lightmap.is_none(),
-                    "a run without probes or a lightmap",
+                    p.probe_out.is_none() && p.lightmap.is_none() && p.image.is_none(),
+                    "a run without probes, a lightmap or an image",
                 ),
             ];
             if let Some((_, what)) = other.iter().find(|(asked, _)| *asked) {
@@ -282,28 +294,54 @@ impl OutputPlan {
         Ok(self)
     }
 
-    /// The plan with the lightmap's texels taken from the partial outputs `parts` (file name,
-    /// text) of a sharded bake instead of gathered (`--from-shards`; `super::shards`). The run
-    /// must ask for the lightmap with the shards' settings and no shard of its own.
-    pub fn with_lightmap_parts(
+    /// The plan with the lightmap's texels or the image's pixels taken from the partial outputs
+    /// `parts` (file name, text) of a sharded run instead of gathered (`--from-shards`;
+    /// `super::shards`), merged now. The run must ask for that output with the shards' settings
+    /// and no shard of its own.
+    pub fn with_shards(
         mut self,
         parts: Vec<(String, String)>,
         config: &SolveConfig,
     ) -> Result<Self, OutputError> {
-        if !parts.is_empty() {
-            if self.paths.lightmap.is_none() {
-                return Err(OutputError::MergeShards(
-                    "--from-shards fills a lightmap's texels: ask for it with --lightmap".into(),
-                ));
-            }
-            if config.paths.shard.is_some() {
-                return Err(OutputError::MergeShards(
-                    "--from-shards merges every shard: run it without --shard".into(),
-                ));
-            }
+        if parts.is_empty() {
+            return Ok(self);
         }
-        self.lightmap_parts = parts;
+        let refuse = |what: &str| Err(OutputError::MergeShards(what.into()));
+        if config.paths.shard.is_some() {
+            return refuse("--from-shards merges every shard: run it without --shard");
+        }
+        let merged = merge(&parts).map_err(|e| OutputError::MergeShards(e.to_string()))?;
+        match merged.kind {
+            Kind::Probes => return refuse("these are shards of probes: `gcr merge` joins them"),
+            Kind::Lightmap if self.paths.lightmap.is_none() => {
+                return refuse("these are a lightmap's shards: ask for it with --lightmap");
+            }
+            Kind::Image if self.paths.image.is_none() => {
+                return refuse("these are an image's shards: ask for it with --image");
+            }
+            _ => {}
+        }
+        self.from_shards = Some(merged);
         Ok(self)
+    }
+
+    /// Whether the run takes `kind`'s estimates from merged shards ([`OutputPlan::with_shards`]).
+    pub(super) fn merges(&self, kind: Kind) -> bool {
+        self.from_shards.as_ref().is_some_and(|m| m.kind == kind)
+    }
+
+    /// The estimates of the merged shards of `kind` (one per point, in order), checked to be of
+    /// this run: its `fingerprint` ([`super::shards::fingerprint`]).
+    pub(super) fn merged_shards(
+        &self,
+        kind: Kind,
+        fingerprint: u64,
+    ) -> Result<Vec<Gathered>, OutputError> {
+        let merged = (self.from_shards.as_ref()).ok_or_else(|| {
+            OutputError::MergeShards(format!("no {} shards to merge", kind.words().0))
+        })?;
+        merged_estimates(merged, kind, &format!("{fingerprint:016x}"))
+            .map_err(OutputError::MergeShards)
     }
 
     /// The checked image settings.

@@ -19,10 +19,13 @@
 //! that the indices cover every probe once, and writes the lines in probe order.
 //!
 //! A lightmap's texels are sharded the same way ([`Kind::Lightmap`]): `gcr solve … --lightmap
-//! out.glb --shard I/N` writes `out.shard-I-of-N.txt` ([`lightmap_part_path`]), whose lines hold
+//! out.glb --shard I/N` writes `out.shard-I-of-N.txt` ([`part_path`]), whose lines hold
 //! each texel's whole estimate ([`gathered_line`]), and `gcr solve … --lightmap out.glb
 //! --from-shards PARTS…` lays the atlas out again, takes the texels' values from the parts
-//! instead of gathering them, and writes the single run's files.
+//! instead of gathering them, and writes the single run's files ([`merged_estimates`]). So are
+//! a per-pixel image's pixels from a fixed camera ([`Kind::Image`]: strips of rows are its
+//! blocks, `super::pixel`): `gcr solve … --image out.exr --shard I/N` writes
+//! `out.shard-I-of-N.txt`, and `--image out.exr --from-shards PARTS…` the single run's image.
 
 use crate::config::{Shard, SolveConfig};
 use crate::domain::Domain;
@@ -37,14 +40,21 @@ pub enum Kind {
     Probes,
     /// Lightmap texels (`--lightmap`), merged by `gcr solve … --from-shards`.
     Lightmap,
+    /// A per-pixel image's pixels (`--image … --image-mode pixel` from a fixed camera), merged
+    /// by `gcr solve … --from-shards`.
+    Image,
 }
 
+/// Every kind, for reading a header.
+const KINDS: [Kind; 3] = [Kind::Probes, Kind::Lightmap, Kind::Image];
+
 impl Kind {
-    /// The header's words: what, and what its points are called.
-    fn words(self) -> (&'static str, &'static str) {
+    /// The header's words: what, and what its points are called (`("probe", "points")`).
+    pub fn words(self) -> (&'static str, &'static str) {
         match self {
             Kind::Probes => ("probe", "points"),
             Kind::Lightmap => ("lightmap", "texels"),
+            Kind::Image => ("image", "pixels"),
         }
     }
 }
@@ -85,12 +95,13 @@ pub fn fingerprint(
     h.0
 }
 
-/// Where a lightmap shard's partial output goes: `<stem>.shard-I-of-N.txt` beside the .glb.
-pub fn lightmap_part_path(glb: &Path, shard: Shard) -> PathBuf {
-    let stem = glb
+/// Where a shard's partial lightmap or image goes: `<stem>.shard-I-of-N.txt` beside the target
+/// (the lightmap's .glb, the image).
+pub fn part_path(target: &Path, shard: Shard) -> PathBuf {
+    let stem = target
         .file_stem()
-        .map_or("lightmap".into(), |s| s.to_string_lossy());
-    glb.with_file_name(format!(
+        .map_or("output".into(), |s| s.to_string_lossy());
+    target.with_file_name(format!(
         "{stem}.shard-{}-of-{}.txt",
         shard.index, shard.count
     ))
@@ -142,6 +153,37 @@ pub fn parse_gathered(line: &str) -> Option<Gathered> {
             _ => return None,
         },
     })
+}
+
+/// The estimates (one per point, in order) of `merged` shards of `kind` ([`gathered_line`]s),
+/// checked to be of the run whose fingerprint is `fingerprint` (hexadecimal); the error says
+/// why not.
+pub fn merged_estimates(
+    merged: &Merged,
+    kind: Kind,
+    fingerprint: &str,
+) -> Result<Vec<Gathered>, String> {
+    let (what, unit) = kind.words();
+    if merged.kind != kind {
+        return Err(format!(
+            "these are shards of {} {}, not of {what} {unit}",
+            merged.kind.words().0,
+            merged.kind.words().1
+        ));
+    }
+    if merged.fingerprint != fingerprint {
+        return Err(format!(
+            "the shards have fingerprint {}, this run {fingerprint}: they are of another scene, \
+             {what} or solve settings (give the options of the shard runs, --shard excepted, \
+             --block-points included)",
+            merged.fingerprint
+        ));
+    }
+    (merged.text.lines().enumerate())
+        .map(|(i, line)| {
+            parse_gathered(line).ok_or_else(|| format!("{what} {i}: not an estimate: `{line}`"))
+        })
+        .collect()
 }
 
 /// FNV-1a, 64 bits.
@@ -236,15 +278,13 @@ fn parse(name: &str, text: &str) -> Result<Partial, MergeError> {
             unit,
             "fingerprint",
             f,
-        ] if [Kind::Probes, Kind::Lightmap]
+        ] if KINDS
             .iter()
             .any(|k| k.words() == (what, unit.trim_end_matches(','))) =>
         {
-            let kind = if what == "probe" {
-                Kind::Probes
-            } else {
-                Kind::Lightmap
-            };
+            let kind = *(KINDS.iter())
+                .find(|k| k.words().0 == what)
+                .expect("a kind of these words");
             let shard: Shard = (shard.parse()).map_err(|e| bad(1, format!("{e}")))?;
             let m: usize = (m.parse()).map_err(|_| bad(1, format!("{what} count `{m}`")))?;
             (kind, shard, m, f.to_string())
@@ -253,8 +293,8 @@ fn parse(name: &str, text: &str) -> Result<Partial, MergeError> {
             return Err(bad(
                 1,
                 "not a partial output of `gcr solve --shard` (it starts with `# gcr probe \
-                 shard I/N of M points, fingerprint F` or `# gcr lightmap shard I/N of M \
-                 texels, …`)"
+                 shard I/N of M points, fingerprint F`, `# gcr lightmap shard I/N of M \
+                 texels, …` or `# gcr image shard I/N of M pixels, …`)"
                     .into(),
             ));
         }
@@ -308,7 +348,7 @@ pub fn read_parts(paths: &[PathBuf]) -> Result<Vec<(String, String)>, MergeError
 /// Shards merged: what they hold, the run's fingerprint and the single run's lines.
 #[derive(Clone, Debug)]
 pub struct Merged {
-    /// Probes or lightmap texels.
+    /// Probes, lightmap texels or pixels.
     pub kind: Kind,
     /// The fingerprint every shard carries (hexadecimal, as in the headers).
     pub fingerprint: String,

@@ -6,6 +6,7 @@ use super::OutputError;
 use super::camera::{CameraChoice, ImageMode, ImageSettings};
 use super::encode::{Format, format_of, write_jpeg, write_png};
 use super::mesh::output_mesh;
+use super::pixel::render_pixel_shard;
 use super::plan::{OutputPaths, OutputPlan};
 use super::raster::{Coverage, PinholeCamera, render_image, render_radiance};
 use super::stage::Stage;
@@ -72,12 +73,30 @@ pub(super) fn write_3d(
     if pixel {
         for (_, (camera, _)) in &jobs {
             let size = (settings.width, settings.height, settings.pixel_samples);
-            let img = super::pixel::render_pixels(domain, trained, config, camera, size)?;
+            let merged = merged_pixels(domain, config, plan, camera)?;
+            let img = render_pixel_shard(domain, trained, config, camera, size, merged)?;
             stage.gathers.push(img.stats);
             rendered.push(img);
         }
     }
     stage.metrics.seconds.gather += tg.elapsed().as_secs_f64();
+    if let Some(shard) = config.paths.shard {
+        // ⟨A shard writes its pixels' estimates (its lightmap's texels), nothing else⟩
+        for ((path, (camera, _)), img) in jobs.iter().zip(&rendered) {
+            write_pixel_part(
+                domain,
+                config,
+                (settings, camera),
+                img,
+                (path, shard),
+                stage,
+            )?;
+        }
+        if let Some(path) = &paths.lightmap {
+            super::lightmap::write_lightmap(domain, trained, config, plan, path, stage)?;
+        }
+        return Ok(());
+    }
     // ⟨The lightmap: its own gather at the texels, its files⟩
     if let Some(path) = &paths.lightmap {
         super::lightmap::write_lightmap(domain, trained, config, plan, path, stage)?;
@@ -122,6 +141,65 @@ pub(super) fn write_3d(
     }
     metrics.seconds.output += to.elapsed().as_secs_f64();
     Ok(())
+}
+
+/// The fingerprint of a sharded per-pixel image ([`super::shards::fingerprint`]): the scene, the
+/// settings, the camera and the resolution.
+fn pixel_fingerprint(
+    domain: &Domain,
+    config: &SolveConfig,
+    settings: &ImageSettings,
+    camera: &PinholeCamera,
+) -> u64 {
+    let view = format!("{camera:?} {}x{}", settings.width, settings.height);
+    super::shards::fingerprint(domain, &[], config, &view)
+}
+
+/// The pixels' estimates merged from shards (`--from-shards`), checked to be of this image;
+/// `None` when the image is gathered.
+fn merged_pixels(
+    domain: &Domain,
+    config: &SolveConfig,
+    plan: &OutputPlan,
+    camera: &PinholeCamera,
+) -> Result<Option<Vec<crate::gather::Gathered>>, OutputError> {
+    let kind = super::shards::Kind::Image;
+    if !plan.merges(kind) {
+        return Ok(None);
+    }
+    let settings = plan.images();
+    let print = pixel_fingerprint(domain, config, settings, camera);
+    let merged = plan.merged_shards(kind, print)?;
+    let pixels = settings.width as usize * settings.height as usize;
+    if merged.len() != pixels {
+        return Err(OutputError::MergeShards(format!(
+            "the shards hold {} pixels, the image {pixels}",
+            merged.len()
+        )));
+    }
+    Ok(Some(merged))
+}
+
+/// Writes a shard's partial image (`<stem>.shard-I-of-N.txt` beside the image: its pixels'
+/// whole estimates with their indices, `super::shards`) instead of the image.
+fn write_pixel_part(
+    domain: &Domain,
+    config: &SolveConfig,
+    (settings, camera): (&ImageSettings, &PinholeCamera),
+    img: &super::pixel::PixelImage,
+    (path, shard): (&Path, crate::config::Shard),
+    stage: &mut Stage,
+) -> Result<(), OutputError> {
+    use super::shards::{Kind, gathered_line, part_path, partial_text};
+    let Some((estimates, mine)) = &img.shard else {
+        return Ok(());
+    };
+    let lines: Vec<String> = estimates.iter().map(gathered_line).collect();
+    let print = pixel_fingerprint(domain, config, settings, camera);
+    let text = partial_text(Kind::Image, shard, print, &lines, mine);
+    let part = part_path(path, shard);
+    super::staged::check_target(&part, "image shard", None)?;
+    stage.files.write_bytes(&part, text.as_bytes())
 }
 
 /// The automatic exposure of a mesh's outputs: from the radiosity of its faces that do not emit.

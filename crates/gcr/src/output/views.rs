@@ -67,49 +67,37 @@ pub(super) fn write_3d(
         mesh.as_ref().zip(mesh_exposure.as_ref()),
         settings,
     );
-    // ⟨Per-pixel images: B gathered at every sub-sample's visible point⟩
+    // ⟨Per-pixel images: B gathered at every sub-sample's visible point (or merged)⟩
     let tg = Instant::now();
     let mut rendered = Vec::new();
-    if pixel {
-        for (_, (camera, _)) in &jobs {
-            let size = (settings.width, settings.height, settings.pixel_samples);
-            let merged = merged_pixels(domain, config, plan, camera)?;
-            let img = render_pixel_shard(domain, trained, config, camera, size, merged)?;
-            stage.gathers.push(img.stats);
-            rendered.push(img);
-        }
+    for (_, (camera, _)) in jobs.iter().filter(|_| pixel) {
+        let size = (settings.width, settings.height, settings.pixel_samples);
+        let merged = merged_pixels(domain, config, plan, camera)?;
+        let img = render_pixel_shard(domain, trained, config, camera, size, merged)?;
+        stage.gathers.push(img.stats);
+        rendered.push(img);
     }
     stage.metrics.seconds.gather += tg.elapsed().as_secs_f64();
-    if let Some(shard) = config.paths.shard {
-        // ⟨A shard writes its pixels' estimates (its lightmap's texels), nothing else⟩
-        for ((path, (camera, _)), img) in jobs.iter().zip(&rendered) {
-            write_pixel_part(
-                domain,
-                config,
-                (settings, camera),
-                img,
-                (path, shard),
-                stage,
-            )?;
-        }
-        if let Some(path) = &paths.lightmap {
-            super::lightmap::write_lightmap(domain, trained, config, plan, path, stage)?;
-        }
-        return Ok(());
-    }
-    // ⟨The lightmap: its own gather at the texels, its files⟩
+    // ⟨The lightmap: its own gather at the texels, its files (a shard: its part)⟩
     if let Some(path) = &paths.lightmap {
         super::lightmap::write_lightmap(domain, trained, config, plan, path, stage)?;
+    }
+    if let Some(shard) = config.paths.shard {
+        // ⟨A shard writes its pixels' estimates, no image⟩
+        let images = jobs.iter().map(|(path, (camera, _))| (*path, camera));
+        return write_pixel_parts(
+            domain,
+            config,
+            settings,
+            images.zip(&rendered),
+            shard,
+            stage,
+        );
     }
     let (metrics, staged) = (&mut stage.metrics, &mut stage.files);
     let to = Instant::now();
     // ⟨One exposure for every tone-mapped output⟩
-    let exposure = match (settings.exposure, &mesh_exposure, rendered.first()) {
-        (Some(scale), _, _) => Exposure { scale },
-        (None, Some(e), _) => *e,
-        (None, None, Some(img)) => Exposure::auto(img.lit()),
-        (None, None, None) => Exposure { scale: 1.0 },
-    };
+    let exposure = one_exposure(settings, mesh_exposure, rendered.first());
     let tone_mapped = paths.mesh.is_some()
         || paths.ply.is_some()
         || jobs.iter().any(|(p, _)| format_of(p) != Format::Exr);
@@ -141,6 +129,21 @@ pub(super) fn write_3d(
     }
     metrics.seconds.output += to.elapsed().as_secs_f64();
     Ok(())
+}
+
+/// The exposure of every tone-mapped output: given, else the mesh's, else from the first pixel
+/// image's lit hits, else 1.
+fn one_exposure(
+    settings: &ImageSettings,
+    mesh: Option<Exposure>,
+    first_image: Option<&super::pixel::PixelImage>,
+) -> Exposure {
+    match (settings.exposure, mesh, first_image) {
+        (Some(scale), _, _) => Exposure { scale },
+        (None, Some(e), _) => e,
+        (None, None, Some(img)) => Exposure::auto(img.lit()),
+        (None, None, None) => Exposure { scale: 1.0 },
+    }
 }
 
 /// The fingerprint of a sharded per-pixel image ([`super::shards::fingerprint`]): the scene, the
@@ -180,26 +183,29 @@ fn merged_pixels(
     Ok(Some(merged))
 }
 
-/// Writes a shard's partial image (`<stem>.shard-I-of-N.txt` beside the image: its pixels'
-/// whole estimates with their indices, `super::shards`) instead of the image.
-fn write_pixel_part(
+/// Writes a shard's partial images (`<stem>.shard-I-of-N.txt` beside each image: its pixels'
+/// whole estimates with their indices, `super::shards`) instead of the images.
+fn write_pixel_parts<'a>(
     domain: &Domain,
     config: &SolveConfig,
-    (settings, camera): (&ImageSettings, &PinholeCamera),
-    img: &super::pixel::PixelImage,
-    (path, shard): (&Path, crate::config::Shard),
+    settings: &ImageSettings,
+    images: impl Iterator<Item = ((&'a Path, &'a PinholeCamera), &'a super::pixel::PixelImage)>,
+    shard: crate::config::Shard,
     stage: &mut Stage,
 ) -> Result<(), OutputError> {
     use super::shards::{Kind, gathered_line, part_path, partial_text};
-    let Some((estimates, mine)) = &img.shard else {
-        return Ok(());
-    };
-    let lines: Vec<String> = estimates.iter().map(gathered_line).collect();
-    let print = pixel_fingerprint(domain, config, settings, camera);
-    let text = partial_text(Kind::Image, shard, print, &lines, mine);
-    let part = part_path(path, shard);
-    super::staged::check_target(&part, "image shard", None)?;
-    stage.files.write_bytes(&part, text.as_bytes())
+    for ((path, camera), img) in images {
+        let Some((estimates, mine)) = &img.shard else {
+            continue;
+        };
+        let lines: Vec<String> = estimates.iter().map(gathered_line).collect();
+        let print = pixel_fingerprint(domain, config, settings, camera);
+        let text = partial_text(Kind::Image, shard, print, &lines, mine);
+        let part = part_path(path, shard);
+        super::staged::check_target(&part, "image shard", None)?;
+        stage.files.write_bytes(&part, text.as_bytes())?;
+    }
+    Ok(())
 }
 
 /// The automatic exposure of a mesh's outputs: from the radiosity of its faces that do not emit.

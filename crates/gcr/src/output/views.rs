@@ -43,17 +43,10 @@ pub(super) fn write_3d(
     let images = image_jobs(paths, settings);
     let pixel = settings.mode == ImageMode::Pixel;
     // ⟨The output mesh, when an output needs it⟩
-    let tg = Instant::now();
-    let mesh = if plan.needs_mesh() {
-        let (mesh, stats) = output_mesh(domain, trained, config, RetriangulateLimits::default())?;
-        stage.gathers.push(stats);
-        stage.metrics.output_vertices = mesh.vertex_count();
-        stage.metrics.output_triangles = mesh.triangle_count();
-        Some(mesh)
-    } else {
-        None
+    let mesh = match plan.needs_mesh() {
+        true => Some(staged_mesh(domain, trained, config, stage)?),
+        false => None,
     };
-    stage.metrics.seconds.gather += tg.elapsed().as_secs_f64();
     // ⟨Each image's camera (the automatic one from the mesh's brightness, before any exposure
     // is known: its own)⟩
     let mesh_exposure = mesh.as_ref().map(|m| match settings.exposure {
@@ -129,6 +122,22 @@ pub(super) fn write_3d(
     }
     metrics.seconds.output += to.elapsed().as_secs_f64();
     Ok(())
+}
+
+/// The output mesh, its gather's statistics, size and time recorded in `stage`.
+fn staged_mesh(
+    domain: &Domain,
+    trained: &Trained,
+    config: &SolveConfig,
+    stage: &mut Stage,
+) -> Result<ShadedMesh, OutputError> {
+    let tg = Instant::now();
+    let (mesh, stats) = output_mesh(domain, trained, config, RetriangulateLimits::default())?;
+    stage.gathers.push(stats);
+    stage.metrics.output_vertices = mesh.vertex_count();
+    stage.metrics.output_triangles = mesh.triangle_count();
+    stage.metrics.seconds.gather += tg.elapsed().as_secs_f64();
+    Ok(mesh)
 }
 
 /// The exposure of every tone-mapped output: given, else the mesh's, else from the first pixel

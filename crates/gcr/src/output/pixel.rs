@@ -358,9 +358,15 @@ impl PixelStrips {
         config: &SolveConfig,
     ) -> Vec<Gathered> {
         let rays = (config.gather_samples.direct).max(config.gather_samples.indirect);
-        let mut gathered = vec![Gathered::default(); self.pixels];
-        for &s in mine {
+        // strip by strip in order, each strip's values moved in: one image of estimates at the
+        // peak and a strip's (the whole image's when it is one strip: moved, not copied)
+        let mut gathered = Vec::with_capacity(if self.count() > 1 { self.pixels } else { 0 });
+        for s in 0..self.count() {
             let strip = self.pixels(s);
+            if mine.binary_search(&s).is_err() {
+                gathered.resize(strip.end, Gathered::default());
+                continue;
+            }
             let at = |i: usize, first: usize, rays: usize| estimate(strip.start + i, first, rays);
             let values: Vec<Gathered> = match config.paths.target_error {
                 Some(target) => crate::estimator::pixel_rounds::allocated_rounds(
@@ -375,7 +381,10 @@ impl PixelStrips {
                     .map(|p| estimate(p, 0, rays).gathered())
                     .collect(),
             };
-            gathered[strip].copy_from_slice(&values);
+            match self.count() {
+                1 => gathered = values,
+                _ => gathered.extend(values),
+            }
         }
         gathered
     }

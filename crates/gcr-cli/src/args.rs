@@ -280,9 +280,10 @@ pub struct SolveArgs {
     )]
     pub shard: Option<gcr::Shard>,
     /// The paths gather runs its rounds in blocks of at least this many points, each to the
-    /// target on its own (a point's value then depends only on its block); blocks are what
-    /// --shard splits, so a sharded run needs them, the same in every shard and in any single
-    /// run compared with it [default: one block, every point to the target together].
+    /// target on its own (a point's value then depends only on its block; a per-pixel image's
+    /// blocks are strips of whole rows of at least N pixels); blocks are what --shard splits, so
+    /// a sharded run needs them, the same in every shard and in any single run compared with it
+    /// [default: one block, every point to the target together].
     #[arg(help_heading = "Probes and work planes", long, value_name = "N", value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     pub block_points: Option<usize>,
     /// What the probes get: `radiosity` (B at surface points: each probe snaps onto the nearest

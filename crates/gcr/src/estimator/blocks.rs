@@ -100,14 +100,7 @@ impl Blocks {
         count: usize,
         settings: &PathSettings,
     ) -> Result<Vec<usize>, ShardError> {
-        if let (Some(shard), true) = (settings.shard, self.mine.is_empty()) {
-            return Err(ShardError::Empty {
-                shard,
-                blocks: self.blocks.len(),
-                points: count,
-                block_points: settings.block_points,
-            });
-        }
+        check_shard(self.mine.is_empty(), (self.blocks.len(), count), settings)?;
         Ok(self.points())
     }
 
@@ -141,6 +134,24 @@ pub fn shard_points(
         false => points,
     };
     Blocks::new(domain, points, &config.paths).estimated(points.len(), &config.paths)
+}
+
+/// An error when `settings` ask for a shard and it has no block (`empty`) of the `blocks` blocks
+/// of `points` points (probes, texels, or an image's strips of pixels).
+pub(crate) fn check_shard(
+    empty: bool,
+    (blocks, points): (usize, usize),
+    settings: &PathSettings,
+) -> Result<(), ShardError> {
+    match (settings.shard, empty) {
+        (Some(shard), true) => Err(ShardError::Empty {
+            shard,
+            blocks,
+            points,
+            block_points: settings.block_points,
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// A shard that cannot be formed.

@@ -335,17 +335,10 @@ impl PixelStrips {
     /// The strips (ascending) `config`'s shard computes; every strip without a shard; an error
     /// when the shard has none.
     fn mine(&self, config: &SolveConfig) -> Result<Vec<usize>, GatherError> {
-        let mine = crate::estimator::blocks::of_shard(self.count(), config.paths.shard);
-        match config.paths.shard {
-            Some(shard) if mine.is_empty() => Err(crate::ShardError::Empty {
-                shard,
-                blocks: self.count(),
-                points: self.pixels,
-                block_points: config.paths.block_points,
-            }
-            .into()),
-            _ => Ok(mine),
-        }
+        use crate::estimator::blocks::{check_shard, of_shard};
+        let mine = of_shard(self.count(), config.paths.shard);
+        check_shard(mine.is_empty(), (self.count(), self.pixels), &config.paths)?;
+        Ok(mine)
     }
 
     /// Every pixel's estimate (those of strips not in `mine` left at `Gathered::default()`):

@@ -266,7 +266,7 @@ fn parse(name: &str, text: &str) -> Result<Partial, MergeError> {
     let header = lines.next().unwrap_or("");
     let fields: Vec<&str> = header.split_whitespace().collect();
     // # gcr probe shard I/N of M points, fingerprint F
-    let (kind, shard, points, fingerprint) = match fields[..] {
+    let header = match fields[..] {
         [
             "#",
             "gcr",
@@ -278,28 +278,24 @@ fn parse(name: &str, text: &str) -> Result<Partial, MergeError> {
             unit,
             "fingerprint",
             f,
-        ] if KINDS
-            .iter()
-            .any(|k| k.words() == (what, unit.trim_end_matches(','))) =>
-        {
-            let kind = *(KINDS.iter())
-                .find(|k| k.words().0 == what)
-                .expect("a kind of these words");
-            let shard: Shard = (shard.parse()).map_err(|e| bad(1, format!("{e}")))?;
-            let m: usize = (m.parse()).map_err(|_| bad(1, format!("{what} count `{m}`")))?;
-            (kind, shard, m, f.to_string())
-        }
-        _ => {
-            return Err(bad(
-                1,
-                "not a partial output of `gcr solve --shard` (it starts with `# gcr probe \
-                 shard I/N of M points, fingerprint F`, `# gcr lightmap shard I/N of M \
-                 texels, …` or `# gcr image shard I/N of M pixels, …`)"
-                    .into(),
-            ));
-        }
+        ] => (KINDS.iter())
+            .find(|k| k.words() == (what, unit.trim_end_matches(',')))
+            .map(|&kind| (kind, shard, m, f)),
+        _ => None,
+    };
+    let Some((kind, shard, m, f)) = header else {
+        return Err(bad(
+            1,
+            "not a partial output of `gcr solve --shard` (it starts with `# gcr probe shard I/N \
+             of M points, fingerprint F`, `# gcr lightmap shard I/N of M texels, …` or `# gcr \
+             image shard I/N of M pixels, …`)"
+                .into(),
+        ));
     };
     let what = kind.words().0;
+    let shard: Shard = (shard.parse()).map_err(|e| bad(1, format!("{e}")))?;
+    let points: usize = (m.parse()).map_err(|_| bad(1, format!("{what} count `{m}`")))?;
+    let fingerprint = f.to_string();
     let mut out = Vec::new();
     for (k, line) in lines.enumerate() {
         let (index, rest) = line

@@ -243,6 +243,11 @@ pub struct SolveArgs {
         requires = "lightmap"
     )]
     pub lightmap_quantity: gcr::LightmapQuantity,
+    /// Denoise the lightmap: each texel averaged with its neighbours on the same surface over
+    /// the scale Stein's unbiased risk estimate says is best there; the reported error includes
+    /// the blur (docs/guide/lightmaps.md, "Denoising").
+    #[arg(long, help_heading = "Lightmaps", requires = "lightmap")]
+    pub lightmap_denoise: bool,
     /// Take the lightmap's texels, or the per-pixel image's pixels, from the partial outputs of
     /// `--shard` runs (<NAME>.shard-I-of-N.txt, every shard once) instead of gathering them, and
     /// write the files a single run writes, byte for byte; give the shard runs' options, --shard
@@ -481,6 +486,7 @@ impl SolveArgs {
             page_size: self.lightmap_size,
             padding: self.lightmap_padding,
             quantity: self.lightmap_quantity,
+            denoise: self.lightmap_denoise,
         }
     }
 

@@ -214,12 +214,13 @@ fn shards_of_different_runs_are_not_merged() {
 }
 
 /// A lightmap baked in three shards and merged by `--from-shards` is the single run's .glb and
-/// EXR page, byte for byte (irradiance and radiosity); shards of other settings, a missing
-/// shard and `gcr merge` on lightmap shards are refused, writing nothing.
+/// EXR page, byte for byte (irradiance, and radiosity denoised: every run gathers the same
+/// guide, each block stops on its denoised error); shards of other settings, a missing shard and
+/// `gcr merge` on lightmap shards are refused, writing nothing.
 #[test]
 fn lightmap_shards_merge_into_the_single_bake() {
     let d = dir("shards", "lightmap");
-    for quantity in ["irradiance", "radiosity"] {
+    for (quantity, denoise) in [("irradiance", false), ("radiosity", true)] {
         let bake_at = |density: &str, out: &Path, more: &[&str]| {
             let mut args = vec![
                 "solve",
@@ -235,6 +236,9 @@ fn lightmap_shards_merge_into_the_single_bake() {
                 "--quality",
                 "draft",
             ];
+            if denoise {
+                args.push("--lightmap-denoise");
+            }
             args.extend(more);
             gcr(&args)
         };

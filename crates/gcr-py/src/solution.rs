@@ -18,7 +18,7 @@ fn lightmap_settings(
     density: Option<f64>,
     size: Option<u32>,
     padding: Option<u32>,
-    quantity: Option<String>,
+    (quantity, denoise): (Option<String>, bool),
 ) -> PyResult<gcr::LightmapSettings> {
     let defaults = gcr::LightmapSettings::default();
     Ok(gcr::LightmapSettings {
@@ -29,6 +29,7 @@ fn lightmap_settings(
             Some(q) => q.parse().map_err(crate::errors::value_error)?,
             None => defaults.quantity,
         },
+        denoise,
     })
 }
 
@@ -209,8 +210,8 @@ impl Solution {
     /// Writes the program's outputs of this solution, as ``gcr solve`` does after its solve:
     /// ``image`` (.png, .jpg, .exr), ``mesh`` (glTF .glb with vertex colours: the bake),
     /// ``lightmap`` (.glb with a lightmap atlas on TEXCOORD_1 and the EXR pages beside it, with
-    /// ``lightmap_density``, ``lightmap_size``, ``lightmap_padding`` and ``lightmap_quantity``
-    /// as ``--lightmap-*``), ``ply``,
+    /// ``lightmap_density``, ``lightmap_size``, ``lightmap_padding``, ``lightmap_quantity`` and
+    /// ``lightmap_denoise`` as ``--lightmap-*``), ``ply``,
     /// ``metrics`` (JSON), ``probes`` (a probe file) with ``probe_out`` (and
     /// ``probe_quantity``, ``probe_tolerance``), ``kernel_image`` (Flatland), ``views``
     /// (``(path, eye, target[, up[, fov]])`` each), and the camera and image options of
@@ -229,7 +230,7 @@ impl Solution {
         *, image=None, mesh=None, ply=None, metrics=None, probes=None, probe_out=None,
         probe_quantity=None, probe_tolerance=None, kernel_image=None, views=Vec::new(),
         lightmap=None, lightmap_density=None, lightmap_size=None, lightmap_padding=None,
-        lightmap_quantity=None, shard=None, from_shards=Vec::new(),
+        lightmap_quantity=None, lightmap_denoise=false, shard=None, from_shards=Vec::new(),
         camera_eye=None, camera_target=None, camera_up=[0.0, 1.0, 0.0], fov=None,
         auto_camera=false, resolution=None, image_mode=None, pixel_samples=1, exposure=None,
         progress=None
@@ -253,6 +254,7 @@ impl Solution {
         lightmap_size: Option<u32>,
         lightmap_padding: Option<u32>,
         lightmap_quantity: Option<String>,
+        lightmap_denoise: bool,
         shard: Option<(usize, usize)>,
         from_shards: Vec<PathBuf>,
         camera_eye: Option<[f64; 3]>,
@@ -295,7 +297,7 @@ impl Solution {
                 lightmap_density,
                 lightmap_size,
                 lightmap_padding,
-                lightmap_quantity,
+                (lightmap_quantity, lightmap_denoise),
             )?,
             shard: match shard {
                 None => None,

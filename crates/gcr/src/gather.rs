@@ -49,6 +49,11 @@ pub struct Gathered {
     pub from_networks: Bands,
     /// The estimate's standard error where the gather measures it (`paths`); 0 otherwise.
     pub std_error: Bands,
+    /// The paths gather's two replicates' estimates A and B as their signed half-difference
+    /// (A − B)/2 (so |spread| = std_error); 0 where nothing is measured. The product of two
+    /// points' spreads estimates the covariance of their values without bias (neighbours share
+    /// paths): what the lightmap denoiser's error estimate needs (`lightmap/denoise.rs`).
+    pub spread: Bands,
     /// Shadow rays and cosine rays (each: the larger count) per point behind the value (`rays`,
     /// `paths`); 0 for the gathers that cast none.
     pub rays: usize,

@@ -71,11 +71,14 @@ pub use estimator::{
 };
 pub use gather::Gathered;
 pub use lightmap::{
-    Atlas as LightmapAtlas, FaceUv, Lightmap, LightmapError, LightmapQuantity, LightmapSettings,
-    LightmapTexels, Texel, assemble_lightmap, bake_lightmap, gather_texels, lay_out_texels,
+    Atlas as LightmapAtlas, DenoiseReport, FaceUv, Lightmap, LightmapError, LightmapQuantity,
+    LightmapSettings, LightmapTexels, Texel, assemble_lightmap, bake_lightmap, gather_texels,
+    lay_out_texels,
 };
 pub use mesh::ShadedMesh;
-pub use metrics::{ImageRecord, LightmapRecord, Metrics, PhaseTimes, peak_memory_bytes};
+pub use metrics::{
+    DenoiseRecord, ImageRecord, LightmapRecord, Metrics, PhaseTimes, peak_memory_bytes,
+};
 pub use network::GrowingNetwork;
 pub use options::{SolveOptions, solve_for_outputs};
 pub use output::{output_mesh, vertex_gather_point};

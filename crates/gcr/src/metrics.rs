@@ -49,6 +49,24 @@ pub struct LightmapRecord {
     pub left_out: usize,
     /// The 8-bit pages' scale (PNG value = linear value × scale, sRGB-encoded).
     pub png_scale: f64,
+    /// What the denoiser did (`--lightmap-denoise`), when it ran.
+    pub denoised: Option<DenoiseRecord>,
+}
+
+/// What the lightmap denoiser did (`lightmap/denoise.rs`).
+#[derive(Clone, Debug, Serialize)]
+pub struct DenoiseRecord {
+    /// The texels' estimated relative error before denoising (the solve's `relative_std_error`
+    /// is the denoised one's).
+    pub raw_error: Option<f64>,
+    /// The share of the texels left as they were (their region chose no averaging).
+    pub unfiltered: f64,
+    /// The texels' mean spatial σ of the chosen filters, in texels.
+    pub mean_sigma: f64,
+    /// Seconds spent on the guide bake and on the filters.
+    pub guide_seconds: f64,
+    /// Seconds spent on the filters.
+    pub filter_seconds: f64,
 }
 
 /// Everything a user may want to know about a solve.

@@ -162,6 +162,7 @@ class Solution:
         lightmap_size: int | None = None,
         lightmap_padding: int | None = None,
         lightmap_quantity: Literal["irradiance", "radiosity"] | None = None,
+        lightmap_denoise: bool = False,
         shard: tuple[int, int] | None = None,
         from_shards: Sequence[str | os.PathLike[str]] = (),
         camera_eye: Sequence[float] | None = None,

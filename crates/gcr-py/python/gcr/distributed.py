@@ -108,8 +108,8 @@ def bake_lightmap(
     .write(lightmap=lightmap, **write)`` writes it, byte for byte, its texels estimated as
     ``shards`` shards on the Dask ``client``'s workers; returns the metrics of the writing run.
     ``write``: the lightmap options of :meth:`gcr.Solution.write` (``lightmap_density``,
-    ``lightmap_size``, ``lightmap_padding``, ``lightmap_quantity``); the rest as
-    :func:`shard_values`. Each worker returns its shard's part as text, so no file system is
+    ``lightmap_size``, ``lightmap_padding``, ``lightmap_quantity``, ``lightmap_denoise``); the
+    rest as :func:`shard_values`. Each worker returns its shard's part as text, so no file system is
     shared; the client lays the atlas out again and writes the files.
     """
     settings = _settings(scene, load, solve, block_points)

@@ -31,4 +31,5 @@ pub use points::{
     GatherError, irradiance_at_points, irradiance_at_shard, point_seed, radiosity_at_points,
     radiosity_at_shard,
 };
+pub(crate) use rounds::StopOn;
 pub use rounds::{GatherStats, relative_std_error};

@@ -213,6 +213,9 @@ impl PointEstimate {
             } else {
                 0.0
             };
+            if replicates == 2 {
+                out.spread[k] = share[0][k] - share[1][k];
+            }
         }
         out
     }

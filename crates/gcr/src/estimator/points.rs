@@ -5,7 +5,7 @@
 
 use super::blocks::Blocks;
 use super::paths::PathGather;
-use super::rounds::{grouped_rounds, paths_to_target};
+use super::rounds::{StopOn, grouped_rounds, paths_to_target};
 use crate::config::{GatherMode, SolveConfig};
 use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
@@ -45,7 +45,8 @@ pub fn radiosity_at_points(
     config: &SolveConfig,
     points: &[(DVec3, DVec3, u32)],
 ) -> Result<Vec<Gathered>, GatherError> {
-    radiosity_at_shard(domain, trained, emitters, config, points).map(|(gathered, _)| gathered)
+    radiosity_at_shard(domain, trained, emitters, config, (points, None))
+        .map(|(gathered, _)| gathered)
 }
 
 /// [`radiosity_at_points`] and the indices (ascending) of the points estimated: those of the
@@ -57,7 +58,7 @@ pub fn radiosity_at_shard(
     trained: &Trained,
     emitters: &Emitters,
     config: &SolveConfig,
-    points: &[(DVec3, DVec3, u32)],
+    (points, stop): (&[(DVec3, DVec3, u32)], Option<&StopOn<'_>>),
 ) -> Result<(Vec<Gathered>, Vec<usize>), GatherError> {
     check_base(trained, config)?;
     let frame = domain.frame();
@@ -76,6 +77,7 @@ pub fn radiosity_at_shard(
     let gathered = match (target, blocks) {
         // ⟨The paths gather to a target: in rounds, block by block⟩
         (Some(target), Some(blocks)) => {
+            let target = (target, stop);
             paths_to_target(domain, &paths, (points, &seeds), &blocks, target, config)
         }
         // ⟨Otherwise each point on its own by the configured gather (a shard's points only)⟩
@@ -114,7 +116,8 @@ pub fn irradiance_at_points(
     config: &SolveConfig,
     points: &[(DVec3, DVec3)],
 ) -> Result<Vec<Gathered>, GatherError> {
-    irradiance_at_shard(domain, trained, emitters, config, points).map(|(gathered, _)| gathered)
+    irradiance_at_shard(domain, trained, emitters, config, (points, None))
+        .map(|(gathered, _)| gathered)
 }
 
 /// [`irradiance_at_points`] and the indices (ascending) of the points estimated, as
@@ -124,7 +127,7 @@ pub fn irradiance_at_shard(
     trained: &Trained,
     emitters: &Emitters,
     config: &SolveConfig,
-    points: &[(DVec3, DVec3)],
+    (points, stop): (&[(DVec3, DVec3)], Option<&StopOn<'_>>),
 ) -> Result<(Vec<Gathered>, Vec<usize>), GatherError> {
     if config.gather != GatherMode::Paths {
         return Err(GatherError::IrradianceNeedsPaths(config.gather.name()));
@@ -147,7 +150,7 @@ pub fn irradiance_at_shard(
         (Some(target), Some(blocks)) => {
             let white = |_| ([1.0; BANDS], [0.0; BANDS]);
             let at = (&receivers[..], &seeds[..]);
-            grouped_rounds(domain, &paths, at, &blocks, white, target, config)
+            grouped_rounds(domain, &paths, at, &blocks, white, (target, stop), config)
         }
         (_, blocks) => {
             let mine = blocks.map(|b| b.mask(points.len()));

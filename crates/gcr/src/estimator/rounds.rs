@@ -30,7 +30,7 @@ pub(super) fn paths_to_target(
     paths: &PathGather<impl Fn(DVec3, DVec3) -> Bands + Sync>,
     (points, seeds): (&[(DVec3, DVec3, u32)], &[u64]),
     blocks: &Blocks,
-    target: f64,
+    target: (f64, Option<&StopOn<'_>>),
     config: &SolveConfig,
 ) -> Vec<Gathered> {
     let material =
@@ -46,17 +46,25 @@ pub(super) fn paths_to_target(
     )
 }
 
+/// The error the rounds of a block stop on instead of the relative standard error
+/// ([`error_bound`]): of the block's points (their indices among all the points gathered, in
+/// ascending order) and their values so far; None when nothing was measured. The lightmap
+/// denoiser's estimate (`lightmap/denoise.rs`): a denoised bake stops when its denoised texels
+/// meet the target.
+pub(crate) type StopOn<'a> = dyn Fn(&[usize], &[Gathered]) -> Option<f64> + Sync + 'a;
+
 /// [`rounds_to_target`] over the groups of neighbouring `points` with their `seeds`, block by
 /// block ([`Blocks`] of these points: each block's rounds on their own; only the blocks of the
 /// configured shard, the other points left at `Gathered::default()`), each round of a group by
-/// [`PathGather::estimate_group`] with the members' (ρ, E) from `material`.
+/// [`PathGather::estimate_group`] with the members' (ρ, E) from `material`; `target` the error
+/// to reach and what it is of ([`StopOn`]; default the relative standard error).
 pub(super) fn grouped_rounds(
     domain: &Domain,
     paths: &PathGather<impl Fn(DVec3, DVec3) -> Bands + Sync>,
     (points, seeds): (&[(DVec3, DVec3, u32)], &[u64]),
     blocks: &Blocks,
     material: impl Fn((DVec3, DVec3, u32)) -> (Bands, Bands) + Sync,
-    target: f64,
+    target: (f64, Option<&StopOn<'_>>),
     config: &SolveConfig,
 ) -> Vec<Gathered> {
     let groups = &blocks.groups;
@@ -73,7 +81,12 @@ pub(super) fn grouped_rounds(
         let block_points: Vec<_> = members.iter().map(|&i| points[i]).collect();
         let block_seeds: Vec<u64> = members.iter().map(|&i| seeds[i]).collect();
         let at = (&block_points[..], &block_groups[..], &block_seeds[..]);
-        let gathered = block_rounds(domain, paths, at, &material, target, config);
+        let (target, stop) = target;
+        let bound = |g: &[Gathered], dof: usize| match stop {
+            Some(stop) => stop(&members, g).map(|e| e * chi2_scale(dof)),
+            None => error_bound(g, dof),
+        };
+        let gathered = block_rounds(domain, paths, at, &material, (target, &bound), config);
         for (&i, g) in members.iter().zip(gathered) {
             out[i] = g;
         }
@@ -91,7 +104,7 @@ fn block_rounds(
     paths: &PathGather<impl Fn(DVec3, DVec3) -> Bands + Sync>,
     (points, groups, seeds): Block<'_>,
     material: &(impl Fn((DVec3, DVec3, u32)) -> (Bands, Bands) + Sync),
-    target: f64,
+    target: (f64, &ErrorBound<'_>),
     config: &SolveConfig,
 ) -> Vec<Gathered> {
     // ⟨Guiding: each group's guide, learned from its earlier rounds (estimator/guide.rs)⟩
@@ -144,7 +157,7 @@ fn block_rounds(
             e
         },
         (config.gather_samples, None),
-        (target, &error_bound),
+        target,
         (config.paths.max_rays, config.paths.guiding),
     )
 }

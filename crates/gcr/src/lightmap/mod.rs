@@ -17,11 +17,13 @@
 //! the lightmap referenced) are in `output/lightmap.rs`.
 
 mod atlas;
+mod denoise;
 mod dilate;
 mod settings;
 mod texels;
 
 pub use atlas::{Atlas, FaceUv};
+pub use denoise::DenoiseReport;
 pub use settings::{LightmapError, LightmapQuantity, LightmapSettings};
 pub use texels::Texel;
 
@@ -45,8 +47,11 @@ pub struct Lightmap {
     pub texels: Vec<Texel>,
     /// Texels left out because their point lay under geometry (filled by dilation).
     pub left_out: usize,
-    /// What the gather at the texels measured (its estimated relative error among them).
+    /// What the gather at the texels measured (its estimated relative error among them; with
+    /// [`LightmapSettings::denoise`], the denoised values').
     pub stats: GatherStats,
+    /// What the denoiser did, when it ran.
+    pub denoised: Option<DenoiseReport>,
 }
 
 impl Lightmap {
@@ -125,8 +130,25 @@ pub fn bake_lightmap(
     settings: &LightmapSettings,
 ) -> Result<Lightmap, LightmapError> {
     let texels = lay_out_texels(domain, settings)?;
-    let (gathered, _) = gather_texels(domain, trained, config, settings, &texels)?;
-    Ok(assemble_lightmap(texels, &gathered, settings))
+    let guide = if settings.denoise {
+        Some(gather_guide(domain, trained, config, settings, &texels)?)
+    } else {
+        None
+    };
+    let (gathered, _) = gather_texels(
+        domain,
+        trained,
+        config,
+        settings,
+        (&texels, guide.as_deref()),
+    )?;
+    Ok(assemble_lightmap(
+        domain,
+        texels,
+        &gathered,
+        guide.as_deref(),
+        settings,
+    ))
 }
 
 /// Steps 1 and 2: the atlas and the texels' points ([`LightmapTexels`]).
@@ -179,30 +201,104 @@ pub fn lay_out_texels(
 
 /// Step 3: the estimate at every texel, and the indices (ascending) of the texels estimated:
 /// with a shard in `config`, the shard's texels only, the others left at `Gathered::default()`
-/// ([`crate::shard_points`]); else every one.
+/// ([`crate::shard_points`]); else every one. With a denoiser's `guide` ([`gather_guide`]) and a
+/// target error, the rounds stop when the denoised texels meet the target
+/// ([`denoise::denoised_error`], block by block).
 pub fn gather_texels(
     domain: &Domain,
     trained: &Trained,
     config: &SolveConfig,
     settings: &LightmapSettings,
-    texels: &LightmapTexels,
+    (texels, guide): (&LightmapTexels, Option<&[Gathered]>),
 ) -> Result<(Vec<Gathered>, Vec<usize>), LightmapError> {
     let emitters = Emitters::new(domain);
     let at = texels.points();
+    let material = texel_materials(domain, &texels.texels, settings.quantity);
+    let stop = |members: &[usize], values: &[Gathered]| -> Option<f64> {
+        let guide = guide?;
+        let pick = |i: &usize| texels.texels[*i];
+        let block: Vec<Texel> = members.iter().map(pick).collect();
+        let block_guide: Vec<Gathered> = members.iter().map(|&i| guide[i]).collect();
+        let block_material: Option<Vec<_>> =
+            (material.as_ref()).map(|m| members.iter().map(|&i| m[i]).collect());
+        let values = (values, &block_guide[..]);
+        denoise::denoised_error(&texels.atlas, &block, values, block_material.as_deref())
+    };
+    let stop = guide.map(|_| &stop as &crate::estimator::StopOn);
     Ok(match settings.quantity {
         LightmapQuantity::Irradiance => {
             let at: Vec<_> = at.iter().map(|&(p, n, _)| (p, n)).collect();
-            irradiance_at_shard(domain, trained, &emitters, config, &at)?
+            irradiance_at_shard(domain, trained, &emitters, config, (&at, stop))?
         }
-        LightmapQuantity::Radiosity => radiosity_at_shard(domain, trained, &emitters, config, &at)?,
+        LightmapQuantity::Radiosity => {
+            radiosity_at_shard(domain, trained, &emitters, config, (&at, stop))?
+        }
     })
 }
 
-/// Step 4: the estimates (one per texel, in order) into the pages, dilated over the padding
-/// and the left-out texels.
+/// Each texel's (ρ, E) for a radiosity lightmap (what the denoiser demodulates by); None for
+/// irradiance.
+fn texel_materials(
+    domain: &Domain,
+    texels: &[Texel],
+    quantity: LightmapQuantity,
+) -> Option<Vec<(crate::element::Bands, crate::element::Bands)>> {
+    (quantity == LightmapQuantity::Radiosity).then(|| {
+        (texels.iter())
+            .map(|t| {
+                (
+                    domain.reflectance_at(t.face, t.point),
+                    domain.emission(t.face),
+                )
+            })
+            .collect()
+    })
+}
+
+/// Rays per texel of the denoiser's guide ([`gather_guide`]).
+pub const GUIDE_RAYS: usize = 8;
+
+/// The denoiser's guide (`lightmap/denoise.rs`): every texel's estimate with [`GUIDE_RAYS`] rays
+/// of its own (the solve's seed salted), independent of [`gather_texels`]' values; all texels,
+/// also in a shard's run, so that every run that denoises has the same guide.
+pub fn gather_guide(
+    domain: &Domain,
+    trained: &Trained,
+    config: &SolveConfig,
+    settings: &LightmapSettings,
+    texels: &LightmapTexels,
+) -> Result<Vec<Gathered>, LightmapError> {
+    let _phase = crate::progress::phase("denoiser's guide");
+    let samples = crate::config::GatherSamples {
+        direct: GUIDE_RAYS,
+        indirect: GUIDE_RAYS,
+    };
+    let guide = SolveConfig {
+        seed: config.seed ^ GUIDE_SALT,
+        gather_samples: samples,
+        paths: crate::config::PathSettings {
+            // one round of the guide's rays (the target cannot stop it earlier)
+            target_error: Some(f64::MIN_POSITIVE),
+            max_rays: GUIDE_RAYS,
+            block_points: usize::MAX,
+            shard: None,
+            ..config.paths
+        },
+        ..config.clone()
+    };
+    Ok(gather_texels(domain, trained, &guide, settings, (texels, None))?.0)
+}
+
+/// Salts the seed of [`gather_guide`].
+const GUIDE_SALT: u64 = 0x6775_6964_6520_6c6d;
+
+/// Step 4: the estimates (one per texel, in order), denoised with `guide` ([`gather_guide`]) if
+/// given, into the pages, dilated over the padding and the left-out texels.
 pub fn assemble_lightmap(
+    domain: &Domain,
     texels: LightmapTexels,
     gathered: &[Gathered],
+    guide: Option<&[Gathered]>,
     settings: &LightmapSettings,
 ) -> Lightmap {
     let LightmapTexels {
@@ -210,6 +306,19 @@ pub fn assemble_lightmap(
         texels,
         left_out,
     } = texels;
+    // ⟨Denoised: radiosity demodulated by each texel's (ρ, E)⟩
+    let mut denoised = None;
+    let denoised_values;
+    let gathered = if let Some(guide) = guide {
+        let material = texel_materials(domain, &texels, settings.quantity);
+        let (values, report) =
+            denoise::denoise(&atlas, &texels, (gathered, guide), material.as_deref());
+        denoised = Some(report);
+        denoised_values = values;
+        &denoised_values[..]
+    } else {
+        gathered
+    };
     // ⟨Into the pages, then dilated over the padding and the left-out texels⟩
     let (w, h) = (atlas.width as usize, atlas.height as usize);
     let mut pages = vec![vec![[0.0f32; 3]; w * h]; atlas.pages as usize];
@@ -222,8 +331,13 @@ pub fn assemble_lightmap(
     for (page, filled) in pages.iter_mut().zip(&mut filled) {
         dilate::dilate(page, filled, w, h, 2 * settings.padding as usize + 2);
     }
+    let mut stats = GatherStats::of(gathered);
+    if let Some(report) = denoised {
+        stats.relative_std_error = report.error;
+    }
     Lightmap {
-        stats: GatherStats::of(gathered),
+        stats,
+        denoised,
         atlas,
         pages,
         quantity: settings.quantity,

@@ -39,6 +39,9 @@ pub struct LightmapSettings {
     pub padding: u32,
     /// What the texels hold.
     pub quantity: LightmapQuantity,
+    /// Denoise the texels (`lightmap/denoise.rs`: each texel averaged over the neighbourhood its
+    /// SURE says is best, the error estimate with the blur in it).
+    pub denoise: bool,
 }
 
 impl Default for LightmapSettings {
@@ -48,6 +51,7 @@ impl Default for LightmapSettings {
             page_size: 512,
             padding: 2,
             quantity: LightmapQuantity::Irradiance,
+            denoise: false,
         }
     }
 }

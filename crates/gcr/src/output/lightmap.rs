@@ -57,10 +57,22 @@ pub(super) fn write_lightmap(
     let texels = crate::lightmap::lay_out_texels(domain, settings)?;
     let points = texels.points();
     let print = || super::shards::fingerprint(domain, &points, config, &format!("{settings:?}"));
+    // ⟨The denoiser's guide first: the rounds stop on the denoised error (every run that
+    // denoises, a shard's and the merge's too, gathers the same guide)⟩
+    let tguide = Instant::now();
+    let guide = if settings.denoise {
+        Some(crate::lightmap::gather_guide(
+            domain, trained, config, settings, &texels,
+        )?)
+    } else {
+        None
+    };
+    let guide_seconds = tguide.elapsed().as_secs_f64();
     // ⟨The texels' values: gathered (all of them, or a shard's), or the shards' merged⟩
     let (gathered, mine) = if !plan.merges(super::shards::Kind::Lightmap) {
         let _phase = crate::progress::phase("lightmap");
-        crate::lightmap::gather_texels(domain, trained, config, settings, &texels)?
+        let at = (&texels, guide.as_deref());
+        crate::lightmap::gather_texels(domain, trained, config, settings, at)?
     } else {
         let merged = plan.merged_shards(super::shards::Kind::Lightmap, print())?;
         let every = (0..merged.len()).collect();
@@ -80,7 +92,8 @@ pub(super) fn write_lightmap(
         return Ok(());
     }
     stage.metrics.warnings.extend(texels.atlas.note.clone());
-    let lightmap = crate::lightmap::assemble_lightmap(texels, &gathered, settings);
+    let lightmap =
+        crate::lightmap::assemble_lightmap(domain, texels, &gathered, guide.as_deref(), settings);
     stage.gathers.push(lightmap.stats);
     let (metrics, staged) = (&mut stage.metrics, &mut stage.files);
     metrics.seconds.gather += tg.elapsed().as_secs_f64();
@@ -114,6 +127,13 @@ pub(super) fn write_lightmap(
         texels: lightmap.texels.len(),
         left_out: lightmap.left_out,
         png_scale: scale,
+        denoised: lightmap.denoised.map(|d| crate::metrics::DenoiseRecord {
+            raw_error: d.raw_error,
+            unfiltered: d.unfiltered,
+            mean_sigma: d.mean_sigma,
+            guide_seconds,
+            filter_seconds: d.seconds,
+        }),
     });
     metrics.seconds.output += to.elapsed().as_secs_f64();
     Ok(())

@@ -235,10 +235,12 @@ pub fn gather_probe_shard(
 ) -> Result<(Vec<Gathered>, GatherStats, Vec<usize>), OutputError> {
     let (quantity, outdoor) = (settings.quantity, settings.outdoor_illuminance);
     let (mut gathered, mine) = match quantity {
-        ProbeQuantity::Radiosity => radiosity_at_shard(domain, trained, emitters, config, probes)?,
+        ProbeQuantity::Radiosity => {
+            radiosity_at_shard(domain, trained, emitters, config, (probes, None))?
+        }
         ProbeQuantity::Irradiance | ProbeQuantity::DaylightFactor => {
             let at: Vec<(DVec3, DVec3)> = probes.iter().map(|&(y, n, _)| (y, n)).collect();
-            irradiance_at_shard(domain, trained, emitters, config, &at)?
+            irradiance_at_shard(domain, trained, emitters, config, (&at, None))?
         }
     };
     // a shard's probes only ([`crate::shard_points`]); the others were not estimated

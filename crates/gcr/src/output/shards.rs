@@ -108,7 +108,8 @@ pub fn part_path(target: &Path, shard: Shard) -> PathBuf {
 }
 
 /// A texel's whole estimate as one line of a lightmap's partial output: B (or E), its share
-/// from the networks, its standard error (three bands each), the rays and whether guided.
+/// from the networks, its standard error, its replicates' signed spread (three bands each), the
+/// rays and whether guided.
 /// Rust prints an f64 with the fewest digits that read back to the same bits, so the merge
 /// restores every value exactly.
 pub fn gathered_line(g: &Gathered) -> String {
@@ -119,10 +120,11 @@ pub fn gathered_line(g: &Gathered) -> String {
             .join(" ")
     };
     format!(
-        "{} {} {} {} {}\n",
+        "{} {} {} {} {} {}\n",
         b(&g.radiosity),
         b(&g.from_networks),
         b(&g.std_error),
+        b(&g.spread),
         g.rays,
         u8::from(g.guided)
     )
@@ -132,7 +134,7 @@ pub fn gathered_line(g: &Gathered) -> String {
 pub fn parse_gathered(line: &str) -> Option<Gathered> {
     let f: Vec<&str> = line.split_whitespace().collect();
     let bands = scene_sampler::BANDS;
-    if f.len() != 3 * bands + 2 {
+    if f.len() != 4 * bands + 2 {
         return None;
     }
     let v = |k: usize| -> Option<[f64; scene_sampler::BANDS]> {
@@ -146,8 +148,9 @@ pub fn parse_gathered(line: &str) -> Option<Gathered> {
         radiosity: v(0)?,
         from_networks: v(1)?,
         std_error: v(2)?,
-        rays: f[3 * bands].parse().ok()?,
-        guided: match f[3 * bands + 1] {
+        spread: v(3)?,
+        rays: f[4 * bands].parse().ok()?,
+        guided: match f[4 * bands + 1] {
             "0" => false,
             "1" => true,
             _ => return None,
@@ -487,6 +490,7 @@ mod tests {
             radiosity: [0.1 + 0.2, 1e-310, 123456.789],
             from_networks: [0.0, -0.0, 1.0 / 3.0],
             std_error: [f64::MIN_POSITIVE, 2.5e-17, 7.0],
+            spread: [-f64::MIN_POSITIVE, 2.5e-17, -7.0],
             rays: 65536,
             guided: true,
         };
@@ -494,7 +498,7 @@ mod tests {
         assert!(line.ends_with('\n'));
         let back = parse_gathered(&line).unwrap();
         let bits = |g: &Gathered| {
-            let v = [g.radiosity, g.from_networks, g.std_error].concat();
+            let v = [g.radiosity, g.from_networks, g.std_error, g.spread].concat();
             (
                 v.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
                 g.rays,

@@ -36,12 +36,15 @@
 //! F is linear in y). The texel alone (the identity) has SURE s_i², the raw value's variance.
 //!
 //! **The choice.** Per region of [`REGION`]² texels of a page, the candidate whose SURE summed
-//! over the region is least. A single texel's SURE is far too noisy to choose on (choosing per
-//! texel, even on SURE averaged over a neighbourhood, made the estimate 3–8× optimistic in the
-//! tests: the choice follows the noise); a region's sum over a thousand texels is not. The
-//! estimated error of the result is `√(Σ_i SURE_i / Σ_i y_i²)` over the texels the gather
-//! measured — the relative L2 error the raw gather reports
-//! ([`crate::estimator::relative_std_error`]), now with the blur in it.
+//! over the region and the regions around it is least, over one texel in 16 (every fourth of every
+//! fourth row).
+//! A single texel's SURE is far too noisy to choose on (choosing per texel, even on SURE
+//! averaged over a neighbourhood, made the estimate 3–8× optimistic in the tests: the choice
+//! follows the noise); a sum over thousands is not. The estimated error of the result is
+//! `√(Σ_i SURE_i / Σ_i y_i²)` over the measured texels the choice did not look at (15 in 16;
+//! their noise is not what chose) — the relative L2 error the raw gather reports
+//! ([`crate::estimator::relative_std_error`]), now with the blur in it. A denoised bake's rounds
+//! stop on it ([`denoised_error`], from another texel in 16).
 //!
 //! **Radiosity.** B = E + ρ·L: the noise is in L alone, and a textured ρ is sharp where L is
 //! smooth, so B's texels are filtered as L = (B − E)/ρ (demodulated, as image denoisers divide
@@ -56,7 +59,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 /// The candidates' spatial σ, in texels.
-const SIGMAS: [f64; 4] = [1.0, 2.0, 4.0, 8.0];
+const SIGMAS: [f64; 4] = [2.0, 4.0, 8.0, 16.0];
 
 /// The candidates' range τ, in standard deviations of the guide's difference (∞: geometry alone;
 /// `Grid::candidates` computes the weights of these three).
@@ -152,8 +155,10 @@ pub fn denoise(
             continue;
         }
         let (f, s) = chosen[i];
-        sure_sum += s;
-        square += gathered[i].radiosity.iter().map(|b| b * b).sum::<f64>();
+        if !chooses(&texels[i]) {
+            sure_sum += s;
+            square += gathered[i].radiosity.iter().map(|b| b * b).sum::<f64>();
+        }
         count += 1.0;
         match choice[i] {
             0 => report.unfiltered += 1.0,
@@ -175,10 +180,10 @@ pub fn denoise(
     (out, report)
 }
 
-/// The estimated relative error that [`denoise`] would report, from a quarter of the texels
-/// (odd row and column, where the choice looks at even ones: the choice does not follow these
-/// texels' noise, so the estimate is not the optimistic one of choosing and judging on the same
-/// texels): what rounds to a target error stop on when the bake is denoised.
+/// The estimated relative error that [`denoise`] would report, from one texel in 16 ([`checks`]:
+/// not those the choice looks at, so the estimate is not the optimistic one of choosing and
+/// judging on the same texels): what rounds to a target error stop on when the bake is
+/// denoised.
 pub(crate) fn denoised_error(
     atlas: &Atlas,
     texels: &[Texel],
@@ -188,7 +193,7 @@ pub(crate) fn denoised_error(
     let (grid, samples) = prepare(atlas, texels, (gathered, guide), material);
     let (choice, _) = grid.choose(texels, &samples);
     let others: Vec<usize> = (0..texels.len())
-        .filter(|&i| texels[i].x % 2 == 1 && texels[i].y % 2 == 1 && samples[i].measured())
+        .filter(|&i| checks(&texels[i]) && samples[i].measured())
         .collect();
     let sure_sum: f64 = (others.par_iter())
         .map(|&i| grid.candidates(&samples, texels, i, Some(choice[i]))[choice[i]].1)
@@ -221,6 +226,18 @@ fn prepare(
         .map(|i| grid.smooth_guide(&raw, texels, i))
         .collect();
     (grid, samples)
+}
+
+/// Whether the choice of candidates looks at texel `t`: every fourth of every fourth row (the
+/// error is estimated over the others, whose noise the choice does not follow).
+fn chooses(t: &Texel) -> bool {
+    t.x % 2 == 0 && t.y % 4 == 0
+}
+
+/// Whether the rounds' stopping test looks at texel `t` ([`denoised_error`]): as many texels as
+/// [`chooses`], midway between them.
+fn checks(t: &Texel) -> bool {
+    t.x % 2 == 1 && t.y % 4 == 2
 }
 
 /// Whether the gather measured a texel (it has a standard error in some band).
@@ -412,7 +429,7 @@ impl Grid {
     /// mean's variance (the guide's texels independent: Σw²v/(Σw)²).
     fn smooth_guide(&self, raw: &[Sample], texels: &[Texel], i: usize) -> Sample {
         let (mut sum, mut var, mut total) = (0.0, 0.0, 0.0);
-        self.neighbours(raw, texels, i, SIGMAS[0], |j, w, _| {
+        self.neighbours(raw, texels, i, 1.0, |j, w, _| {
             sum += w * raw[j].guide;
             var += w * w * raw[j].guide_var;
             total += w;
@@ -468,7 +485,7 @@ impl Grid {
     }
 
     /// Each texel's candidate: the one of least SURE summed over its region ([`REGION`]² texels
-    /// of a page) and the regions around it, over the measured texels of even row and column;
+    /// of a page) and the regions around it, over the measured texels it [`chooses`] by;
     /// with those texels and their candidates' SURE.
     fn choose(&self, texels: &[Texel], samples: &[Sample]) -> (Vec<usize>, Picked) {
         let (across, down) = (self.width.div_ceil(REGION), self.height.div_ceil(REGION));
@@ -477,7 +494,7 @@ impl Grid {
         };
         let regions = self.index.len() / (self.width * self.height) * across * down;
         let picked: Vec<usize> = (0..texels.len())
-            .filter(|&i| texels[i].x % 2 == 0 && texels[i].y % 2 == 0 && samples[i].measured())
+            .filter(|&i| chooses(&texels[i]) && samples[i].measured())
             .collect();
         let sure: Vec<[f64; CANDIDATES]> = (picked.par_iter())
             .map(|&i| self.candidates(samples, texels, i, None).map(|c| c.1))

@@ -111,6 +111,7 @@ struct Sample {
     weight: Bands,
     guide: f64,
     guide_var: f64,
+    has_guide: bool,
 }
 
 impl Sample {
@@ -228,6 +229,13 @@ fn prepare(
     (grid, samples)
 }
 
+/// Whether texel `t` carries the guide: the guide bake (`super::gather_guide`) estimates every
+/// second texel of every second row alone, a quarter of the texels (each texel's guide is a
+/// mean over the guide's texels around it anyway, [`Grid::smooth_guide`]).
+pub(super) fn guides(t: &Texel) -> bool {
+    t.x % 2 == 0 && t.y % 2 == 0
+}
+
 /// Whether the choice of candidates looks at texel `t`: every fourth of every fourth row (the
 /// error is estimated over the others, whose noise the choice does not follow).
 fn chooses(t: &Texel) -> bool {
@@ -262,6 +270,7 @@ fn sample(
         weight: [0.0; BANDS],
         guide: 0.0,
         guide_var: 0.0,
+        has_guide: guides(t),
     };
     let (mut bands, mut guide_spread) = (0.0, 0.0);
     for k in 0..BANDS {
@@ -425,18 +434,27 @@ impl Grid {
         }
     }
 
-    /// Texel `i`'s sample with its guide the mean over its neighbourhood (σ = 1 texel) and that
-    /// mean's variance (the guide's texels independent: Σw²v/(Σw)²).
+    /// Texel `i`'s sample with its guide the mean over the guide's texels around it ([`guides`];
+    /// a Gaussian of σ = 1.5 texels) and that mean's variance (the guide's texels independent:
+    /// Σw²v/(Σw)²); with none around it (a chart of a few texels), no guide: an infinite variance
+    /// (the range weights do not distinguish).
     fn smooth_guide(&self, raw: &[Sample], texels: &[Texel], i: usize) -> Sample {
         let (mut sum, mut var, mut total) = (0.0, 0.0, 0.0);
-        self.neighbours(raw, texels, i, 1.0, |j, w, _| {
-            sum += w * raw[j].guide;
-            var += w * w * raw[j].guide_var;
-            total += w;
+        self.neighbours(raw, texels, i, 1.5, |j, w, _| {
+            if raw[j].has_guide {
+                sum += w * raw[j].guide;
+                var += w * w * raw[j].guide_var;
+                total += w;
+            }
         });
+        let (guide, guide_var) = if total > 0.0 {
+            (sum / total, var / (total * total))
+        } else {
+            (0.0, f64::INFINITY)
+        };
         Sample {
-            guide: sum / total,
-            guide_var: var / (total * total),
+            guide,
+            guide_var,
             ..raw[i]
         }
     }

@@ -258,9 +258,10 @@ fn texel_materials(
 /// Rays per texel of the denoiser's guide ([`gather_guide`]).
 pub const GUIDE_RAYS: usize = 8;
 
-/// The denoiser's guide (`lightmap/denoise.rs`): every texel's estimate with [`GUIDE_RAYS`] rays
-/// of its own (the solve's seed salted), independent of [`gather_texels`]' values; all texels,
-/// also in a shard's run, so that every run that denoises has the same guide.
+/// The denoiser's guide (`lightmap/denoise.rs`): an estimate with [`GUIDE_RAYS`] rays of its own
+/// (the solve's seed salted), independent of [`gather_texels`]' values, at every second texel of
+/// every second row (the others left at `Gathered::default()`); of the whole lightmap, also in a
+/// shard's run, so that every run that denoises has the same guide.
 pub fn gather_guide(
     domain: &Domain,
     trained: &Trained,
@@ -286,7 +287,20 @@ pub fn gather_guide(
         },
         ..config.clone()
     };
-    Ok(gather_texels(domain, trained, &guide, settings, (texels, None))?.0)
+    let mine: Vec<usize> = (0..texels.texels.len())
+        .filter(|&i| denoise::guides(&texels.texels[i]))
+        .collect();
+    let sparse = LightmapTexels {
+        atlas: texels.atlas.clone(),
+        texels: mine.iter().map(|&i| texels.texels[i]).collect(),
+        left_out: texels.left_out,
+    };
+    let values = gather_texels(domain, trained, &guide, settings, (&sparse, None))?.0;
+    let mut out = vec![Gathered::default(); texels.texels.len()];
+    for (&i, v) in mine.iter().zip(values) {
+        out[i] = v;
+    }
+    Ok(out)
 }
 
 /// Salts the seed of [`gather_guide`].

@@ -459,8 +459,8 @@ impl Grid {
         }
     }
 
-    /// The candidates at texel `i` (only `only`'s σ, with its τs, when given; the others are
-    /// left at the texel alone): each one's value (demodulated) and its SURE in the output's units
+    /// The candidates at texel `i` (only `only` when given; the others are left at the texel
+    /// alone): each one's value (demodulated) and its SURE in the output's units
     /// (module docs).
     fn candidates(
         &self,
@@ -475,6 +475,9 @@ impl Grid {
             if only.is_some_and(|k| k == 0 || (k - 1) / TAUS.len() != si) {
                 continue;
             }
+            // the range τs wanted: all of them, or `only`'s
+            let want: [bool; TAUS.len()] =
+                std::array::from_fn(|t| only.is_none_or(|k| (k - 1) % TAUS.len() == t));
             let mut acc = [Moments::default(); TAUS.len()];
             self.neighbours(samples, texels, i, sigma, |j, w, offset| {
                 let s = &samples[j];
@@ -490,11 +493,13 @@ impl Grid {
                 // exp(−r/τ²) for τ = 1, 3, ∞: the first the second to the 9th power
                 let wide = (-range / 9.0).exp();
                 let narrow = wide.powi(9);
-                for (a, r) in acc.iter_mut().zip([narrow, wide, 1.0]) {
-                    a.add(w * r, offset, s);
+                for ((a, r), on) in acc.iter_mut().zip([narrow, wide, 1.0]).zip(want) {
+                    if on {
+                        a.add(w * r, offset, s);
+                    }
                 }
             });
-            for (ti, a) in acc.iter().enumerate() {
+            for (ti, a) in acc.iter().enumerate().filter(|&(ti, _)| want[ti]) {
                 let (f, ws) = a.solve();
                 out[1 + si * TAUS.len() + ti] = (f, sure(c, &f, &ws));
             }

@@ -65,8 +65,32 @@ const SIGMAS: [f64; 4] = [2.0, 4.0, 8.0, 16.0];
 /// `Grid::candidates` computes the weights of these three).
 const TAUS: [f64; 3] = [1.0, 3.0, f64::INFINITY];
 
-/// Candidates: the texel alone (0), then σ × τ ([`candidate`]).
-const CANDIDATES: usize = 1 + SIGMAS.len() * TAUS.len();
+/// The fits after the texel alone, as (σ, τ, terms) indices into [`SIGMAS`], [`TAUS`] and the
+/// terms of the fit (3: linear; [`TERMS`]: quadratic, for the wide σ only, over which light
+/// curves: a wide linear fit of concave light — bright in a wall's middle — comes out low).
+const FITS: [(usize, usize, usize); 18] = [
+    (0, 0, 3),
+    (0, 1, 3),
+    (0, 2, 3),
+    (1, 0, 3),
+    (1, 1, 3),
+    (1, 2, 3),
+    (2, 0, 3),
+    (2, 1, 3),
+    (2, 2, 3),
+    (3, 0, 3),
+    (3, 1, 3),
+    (3, 2, 3),
+    (2, 0, TERMS),
+    (2, 1, TERMS),
+    (2, 2, TERMS),
+    (3, 0, TERMS),
+    (3, 1, TERMS),
+    (3, 2, TERMS),
+];
+
+/// Candidates: the texel alone (0), then [`FITS`].
+const CANDIDATES: usize = 1 + FITS.len();
 
 /// The side of a region that chooses one candidate, in texels.
 const REGION: usize = 32;
@@ -74,9 +98,9 @@ const REGION: usize = 32;
 /// Neighbours are on the same surface when their normals' cosine is at least this (18°).
 const SAME_NORMAL: f64 = 0.95;
 
-/// The least spread of a neighbourhood, the determinant of its points' covariance in texels⁴,
-/// for a first-order fit (below it, along a thin strip of texels, the mean is taken).
-const SPREAD: f64 = 0.05;
+/// A fit needs every Cholesky pivot of its moments above this share of its diagonal element
+/// (else its neighbours do not determine it: a strip of texels, a chart's corner).
+const PIVOT: f64 = 1e-3;
 
 /// What denoising did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -94,9 +118,9 @@ pub struct DenoiseReport {
     pub seconds: f64,
 }
 
-/// The spatial σ (texels) and range τ of candidate `k` (`k` ≥ 1).
-fn candidate(k: usize) -> (f64, f64) {
-    (SIGMAS[(k - 1) / TAUS.len()], TAUS[(k - 1) % TAUS.len()])
+/// The spatial σ (texels) of candidate `k` (`k` ≥ 1).
+fn candidate_sigma(k: usize) -> f64 {
+    SIGMAS[FITS[k - 1].0]
 }
 
 /// A texel's data for filtering: its point and normal, its demodulated value L and spread, the
@@ -163,7 +187,7 @@ pub fn denoise(
         count += 1.0;
         match choice[i] {
             0 => report.unfiltered += 1.0,
-            k => report.mean_sigma += candidate(k).0,
+            k => report.mean_sigma += candidate_sigma(k),
         }
         let (rho, e) = material.map_or(([1.0; BANDS], [0.0; BANDS]), |m| m[i]);
         for b in 0..BANDS {
@@ -301,54 +325,105 @@ fn sure(t: &Sample, f: &Bands, ws: &Bands) -> f64 {
         .sum()
 }
 
-/// The weighted sums of a first-order fit around a texel: of the weights' moments (Σw, Σwu,
-/// Σwv, Σwu², Σwuv, Σwv², u and v a neighbour's offset along the texel's surface in texels),
-/// and per band of the values and spreads times (1, u, v).
-#[derive(Clone, Copy, Default)]
+/// Terms of a fit of degree 2 around a texel: 1, u, v, u², uv, v² (u, v a neighbour's offset
+/// along the texel's surface, in units of the candidate's σ); a fit of degree 1 takes the first
+/// three.
+const TERMS: usize = 6;
+
+/// The weighted sums of a local polynomial fit around a texel: Σ w φ_a φ_b over the neighbours
+/// (upper triangle, row by row) and per band of the values and spreads times φ_a.
+#[derive(Clone, Copy)]
 struct Moments {
-    m: [f64; 6],
-    y: [[f64; 3]; BANDS],
-    s: [[f64; 3]; BANDS],
+    m: [f64; TERMS * (TERMS + 1) / 2],
+    y: [[f64; TERMS]; BANDS],
+    s: [[f64; TERMS]; BANDS],
+}
+
+impl Default for Moments {
+    fn default() -> Self {
+        Self {
+            m: [0.0; TERMS * (TERMS + 1) / 2],
+            y: [[0.0; TERMS]; BANDS],
+            s: [[0.0; TERMS]; BANDS],
+        }
+    }
+}
+
+/// Where Σ w φ_a φ_b (a ≤ b) is kept in [`Moments::m`].
+fn pair(a: usize, b: usize) -> usize {
+    a * TERMS - a * (a + 1) / 2 + b
 }
 
 impl Moments {
-    fn add(&mut self, w: f64, (u, v): (f64, f64), n: &Sample) {
-        let x = [w, w * u, w * v];
-        for (m, d) in self
-            .m
-            .iter_mut()
-            .zip([w, w * u, w * v, w * u * u, w * u * v, w * v * v])
-        {
-            *m += d;
-        }
-        for k in 0..BANDS {
-            for a in 0..3 {
-                self.y[k][a] += x[a] * n.value[k];
-                self.s[k][a] += x[a] * n.spread[k];
+    /// Adds neighbour `n` with weight `w` at offset (u, v) (in σ) to a fit of `terms` terms.
+    fn add(&mut self, w: f64, (u, v): (f64, f64), n: &Sample, terms: usize) {
+        let phi = [1.0, u, v, u * u, u * v, v * v];
+        for a in 0..terms {
+            let wa = w * phi[a];
+            for b in a..terms {
+                self.m[pair(a, b)] += wa * phi[b];
+            }
+            for k in 0..BANDS {
+                self.y[k][a] += wa * n.value[k];
+                self.s[k][a] += wa * n.spread[k];
             }
         }
     }
 
-    /// The fit's value at the texel (a local linear regression, Nadaraya–Watson's mean where
-    /// the neighbours lie along a line) and the same weights applied to the spreads: the hat
-    /// matrix's row is w_j·(g₀ + g₁u_j + g₂v_j), g the first column of the moments' inverse.
-    fn solve(&self) -> (Bands, Bands) {
-        let [s0, su, sv, suu, suv, svv] = self.m;
-        let (mu, mv) = (su / s0, sv / s0);
-        let (cuu, cuv, cvv) = (suu / s0 - mu * mu, suv / s0 - mu * mv, svv / s0 - mv * mv);
-        let g = if cuu * cvv - cuv * cuv > SPREAD {
-            let c00 = suu * svv - suv * suv;
-            let c10 = suv * sv - su * svv;
-            let c20 = su * suv - suu * sv;
-            let det = s0 * c00 + su * c10 + sv * c20;
-            [c00 / det, c10 / det, c20 / det]
-        } else {
-            [1.0 / s0, 0.0, 0.0]
-        };
-        let apply = |m: &[[f64; 3]; BANDS]| -> Bands {
-            std::array::from_fn(|k| g[0] * m[k][0] + g[1] * m[k][1] + g[2] * m[k][2])
+    /// The fit's value at the texel (a local polynomial regression of `terms` terms; fewer —
+    /// linear, then the weighted mean — where the neighbours cannot hold it: a strip of texels,
+    /// a chart's corner) and the same weights applied to the spreads. The hat matrix's row is
+    /// w_j·Σ_a g_a φ_a(j), g the first column of the moments' inverse.
+    fn solve(&self, terms: usize) -> (Bands, Bands) {
+        let g = [terms, 3, 1]
+            .into_iter()
+            .filter(|&t| t <= terms)
+            .find_map(|t| self.first_column(t))
+            .unwrap_or([0.0; TERMS]);
+        let apply = |m: &[[f64; TERMS]; BANDS]| -> Bands {
+            std::array::from_fn(|k| (0..TERMS).map(|a| g[a] * m[k][a]).sum())
         };
         (apply(&self.y), apply(&self.s))
+    }
+
+    /// The first column of the inverse of the `t × t` moments (Cholesky), None when a pivot
+    /// falls below [`PIVOT`] of its diagonal (the neighbours do not determine the fit).
+    fn first_column(&self, t: usize) -> Option<[f64; TERMS]> {
+        let mut l = [[0.0; TERMS]; TERMS];
+        for i in 0..t {
+            for j in 0..=i {
+                let mut sum = self.m[pair(j, i)];
+                for k in 0..j {
+                    sum -= l[i][k] * l[j][k];
+                }
+                if i == j {
+                    if sum.is_nan() || sum <= PIVOT * self.m[pair(i, i)] {
+                        return None;
+                    }
+                    l[i][i] = sum.sqrt();
+                } else {
+                    l[i][j] = sum / l[j][j];
+                }
+            }
+        }
+        // L Lᵀ g = e₁: forward, then back
+        let mut z = [0.0; TERMS];
+        for i in 0..t {
+            let mut sum = if i == 0 { 1.0 } else { 0.0 };
+            for k in 0..i {
+                sum -= l[i][k] * z[k];
+            }
+            z[i] = sum / l[i][i];
+        }
+        let mut g = [0.0; TERMS];
+        for i in (0..t).rev() {
+            let mut sum = z[i];
+            for k in i + 1..t {
+                sum -= l[k][i] * g[k];
+            }
+            g[i] = sum / l[i][i];
+        }
+        Some(g)
     }
 }
 
@@ -471,13 +546,19 @@ impl Grid {
     ) -> [(Bands, f64); CANDIDATES] {
         let c = &samples[i];
         let mut out = [(c.value, sure(c, &c.value, &c.spread)); CANDIDATES];
+        let wanted = |k: usize| only.is_none_or(|o| o == k);
         for (si, &sigma) in SIGMAS.iter().enumerate() {
-            if only.is_some_and(|k| k == 0 || (k - 1) / TAUS.len() != si) {
+            // the fits of this σ wanted: their range τs and the most terms they take
+            let (mut want, mut terms) = ([false; TAUS.len()], 0);
+            for (f, &(fs, ft, fterms)) in FITS.iter().enumerate() {
+                if fs == si && wanted(f + 1) {
+                    want[ft] = true;
+                    terms = terms.max(fterms);
+                }
+            }
+            if terms == 0 {
                 continue;
             }
-            // the range τs wanted: all of them, or `only`'s
-            let want: [bool; TAUS.len()] =
-                std::array::from_fn(|t| only.is_none_or(|k| (k - 1) % TAUS.len() == t));
             let mut acc = [Moments::default(); TAUS.len()];
             self.neighbours(samples, texels, i, sigma, |j, w, offset| {
                 let s = &samples[j];
@@ -493,15 +574,19 @@ impl Grid {
                 // exp(−r/τ²) for τ = 1, 3, ∞: the first the second to the 9th power
                 let wide = (-range / 9.0).exp();
                 let narrow = wide.powi(9);
+                let at = (offset.0 / sigma, offset.1 / sigma);
                 for ((a, r), on) in acc.iter_mut().zip([narrow, wide, 1.0]).zip(want) {
                     if on {
-                        a.add(w * r, offset, s);
+                        a.add(w * r, at, s, terms);
                     }
                 }
             });
-            for (ti, a) in acc.iter().enumerate().filter(|&(ti, _)| want[ti]) {
-                let (f, ws) = a.solve();
-                out[1 + si * TAUS.len() + ti] = (f, sure(c, &f, &ws));
+            // (a quadratic fit's sums hold the linear one's: both from one pass)
+            for (f, &(fs, ft, fterms)) in FITS.iter().enumerate() {
+                if fs == si && wanted(f + 1) {
+                    let (value, ws) = acc[ft].solve(fterms);
+                    out[f + 1] = (value, sure(c, &value, &ws));
+                }
             }
         }
         out

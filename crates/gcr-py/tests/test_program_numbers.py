@@ -74,19 +74,28 @@ def test_probes_give_the_programs_numbers_bit_for_bit(root, gcr_bin, tmp_path, p
     assert written.read_bytes() == out.read_bytes()
 
 
-def test_lightmaps_are_the_programs_bytes(gcr_bin, tmp_path):
+@pytest.mark.parametrize("denoise", [False, True])
+def test_lightmaps_are_the_programs_bytes(gcr_bin, tmp_path, denoise):
     """`Solution.write(lightmap=...)` writes the glTF and the EXR pages `gcr solve --lightmap`
-    writes, byte for byte (issue 33: lightmaps from Python)."""
+    writes, byte for byte (issue 33: lightmaps from Python), denoised too
+    (`lightmap_denoise=True`, `--lightmap-denoise`), whose metrics say what the denoiser did."""
     (tmp_path / "cli").mkdir()
     (tmp_path / "py").mkdir()
     args = ["--lightmap-size", "128", "--lightmap-quantity", "radiosity", "--quality", "draft"]
+    args += ["--lightmap-denoise"] if denoise else []
     run_gcr(gcr_bin, "solve", "cornell-box", "--lightmap", str(tmp_path / "cli" / "b.glb"), *args, "--quiet")
     solution = gcr.solve(gcr.Scene.load("cornell-box"), quality="draft")
-    solution.write(lightmap=tmp_path / "py" / "b.glb", lightmap_size=128, lightmap_quantity="radiosity")
+    metrics = solution.write(lightmap=tmp_path / "py" / "b.glb", lightmap_size=128, lightmap_quantity="radiosity",
+                             lightmap_denoise=denoise)
     cli = sorted(p.name for p in (tmp_path / "cli").iterdir())
     assert cli == sorted(p.name for p in (tmp_path / "py").iterdir()) and len(cli) >= 2, cli
     for name in cli:
         assert (tmp_path / "cli" / name).read_bytes() == (tmp_path / "py" / name).read_bytes(), name
+    denoised = metrics["lightmap"]["denoised"]
+    if denoise:
+        assert denoised["raw_error"] > metrics["relative_std_error"] > 0, denoised
+    else:
+        assert denoised is None
     with pytest.raises(ValueError, match="unknown lightmap quantity"):
         solution.write(lightmap=tmp_path / "py" / "c.glb", lightmap_quantity="albedo")
 

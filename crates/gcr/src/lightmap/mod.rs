@@ -203,7 +203,7 @@ pub fn lay_out_texels(
 /// with a shard in `config`, the shard's texels only, the others left at `Gathered::default()`
 /// ([`crate::shard_points`]); else every one. With a denoiser's `guide` ([`gather_guide`]) and a
 /// target error, the rounds stop when the denoised texels meet the target
-/// ([`denoise::denoised_error`], block by block).
+/// (`lightmap/denoise.rs`, block by block).
 pub fn gather_texels(
     domain: &Domain,
     trained: &Trained,

@@ -354,7 +354,7 @@ fn the_paths_gather_reports_its_estimated_error() {
 
 /// Irradiance probes (`rtrace -I`): a work plane in the air of the Cornell box and one probe on
 /// its floor; each value independent of its line, the quantity in the metrics; the ray gather
-/// refuses them before the solve.
+/// refuses them before the solve, and a denoised lightmap too.
 #[test]
 fn solve_writes_irradiance_at_points_in_the_air() {
     let (probes, moved, out, out2, metrics) = (
@@ -433,6 +433,23 @@ fn solve_writes_irradiance_at_points_in_the_air() {
     ]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("irradiance needs the paths gather"));
+    // Nor does it measure the noise a denoised lightmap weighs: refused before the solve.
+    let glb = std::env::temp_dir().join(format!("gcr-denoise-rays-{}.glb", std::process::id()));
+    let o = gcr(&[
+        "solve",
+        "cornell-box",
+        "--gather",
+        "rays",
+        "--lightmap",
+        glb.to_str().unwrap(),
+        "--lightmap-quantity",
+        "radiosity",
+        "--lightmap-denoise",
+    ]);
+    assert!(!o.status.success() && !glb.exists());
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("--lightmap-denoise needs the paths gather")
+    );
 }
 
 /// `--probe-tolerance`: a probe 5 mm off the floor is refused by default (0.1 mm on the Cornell

@@ -232,6 +232,17 @@ impl OutputPlan {
         if irradiance && !self.probes.is_empty() && config.gather != GatherMode::Paths {
             return Err(GatherError::IrradianceNeedsPaths(config.gather.name()).into());
         }
+        if self.paths.lightmap.is_some()
+            && self.lightmap.denoise
+            && config.gather != GatherMode::Paths
+        {
+            return Err(crate::lightmap::LightmapError::Settings(format!(
+                "--lightmap-denoise needs the paths gather (the default), whose replicates measure \
+                 the noise it weighs; not --gather {}",
+                config.gather.name()
+            ))
+            .into());
+        }
         // ⟨A shard writes its probes', its lightmap texels' and its pixels' values and nothing
         // else (`super::shards`); an image merged from shards is a shard's image⟩
         if config.paths.shard.is_some() || self.merges(Kind::Image) {

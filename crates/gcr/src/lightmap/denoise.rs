@@ -44,7 +44,7 @@
 //! single texel's SURE is far too noisy to choose on (choosing per texel, even on SURE
 //! averaged over a neighbourhood, made the estimate 3–8× optimistic in the tests: the choice
 //! follows the noise); a sum over thousands is not. The estimated error of the result is
-//! `√(Σ_i SURE_i / Σ_i y_i²)` over the measured texels the choice did not look at (seven in
+//! `√(Σ_i SURE_i / Σ_i y_i²)` over the reflecting texels the choice did not look at (seven in
 //! eight; their noise is not what chose) — the relative L2 error the raw gather reports
 //! ([`crate::estimator::relative_std_error`]), now with the blur in it. A denoised bake's rounds
 //! stop on it ([`denoised_error`], from another texel in eight).
@@ -113,7 +113,7 @@ pub struct DenoiseReport {
     pub error: Option<f64>,
     /// The raw values' estimated relative error (their standard errors, as the gather reports).
     pub raw_error: Option<f64>,
-    /// The share of the measured texels whose region chose the texel alone (no averaging).
+    /// The share of the reflecting texels whose region chose the texel alone (no averaging).
     pub unfiltered: f64,
     /// The texels' mean spatial σ of the chosen filters, in texels (0 for the texel alone).
     pub mean_sigma: f64,
@@ -127,8 +127,8 @@ fn candidate_sigma(k: usize) -> f64 {
 }
 
 /// A texel's data for filtering: its point and normal, its demodulated value L and spread, the
-/// weight ρ² of its bands back in the output's units (0: a band left as it is, or a texel the
-/// gather did not measure), and the guide's demodulated luminance and that one's variance.
+/// weight ρ² of its bands back in the output's units (0: a band that does not reflect, left as it
+/// is), and the guide's demodulated luminance and that one's variance.
 #[derive(Clone, Copy)]
 struct Sample {
     point: DVec3,
@@ -146,6 +146,11 @@ impl Sample {
         self.weight.iter().any(|w| *w > 0.0)
     }
 
+    /// Whether the guide found no light at all around the texel (a closed room's texels).
+    fn dark(&self) -> bool {
+        self.guide == 0.0 && self.guide_var.is_finite()
+    }
+
     /// Whether `other` has the same bands filtered (a neighbour must: its L is unknown where ρ = 0).
     fn same_bands(&self, other: &Sample) -> bool {
         (0..BANDS).all(|k| (self.weight[k] > 0.0) == (other.weight[k] > 0.0))
@@ -154,8 +159,9 @@ impl Sample {
 
 /// Denoises the `gathered` values of `texels` (in order) on `atlas` with the independent bake
 /// `guide` of the same texels; `material` gives each texel's (ρ, E) for radiosity (B = E + ρ·L),
-/// or `None` for irradiance (filtered as it is). Texels the gather did not measure keep their
-/// values and are no one's neighbours.
+/// or `None` for irradiance (filtered as it is). Texels that do not reflect keep their values
+/// and are no one's neighbours; texels around which the guide found no light at all (a closed
+/// room) mix only with each other.
 pub fn denoise(
     atlas: &Atlas,
     texels: &[Texel],
@@ -193,9 +199,11 @@ pub fn denoise(
             k => report.mean_sigma += candidate_sigma(k),
         }
         let (rho, e) = material.map_or(([1.0; BANDS], [0.0; BANDS]), |m| m[i]);
+        // (light is never negative: a fit's value below 0 is raised to 0, which only brings it
+        // nearer the truth, so SURE still bounds the error)
         for b in 0..BANDS {
             if samples[i].weight[b] > 0.0 {
-                o.radiosity[b] = e[b] + rho[b] * f[b];
+                o.radiosity[b] = e[b] + rho[b] * f[b].max(0.0);
             }
         }
     }
@@ -276,14 +284,9 @@ fn checks(t: &Texel) -> bool {
     t.x % 2 == 1 && t.y % 4 == 2
 }
 
-/// Whether the gather measured a texel (it has a standard error in some band).
-fn measured(g: &Gathered) -> bool {
-    g.std_error.iter().any(|s| *s != 0.0)
-}
-
 /// A texel's [`Sample`]: L = (y − E)/ρ and s/ρ per band with ρ > 0, weight ρ² (ρ = 1 for
-/// irradiance); the guide's L and its spread² as the mean over those bands. An unmeasured texel
-/// has weight 0 in every band.
+/// irradiance); the guide's L and its spread² as the mean over those bands. A texel that does
+/// not reflect has weight 0 in every band.
 fn sample(
     t: &Texel,
     (g, guide): (&Gathered, &Gathered),
@@ -302,7 +305,9 @@ fn sample(
     };
     let (mut bands, mut guide_spread) = (0.0, 0.0);
     for k in 0..BANDS {
-        if measured(g) && rho[k] > 0.0 {
+        // every reflecting texel, also one whose replicates agree (both 0 where light is rare):
+        // leaving those out made the neighbours a choice by the values, and SURE 2.6× low
+        if rho[k] > 0.0 {
             s.value[k] = (g.radiosity[k] - e[k]) / rho[k];
             s.spread[k] = g.spread[k] / rho[k];
             s.weight[k] = rho[k] * rho[k];
@@ -501,7 +506,7 @@ impl Grid {
                 }
                 // off the texel's plane, or farther in the scene than on the page (another chart)
                 let d = s.point - c.point;
-                let page_distance = ((dx * dx + dy * dy) as f64).sqrt() + 1.5;
+                let page_distance = ((dx * dx + dy * dy) as f64).sqrt() + 1.0;
                 if c.normal.dot(d).abs() > self.h
                     || d.length_squared() > (page_distance * self.h).powi(2)
                 {
@@ -566,6 +571,11 @@ impl Grid {
             let mut acc = [Moments::default(); TAUS.len()];
             self.neighbours(samples, texels, i, sigma, |j, w, offset| {
                 let s = &samples[j];
+                // light found around one and none around the other: a wall between them (a
+                // floor running under it into a closed room), or light's edge; never mixed
+                if c.dark() != s.dark() {
+                    return;
+                }
                 let scale = c.guide_var + s.guide_var;
                 let diff = (c.guide - s.guide).powi(2);
                 let range = if scale > 0.0 {
@@ -597,7 +607,7 @@ impl Grid {
     }
 
     /// Each texel's candidate: the one of least SURE summed over its region ([`REGION`]² texels
-    /// of a page) and the regions around it, over the measured texels it [`chooses`] by;
+    /// of a page) and the regions around it, over the reflecting texels it [`chooses`] by;
     /// with those texels and their candidates' SURE.
     fn choose(&self, texels: &[Texel], samples: &[Sample]) -> (Vec<usize>, Picked) {
         let (across, down) = (self.width.div_ceil(REGION), self.height.div_ceil(REGION));

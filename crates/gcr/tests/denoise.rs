@@ -8,7 +8,7 @@ use gcr::{
 };
 use scene_sampler::{AnyScene, KernelSampler, SceneBvh, builtin};
 
-/// The Cornell box's irradiance lightmap on a 128-texel page, to `target`.
+/// The Cornell box's irradiance lightmap on a 256-texel page, to `target`.
 fn bake(target: f64, seed: u64, denoise: bool) -> Lightmap {
     let AnyScene::ThreeD(scene) = builtin("cornell-box").unwrap() else {
         panic!("the Cornell box is 3-D")
@@ -26,7 +26,7 @@ fn bake(target: f64, seed: u64, denoise: bool) -> Lightmap {
     };
     let trained = Trained::without_networks(&domain, &config);
     let settings = LightmapSettings {
-        page_size: 128,
+        page_size: 256,
         quantity: LightmapQuantity::Irradiance,
         denoise,
         ..LightmapSettings::default()

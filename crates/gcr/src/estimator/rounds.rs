@@ -46,11 +46,11 @@ pub(super) fn paths_to_target(
     )
 }
 
-/// The error the rounds of a block stop on instead of the relative standard error
-/// ([`error_bound`]): of the block's points (their indices among all the points gathered, in
-/// ascending order) and their values so far; None when nothing was measured. The lightmap
-/// denoiser's estimate (`lightmap/denoise.rs`): a denoised bake stops when its denoised texels
-/// meet the target.
+/// The error bound the rounds of a block stop on instead of the relative standard error's
+/// ([`error_bound`]): an upper confidence bound of an error of the block's points (their indices
+/// among all the points gathered, in ascending order) from their values so far; None when
+/// nothing was measured. The lightmap denoiser's (`lightmap/denoise.rs`, `denoised_error`): a
+/// denoised bake stops when its denoised texels meet the target.
 pub(crate) type StopOn<'a> = dyn Fn(&[usize], &[Gathered]) -> Option<f64> + Sync + 'a;
 
 /// [`rounds_to_target`] over the groups of neighbouring `points` with their `seeds`, block by
@@ -83,7 +83,7 @@ pub(super) fn grouped_rounds(
         let at = (&block_points[..], &block_groups[..], &block_seeds[..]);
         let (target, stop) = target;
         let bound = |g: &[Gathered], dof: usize| match stop {
-            Some(stop) => stop(&members, g).map(|e| e * chi2_scale(dof)),
+            Some(stop) => stop(&members, g),
             None => error_bound(g, dof),
         };
         let gathered = block_rounds(domain, paths, at, &material, (target, &bound), config);

@@ -98,6 +98,16 @@ const CANDIDATES: usize = 1 + FITS.len();
 /// The side of a region that chooses one candidate, in texels.
 const REGION: usize = 32;
 
+/// The page's lattice of a wide filter's neighbours ([`Grid::neighbours`]).
+const PAGE_LATTICE: u8 = 1;
+
+/// The texel's lattice of a wide filter's neighbours ([`Grid::neighbours`]).
+const TEXEL_LATTICE: u8 = 2;
+
+/// Texels this near their surface's edge on the page (in texels, either way) choose apart
+/// ([`Sample::edge`]).
+const EDGE: i64 = 3;
+
 /// Neighbours are on the same surface when their normals' cosine is at least this (18°).
 const SAME_NORMAL: f64 = 0.95;
 
@@ -139,6 +149,10 @@ struct Sample {
     guide: f64,
     guide_var: f64,
     has_guide: bool,
+    /// Whether the texel is within [`EDGE`] texels of its surface's edge on the page (its
+    /// region chooses for these texels apart: light bends at a surface's edge, the corner of
+    /// a wall and a ceiling, where a fit that serves the region's middle overshoots).
+    edge: bool,
 }
 
 impl Sample {
@@ -172,11 +186,15 @@ pub fn denoise(
     let (grid, samples) = prepare(atlas, texels, (gathered, guide), material);
     // ⟨Per region the candidate of least summed SURE, over every second texel of every
     // second row (a region's sum over 256 of them is as good to choose by)⟩
-    let (choice, _) = grid.choose(texels, &samples);
-    // ⟨The chosen candidate at every texel: its value and SURE; the error over the measured⟩
+    let choice = grid.choose(texels, &samples);
+    // ⟨Every texel's blend of its regions' candidates: its value and SURE; the error over the
+    // measured⟩
+    let mixes: Vec<Mix> = (texels.iter().zip(&samples))
+        .map(|(t, s)| choice.mix(t, s.edge))
+        .collect();
     let chosen: Vec<(Bands, f64)> = (0..texels.len())
         .into_par_iter()
-        .map(|i| grid.candidates(&samples, texels, i, Some(choice[i]))[choice[i]])
+        .map(|i| grid.filtered(&samples, texels, i, &mixes[i]))
         .collect();
     let mut report = DenoiseReport {
         raw_error: crate::estimator::relative_std_error(gathered),
@@ -194,9 +212,11 @@ pub fn denoise(
             square += gathered[i].radiosity.iter().map(|b| b * b).sum::<f64>();
         }
         count += 1.0;
-        match choice[i] {
-            0 => report.unfiltered += 1.0,
-            k => report.mean_sigma += candidate_sigma(k),
+        for &(k, w) in &mixes[i] {
+            match k {
+                0 => report.unfiltered += w,
+                k => report.mean_sigma += w * candidate_sigma(k),
+            }
         }
         let (rho, e) = material.map_or(([1.0; BANDS], [0.0; BANDS]), |m| m[i]);
         // (light is never negative: a fit's value below 0 is raised to 0, which only brings it
@@ -216,10 +236,21 @@ pub fn denoise(
     (out, report)
 }
 
-/// The estimated relative error that [`denoise`] would report, from one texel in eight ([`checks`]:
-/// not those the choice looks at, so the estimate is not the optimistic one of choosing and
-/// judging on the same texels): what rounds to a target error stop on when the bake is
-/// denoised.
+/// The upper confidence bound (90 %) of the relative error that [`denoise`] would report, from
+/// one texel in eight ([`checks`]: not those the choice looks at): what rounds to a target error
+/// stop on when the bake is denoised.
+///
+/// SURE is unbiased but noisy: each texel's term is a difference of squares of the raw noise's
+/// size, and the denoised error is a fraction of that (at a raw 8 % and a denoised 2 %, a
+/// term's noise is 16× the error² it measures), heavy-tailed where light is hard to find.
+/// Stopping on it as it stands stops on a lucky low value: the uplight room stopped at 1.25 %
+/// estimated, 2.01 % measured. The bound takes the sum's standard error from its spread over
+/// square blocks of the pages, 2 × 2 regions (as wide as the widest filter's reach, so about
+/// independent, and wider than any group of texels that share paths) or smaller on small pages,
+/// so that there are some 32 of them: `(S + 1.28·se(S)) / Y`, S the SURE sum and Y the values'
+/// Σ y², se from the blocks' residuals about S_b = (S/G)·G_b, G_b the block's noise by the guide
+/// (Σ ρ²·v over its texels). With it the uplight room stops at 64 rays (1.46 % measured, 1.40 %
+/// estimated); the Cornell box and the sun patch room still stop at 32.
 pub(crate) fn denoised_error(
     atlas: &Atlas,
     texels: &[Texel],
@@ -227,17 +258,57 @@ pub(crate) fn denoised_error(
     material: Option<&[(Bands, Bands)]>,
 ) -> Option<f64> {
     let (grid, samples) = prepare(atlas, texels, (gathered, guide), material);
-    let (choice, _) = grid.choose(texels, &samples);
+    let choice = grid.choose(texels, &samples);
     let others: Vec<usize> = (0..texels.len())
         .filter(|&i| checks(&texels[i]) && samples[i].measured())
         .collect();
-    let sure_sum: f64 = (others.par_iter())
-        .map(|&i| grid.candidates(&samples, texels, i, Some(choice[i]))[choice[i]].1)
-        .sum();
-    let square: f64 = (others.iter())
-        .map(|&i| gathered[i].radiosity.iter().map(|b| b * b).sum::<f64>())
-        .sum();
-    (square > 0.0).then(|| (sure_sum.max(0.0) / square).sqrt())
+    let sure: Vec<f64> = (others.par_iter())
+        .map(|&i| {
+            let mix = choice.mix(&texels[i], samples[i].edge);
+            grid.filtered(&samples, texels, i, &mix).1
+        })
+        .collect();
+    // ⟨Per block of 2 × 2 regions: its SURE sum and Σ y²⟩
+    let side = ((texels.len() as f64 / 32.0).sqrt() as usize).clamp(REGION / 4, 2 * REGION);
+    let (across, down) = (grid.width.div_ceil(side), grid.height.div_ceil(side));
+    let mut blocks = std::collections::BTreeMap::<usize, (f64, f64, f64)>::new();
+    for (&i, &s) in others.iter().zip(&sure) {
+        let t = &texels[i];
+        let b = (t.page as usize * down + t.y as usize / side) * across + t.x as usize / side;
+        let e = blocks.entry(b).or_default();
+        e.0 += s;
+        e.1 += gathered[i].radiosity.iter().map(|b| b * b).sum::<f64>();
+        let c = &samples[i];
+        e.2 += c.weight.iter().sum::<f64>()
+            * if c.guide_var.is_finite() {
+                c.guide_var
+            } else {
+                0.0
+            };
+    }
+    let (sum, square, noise) =
+        (blocks.values()).fold((0.0, 0.0, 0.0), |(s, y, g), b| (s + b.0, y + b.1, g + b.2));
+    if square <= 0.0 {
+        return None;
+    }
+    let n = blocks.len() as f64;
+    // (blocks differ in their error, not only by chance: a corner's texels are noisier than a
+    // wall's middle; the guide's variance, independent of the values, models that part better
+    // than the values' Σ y² — the residuals' share 0.23 instead of 0.32 of S on a small page)
+    let model = |b: &(f64, f64, f64)| {
+        if noise > 0.0 {
+            sum / noise * b.2
+        } else {
+            sum / square * b.1
+        }
+    };
+    let residuals: f64 = blocks.values().map(|b| (b.0 - model(b)).powi(2)).sum();
+    let se = if n > 1.0 {
+        (n / (n - 1.0) * residuals).sqrt()
+    } else {
+        0.0
+    };
+    Some(((sum + 1.281_551_6 * se).max(0.0) / square).sqrt())
 }
 
 /// The texels' grid and their samples, the guide smoothed over each texel's neighbourhood.
@@ -259,7 +330,10 @@ fn prepare(
         .collect();
     let samples = (0..texels.len())
         .into_par_iter()
-        .map(|i| grid.smooth_guide(&raw, texels, i))
+        .map(|i| Sample {
+            edge: grid.near_edge(&raw, texels, i),
+            ..grid.smooth_guide(&raw, texels, i)
+        })
         .collect();
     (grid, samples)
 }
@@ -271,17 +345,19 @@ pub(super) fn guides(t: &Texel) -> bool {
     t.x % 2 == 0 && t.y % 2 == 0
 }
 
-/// Whether the choice of candidates looks at texel `t`: every second texel of every fourth row,
-/// one in eight (the error is estimated over the others, whose noise the choice does not
-/// follow; one in four chose no better, one in 16 worse: Cornell box 1.72 / 1.67 / 1.88 %).
+/// Whether the choice of candidates looks at texel `t`: one texel in eight, on diagonals
+/// (x + y ≡ 0 mod 8; one in four chose no better, one in 16 worse: Cornell box 1.72 / 1.67 /
+/// 1.88 %). Every row and column, odd or even: the wide filters' neighbours on the texel's
+/// lattice are an even number of texels away, so texels of even columns alone would never show
+/// the choice what it does to the odd ones.
 fn chooses(t: &Texel) -> bool {
-    t.x % 2 == 0 && t.y % 4 == 0
+    (t.x + t.y) % 8 == 0
 }
 
 /// Whether the rounds' stopping test looks at texel `t` ([`denoised_error`]): as many texels as
 /// [`chooses`], between them.
 fn checks(t: &Texel) -> bool {
-    t.x % 2 == 1 && t.y % 4 == 2
+    (t.x + t.y) % 8 == 4
 }
 
 /// A texel's [`Sample`]: L = (y − E)/ρ and s/ρ per band with ρ > 0, weight ρ² (ρ = 1 for
@@ -302,6 +378,7 @@ fn sample(
         guide: 0.0,
         guide_var: 0.0,
         has_guide: guides(t),
+        edge: false,
     };
     let (mut bands, mut guide_spread) = (0.0, 0.0);
     for k in 0..BANDS {
@@ -436,8 +513,54 @@ impl Moments {
     }
 }
 
-/// The texels a choice looked at, with their candidates' SURE.
-type Picked = Vec<(usize, [f64; CANDIDATES])>;
+/// A texel's filter: candidates and their weights (summing to 1), the blend of the choices of
+/// the four regions nearest it ([`Choice::mix`]).
+type Mix = [(usize, f64); 4];
+
+/// The candidate each region chose, for its edge texels and for the others
+/// ([`Grid::choose`]).
+struct Choice {
+    across: usize,
+    down: usize,
+    /// Per region (page, row, column) and class (0: inside, 1: edge), the candidate; None where
+    /// the region and those around it have no texel of the class to choose by.
+    best: Vec<[Option<usize>; 2]>,
+}
+
+impl Choice {
+    /// Texel `t`'s blend of its class's choices, bilinear between the centres of the four
+    /// regions nearest it, so that the filter changes smoothly from region to region (a choice
+    /// per region shows its square on the page; a choice per texel by the regions' SURE
+    /// interpolated, patches with hard borders). Regions without a choice for the class take
+    /// the other class's, or are left out.
+    fn mix(&self, t: &Texel, edge: bool) -> Mix {
+        let axis = |at: u32, n: usize| {
+            let f = (at as f64 + 0.5) / REGION as f64 - 0.5;
+            let lo = f.floor();
+            let a = f - lo;
+            let clamp = |r: f64| (r.max(0.0) as usize).min(n - 1);
+            [(clamp(lo), 1.0 - a), (clamp(lo + 1.0), a)]
+        };
+        let (page, class) = (t.page as usize * self.down, usize::from(edge));
+        let mut mix = [(0, 0.0); 4];
+        let mut total = 0.0;
+        let corners = (axis(t.y, self.down).into_iter())
+            .flat_map(|y| axis(t.x, self.across).into_iter().map(move |x| (y, x)));
+        for (m, ((ry, wy), (rx, wx))) in mix.iter_mut().zip(corners) {
+            let best = self.best[(page + ry) * self.across + rx];
+            if let Some(c) = best[class].or(best[1 - class]) {
+                *m = (c, wy * wx);
+                total += wy * wx;
+            }
+        }
+        if total > 0.0 {
+            mix.iter_mut().for_each(|m| m.1 /= total);
+        } else {
+            mix[0] = (0, 1.0);
+        }
+        mix
+    }
+}
 
 /// The texels' places on the pages (texel index per page, row and column), and the texel's size
 /// in the scene.
@@ -463,37 +586,72 @@ impl Grid {
         }
     }
 
-    /// Calls `visit(j, w_ij, (u, v))` for the measured neighbours j of texel `i` on its surface
-    /// with the same bands (itself included, weight 1, offset 0): their spatial weight under the
-    /// Gaussian of `sigma` texels and their offset along the surface in texels. Wide Gaussians
-    /// visit every `σ/2`-th texel of every `σ/2`-th row: the same filter, a fraction of the cost,
-    /// and about as many independent values (neighbours that share paths share noise).
+    /// Calls `visit(j, w_ij, (u, v), lattices)` for the measured neighbours j of texel `i` on
+    /// its surface with the same bands (itself included, weight 1, offset 0, on both
+    /// lattices): their spatial weight under the Gaussian of `sigma` texels, their offset along
+    /// the surface in texels, and the lattices they are on ([`PAGE_LATTICE`],
+    /// [`TEXEL_LATTICE`]).
+    ///
+    /// Wide Gaussians visit only every `σ/2`-th column of every `σ/2`-th row: the same filter, a
+    /// fraction of the cost, and about as many independent values (neighbours that share paths
+    /// share noise). Which rows: the **page's lattice** (rows and columns whose index is a
+    /// multiple of the step) gives texels side by side the same neighbours with weights that
+    /// differ a little, so the result is as smooth as the light; the **texel's lattice** (rows
+    /// and columns a multiple of the step away from the texel) gave texels a step apart disjoint
+    /// neighbours, a visible waffle of noise. But a range weight cannot tell apart the texels
+    /// just across a shadow's edge (the guide is smoothed over them), and the page's lattice
+    /// puts a neighbour there for half the texels, a step's texel lattice for none: beside a
+    /// sharp edge of 5 : 1 the page's lattice made the texels 2.5× worse than raw, the texel's
+    /// 0.8× (the synthetic chart's test, 10 % noise). So the fits that follow the guide (τ < ∞)
+    /// take the texel's lattice, those that do not (τ = ∞, the smooth places where a waffle
+    /// shows) the page's. A texel by its surface's edge also takes its own row and column on
+    /// the page's lattice (the light there changes fastest across the edge, and the lattice's
+    /// nearest row may be `step` − 1 texels inward).
     fn neighbours(
         &self,
         samples: &[Sample],
         texels: &[Texel],
         i: usize,
-        sigma: f64,
-        mut visit: impl FnMut(usize, f64, (f64, f64)),
+        (sigma, lattices): (f64, u8),
+        mut visit: impl FnMut(usize, f64, (f64, f64), u8),
     ) {
         let (t, c) = (&texels[i], &samples[i]);
-        visit(i, 1.0, (0.0, 0.0));
+        visit(i, 1.0, (0.0, 0.0), PAGE_LATTICE | TEXEL_LATTICE);
         let (tu, tv) = scene_sampler::orthonormal_basis(c.normal);
         let reach = (2.0 * sigma).ceil() as i64;
-        let step = ((sigma / 2.0).floor() as usize).max(1);
+        let step = ((sigma / 2.0).floor() as i64).max(1);
         // the weight by the offset on the page (a chart keeps the density: the same distance in
         // the scene), one exponential per row and column
         let weight = |d: i64| (-0.5 * (d as f64 / sigma).powi(2)).exp();
-        let across: Vec<f64> = (-reach..=reach).step_by(step).map(weight).collect();
+        // the offsets along one axis with the lattices they are on
+        let offsets = |at: u32| -> Vec<(i64, u8, f64)> {
+            let mut d: Vec<(i64, u8, f64)> =
+                Vec::with_capacity(2 * (2 * reach / step + 2) as usize);
+            for o in -reach..=reach {
+                let mut on = 0;
+                if (at as i64 + o) % step == 0 || (c.edge && o == 0) {
+                    on |= PAGE_LATTICE;
+                }
+                if o % step == 0 {
+                    on |= TEXEL_LATTICE;
+                }
+                if on != 0 {
+                    d.push((o, on, weight(o)));
+                }
+            }
+            d
+        };
+        let across = offsets(t.x);
         let page = t.page as usize * self.height;
-        for (wy, dy) in (-reach..=reach).step_by(step).enumerate() {
+        for (dy, on_y, wy) in offsets(t.y) {
             let y = t.y as i64 + dy;
             if y < 0 || y >= self.height as i64 {
                 continue;
             }
-            for (wx, dx) in (-reach..=reach).step_by(step).enumerate() {
+            for &(dx, on_x, wx) in &across {
                 let x = t.x as i64 + dx;
-                if x < 0 || x >= self.width as i64 || (dx == 0 && dy == 0) {
+                let on = on_x & on_y & lattices;
+                if on == 0 || x < 0 || x >= self.width as i64 || (dx == 0 && dy == 0) {
                     continue;
                 }
                 let j = self.index[(page + y as usize) * self.width + x as usize];
@@ -501,21 +659,27 @@ impl Grid {
                     continue;
                 }
                 let s = &samples[j as usize];
-                if !s.measured() || !c.same_bands(s) || s.normal.dot(c.normal) < SAME_NORMAL {
+                if !self.joins(c, s, (dx, dy)) {
                     continue;
                 }
-                // off the texel's plane, or farther in the scene than on the page (another chart)
                 let d = s.point - c.point;
-                let page_distance = ((dx * dx + dy * dy) as f64).sqrt() + 1.0;
-                if c.normal.dot(d).abs() > self.h
-                    || d.length_squared() > (page_distance * self.h).powi(2)
-                {
-                    continue;
-                }
                 let offset = (d.dot(tu) / self.h, d.dot(tv) / self.h);
-                visit(j as usize, across[wy] * across[wx], offset);
+                visit(j as usize, wy * wx, offset, on);
             }
         }
+    }
+
+    /// Whether `s`, `(dx, dy)` texels from `c` on the page, is on `c`'s surface with the same
+    /// bands: measured, its normal within [`SAME_NORMAL`], within a texel of `c`'s plane and no
+    /// farther in the scene than on the page (else another chart that touches this one on the
+    /// page only).
+    fn joins(&self, c: &Sample, s: &Sample, (dx, dy): (i64, i64)) -> bool {
+        if !s.measured() || !c.same_bands(s) || s.normal.dot(c.normal) < SAME_NORMAL {
+            return false;
+        }
+        let d = s.point - c.point;
+        let page_distance = ((dx * dx + dy * dy) as f64).sqrt() + 1.0;
+        c.normal.dot(d).abs() <= self.h && d.length_squared() <= (page_distance * self.h).powi(2)
     }
 
     /// Texel `i`'s sample with its guide the mean over the guide's texels around it ([`guides`];
@@ -524,7 +688,8 @@ impl Grid {
     /// (the range weights do not distinguish).
     fn smooth_guide(&self, raw: &[Sample], texels: &[Texel], i: usize) -> Sample {
         let (mut sum, mut var, mut total) = (0.0, 0.0, 0.0);
-        self.neighbours(raw, texels, i, 1.5, |j, w, _| {
+        let both = PAGE_LATTICE | TEXEL_LATTICE;
+        self.neighbours(raw, texels, i, (1.5, both), |j, w, _, _| {
             if raw[j].has_guide {
                 sum += w * raw[j].guide;
                 var += w * w * raw[j].guide_var;
@@ -543,19 +708,18 @@ impl Grid {
         }
     }
 
-    /// The candidates at texel `i` (only `only` when given; the others are left at the texel
-    /// alone): each one's value (demodulated) and its SURE in the output's units
-    /// (module docs).
+    /// The candidates at texel `i` (those `wanted`; the others are left at the texel alone):
+    /// each one's value (demodulated) and its weights applied to the spreads, W s (module docs).
     fn candidates(
         &self,
         samples: &[Sample],
         texels: &[Texel],
         i: usize,
-        only: Option<usize>,
-    ) -> [(Bands, f64); CANDIDATES] {
+        wanted: &[bool; CANDIDATES],
+    ) -> [(Bands, Bands); CANDIDATES] {
         let c = &samples[i];
-        let mut out = [(c.value, sure(c, &c.value, &c.spread)); CANDIDATES];
-        let wanted = |k: usize| only.is_none_or(|o| o == k);
+        let mut out = [(c.value, c.spread); CANDIDATES];
+        let wanted = |k: usize| wanted[k];
         for (si, &sigma) in SIGMAS.iter().enumerate() {
             // the fits of this σ wanted: their range τs and the most terms they take
             let (mut want, mut terms) = ([false; TAUS.len()], 0);
@@ -568,8 +732,14 @@ impl Grid {
             if terms == 0 {
                 continue;
             }
+            // (the fits that follow the guide on the texel's lattice, the others on the page's:
+            // `neighbours`)
+            let lattice = [TEXEL_LATTICE, TEXEL_LATTICE, PAGE_LATTICE];
+            let lattices = (want.iter().zip(lattice))
+                .filter(|(w, _)| **w)
+                .fold(0, |m, (_, l)| m | l);
             let mut acc = [Moments::default(); TAUS.len()];
-            self.neighbours(samples, texels, i, sigma, |j, w, offset| {
+            self.neighbours(samples, texels, i, (sigma, lattices), |j, w, offset, on| {
                 let s = &samples[j];
                 // light found around one and none around the other: a wall between them (a
                 // floor running under it into a closed room), or light's edge; never mixed
@@ -586,11 +756,20 @@ impl Grid {
                     f64::INFINITY
                 };
                 // exp(−r/τ²) for τ = 1, 3, ∞: the first the second to the 9th power
-                let wide = (-range / 9.0).exp();
-                let narrow = wide.powi(9);
+                let (wide, narrow) = if on & TEXEL_LATTICE != 0 {
+                    let wide = (-range / 9.0).exp();
+                    (wide, wide.powi(9))
+                } else {
+                    (0.0, 0.0)
+                };
                 let at = (offset.0 / sigma, offset.1 / sigma);
-                for ((a, r), on) in acc.iter_mut().zip([narrow, wide, 1.0]).zip(want) {
-                    if on {
+                for (((a, r), wanted), l) in acc
+                    .iter_mut()
+                    .zip([narrow, wide, 1.0])
+                    .zip(want)
+                    .zip(lattice)
+                {
+                    if wanted && on & l != 0 {
                         a.add(w * r, at, s, terms);
                     }
                 }
@@ -598,18 +777,55 @@ impl Grid {
             // (a quadratic fit's sums hold the linear one's: both from one pass)
             for (f, &(fs, ft, fterms)) in FITS.iter().enumerate() {
                 if fs == si && wanted(f + 1) {
-                    let (value, ws) = acc[ft].solve(fterms);
-                    out[f + 1] = (value, sure(c, &value, &ws));
+                    out[f + 1] = acc[ft].solve(fterms);
                 }
             }
         }
         out
     }
 
-    /// Each texel's candidate: the one of least SURE summed over its region ([`REGION`]² texels
-    /// of a page) and the regions around it, over the reflecting texels it [`chooses`] by;
-    /// with those texels and their candidates' SURE.
-    fn choose(&self, texels: &[Texel], samples: &[Sample]) -> (Vec<usize>, Picked) {
+    /// Texel `i` filtered by the blend `mix` of candidates: its value (demodulated) and SURE
+    /// (linear in the candidates: F = Σ a_k F_k, W s = Σ a_k W_k s).
+    fn filtered(&self, samples: &[Sample], texels: &[Texel], i: usize, mix: &Mix) -> (Bands, f64) {
+        let mut wanted = [false; CANDIDATES];
+        mix.iter()
+            .filter(|m| m.1 > 0.0)
+            .for_each(|m| wanted[m.0] = true);
+        let candidates = self.candidates(samples, texels, i, &wanted);
+        let (mut f, mut ws) = ([0.0; BANDS], [0.0; BANDS]);
+        for &(k, a) in mix.iter().filter(|m| m.1 > 0.0) {
+            for b in 0..BANDS {
+                f[b] += a * candidates[k].0[b];
+                ws[b] += a * candidates[k].1[b];
+            }
+        }
+        (f, sure(&samples[i], &f, &ws))
+    }
+
+    /// Whether texel `i` is within [`EDGE`] texels of its surface's edge on the page: a place
+    /// there that holds no texel of the same surface ([`Grid::neighbours`]' test).
+    fn near_edge(&self, samples: &[Sample], texels: &[Texel], i: usize) -> bool {
+        let (t, c) = (&texels[i], &samples[i]);
+        let page = t.page as usize * self.height;
+        for dy in -EDGE..=EDGE {
+            for dx in -EDGE..=EDGE {
+                let (x, y) = (t.x as i64 + dx, t.y as i64 + dy);
+                if x < 0 || y < 0 || x >= self.width as i64 || y >= self.height as i64 {
+                    return true;
+                }
+                let j = self.index[(page + y as usize) * self.width + x as usize];
+                if j == u32::MAX || !self.joins(c, &samples[j as usize], (dx, dy)) {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// Each region's candidates ([`Choice`]): for each class of texels (inside, edge), the one
+    /// of least SURE summed over the region and the regions around it, over the reflecting
+    /// texels of the class it [`chooses`] by.
+    fn choose(&self, texels: &[Texel], samples: &[Sample]) -> Choice {
         let (across, down) = (self.width.div_ceil(REGION), self.height.div_ceil(REGION));
         let region = |t: &Texel| {
             (t.page as usize * down + t.y as usize / REGION) * across + t.x as usize / REGION
@@ -618,31 +834,43 @@ impl Grid {
         let picked: Vec<usize> = (0..texels.len())
             .filter(|&i| chooses(&texels[i]) && samples[i].measured())
             .collect();
+        let all = [true; CANDIDATES];
         let sure: Vec<[f64; CANDIDATES]> = (picked.par_iter())
-            .map(|&i| self.candidates(samples, texels, i, None).map(|c| c.1))
-            .collect();
-        let mut sums = vec![[0.0; CANDIDATES]; regions];
-        for (&i, s) in picked.iter().zip(&sure) {
-            let r = &mut sums[region(&texels[i])];
-            r.iter_mut().zip(s).for_each(|(a, b)| *a += b);
-        }
-        let best: Vec<usize> = (0..regions)
-            .map(|r| {
-                let (page, y, x) = (r / (across * down), r / across % down, r % across);
-                let mut s = [0.0; CANDIDATES];
-                for ny in y.saturating_sub(1)..(y + 2).min(down) {
-                    for nx in x.saturating_sub(1)..(x + 2).min(across) {
-                        let n = (page * down + ny) * across + nx;
-                        s.iter_mut().zip(&sums[n]).for_each(|(a, b)| *a += b);
-                    }
-                }
-                (0..CANDIDATES)
-                    .min_by(|&a, &b| s[a].total_cmp(&s[b]))
-                    .unwrap_or(0)
+            .map(|&i| {
+                let c = &samples[i];
+                self.candidates(samples, texels, i, &all)
+                    .map(|(f, ws)| sure(c, &f, &ws))
             })
             .collect();
-        let choice = texels.iter().map(|t| best[region(t)]).collect();
-        (choice, picked.into_iter().zip(sure).collect())
+        let mut sums = vec![[[0.0; CANDIDATES]; 2]; regions];
+        let mut counts = vec![[0usize; 2]; regions];
+        for (&i, s) in picked.iter().zip(&sure) {
+            let (r, class) = (region(&texels[i]), usize::from(samples[i].edge));
+            counts[r][class] += 1;
+            let r = &mut sums[r][class];
+            r.iter_mut().zip(s).for_each(|(a, b)| *a += b);
+        }
+        let best = (0..regions)
+            .map(|r| {
+                let (page, y, x) = (r / (across * down), r / across % down, r % across);
+                std::array::from_fn(|class| {
+                    let (mut s, mut n) = ([0.0; CANDIDATES], 0);
+                    for ny in y.saturating_sub(1)..(y + 2).min(down) {
+                        for nx in x.saturating_sub(1)..(x + 2).min(across) {
+                            let m = (page * down + ny) * across + nx;
+                            s.iter_mut().zip(&sums[m][class]).for_each(|(a, b)| *a += b);
+                            n += counts[m][class];
+                        }
+                    }
+                    (n > 0).then(|| {
+                        (0..CANDIDATES)
+                            .min_by(|&a, &b| s[a].total_cmp(&s[b]))
+                            .unwrap_or(0)
+                    })
+                })
+            })
+            .collect();
+        Choice { across, down, best }
     }
 }
 

@@ -174,7 +174,8 @@ pub fn lay_out_texels(
                 height: side,
                 texels: texels as u64,
                 max: settings::MAX_TEXELS,
-                gib: settings::bake_bytes(1, side, side) as f64 / (1u64 << 30) as f64,
+                gib: settings::bake_bytes(1, side, side, settings.denoise) as f64
+                    / (1u64 << 30) as f64,
             });
         }
     }
@@ -187,7 +188,8 @@ pub fn lay_out_texels(
             height: atlas.height,
             texels,
             max: settings::MAX_TEXELS,
-            gib: settings::bake_bytes(atlas.pages, atlas.width, atlas.height) as f64
+            gib: settings::bake_bytes(atlas.pages, atlas.width, atlas.height, settings.denoise)
+                as f64
                 / (1u64 << 30) as f64,
         });
     }

@@ -65,10 +65,17 @@ pub const MAX_TEXELS: u64 = 1 << 28;
 
 /// The memory a bake of `pages` pages of `width × height` texels takes at most, in bytes: per
 /// page texel the value (12), the filled flag (1) and the rasterizer's candidate (32), and per
-/// covered texel its point (64) and its estimate (160).
-pub fn bake_bytes(pages: u32, width: u32, height: u32) -> u64 {
+/// covered texel its point (64) and its estimate (160); `denoise`d, per texel also the
+/// denoiser's state (`lightmap/denoise.rs`: two samples of 144, the guide's estimate and the
+/// denoised copy of 112 each, the chosen value and blend 96, the page's index 4).
+pub fn bake_bytes(pages: u32, width: u32, height: u32, denoise: bool) -> u64 {
     let texels = u64::from(pages) * u64::from(width) * u64::from(height);
-    texels * (12 + 1 + 32 + 64 + 160)
+    let denoiser = if denoise {
+        2 * 144 + 2 * 112 + 96 + 4
+    } else {
+        0
+    };
+    texels * (12 + 1 + 32 + 64 + 160 + denoiser)
 }
 
 impl LightmapSettings {

@@ -39,15 +39,16 @@
 //! F is linear in y; W need not be positive, so a fit's hat matrix serves as well as a mean's).
 //! The texel alone (the identity) has SURE s_i², the raw value's variance.
 //!
-//! **The choice.** Per region of [`REGION`]² texels of a page, the candidate whose SURE summed
-//! over the region and the regions around it is least, over one texel in eight ([`chooses`]). A
-//! single texel's SURE is far too noisy to choose on (choosing per texel, even on SURE
-//! averaged over a neighbourhood, made the estimate 3–8× optimistic in the tests: the choice
-//! follows the noise); a sum over thousands is not. The estimated error of the result is
-//! `√(Σ_i SURE_i / Σ_i y_i²)` over the reflecting texels the choice did not look at (seven in
-//! eight; their noise is not what chose) — the relative L2 error the raw gather reports
-//! ([`crate::estimator::relative_std_error`]), now with the blur in it. A denoised bake's rounds
-//! stop on it ([`denoised_error`], from another texel in eight).
+//! **The choice.** Per region of [`REGION`]² texels of a page, and apart for its texels by a
+//! surface's edge ([`Sample::edge`]), the candidate whose SURE summed over the region and the
+//! regions around it is least, over one texel in eight ([`chooses`]); each texel blends the
+//! choices of the four regions nearest it ([`Choice::mix`]). A single texel's SURE is far too
+//! noisy to choose on (choosing per texel, even on SURE averaged over a neighbourhood, made the
+//! estimate 3–8× optimistic in the tests: the choice follows the noise); a sum over thousands
+//! is not. The estimated error of the result is `√(Σ_i SURE_i / Σ_i y_i²)` over the reflecting
+//! texels the choice did not look at (seven in eight) — the relative L2 error the raw gather
+//! reports ([`crate::estimator::relative_std_error`]), now with the blur in it. A denoised
+//! bake's rounds stop on its upper bound ([`denoised_error`], from another texel in eight).
 //!
 //! **Radiosity.** B = E + ρ·L: the noise is in L alone, and a textured ρ is sharp where L is
 //! smooth, so B's texels are filtered as L = (B − E)/ρ (demodulated, as image denoisers divide

@@ -284,35 +284,24 @@ pub fn gather_guide(
     texels: &LightmapTexels,
 ) -> Result<Vec<Gathered>, LightmapError> {
     let _phase = crate::progress::phase("denoiser's guide");
-    let mine: Vec<usize> = (0..texels.texels.len())
+    let mut which: Vec<usize> = (0..texels.texels.len())
         .filter(|&i| denoise::guides(&texels.texels[i]))
         .collect();
     let mut out = vec![Gathered::default(); texels.texels.len()];
-    let first = guide_pass(
-        domain,
-        trained,
-        (config, GUIDE_RAYS, 0),
-        settings,
-        texels,
-        &mine,
-    )?;
-    for (&i, v) in mine.iter().zip(first) {
-        out[i] = v;
-    }
-    // ⟨A second look where the first found no light⟩
-    let unlit: Vec<usize> = (mine.into_iter())
-        .filter(|&i| out[i].radiosity == domain.emission(texels.texels[i].face))
-        .collect();
-    let second = guide_pass(
-        domain,
-        trained,
-        (config, GUIDE_DARK_RAYS, 1),
-        settings,
-        texels,
-        &unlit,
-    )?;
-    for (&i, v) in unlit.iter().zip(second) {
-        out[i] = v;
+    for (pass, rays) in [(0, GUIDE_RAYS), (1, GUIDE_DARK_RAYS)] {
+        let values = guide_pass(
+            domain,
+            trained,
+            (config, rays, pass),
+            settings,
+            texels,
+            &which,
+        )?;
+        for (&i, v) in which.iter().zip(values) {
+            out[i] = v;
+        }
+        // ⟨The next look: where this one found no light⟩
+        which.retain(|&i| out[i].radiosity == domain.emission(texels.texels[i].face));
     }
     Ok(out)
 }

@@ -72,8 +72,8 @@ pub use estimator::{
 pub use gather::Gathered;
 pub use lightmap::{
     Atlas as LightmapAtlas, DenoiseReport, FaceUv, GUIDE_DARK_RAYS, GUIDE_RAYS, Lightmap,
-    LightmapError, LightmapQuantity, LightmapSettings, LightmapTexels, Texel, assemble_lightmap,
-    bake_lightmap, gather_guide, gather_texels, lay_out_texels,
+    LightmapError, LightmapGuide, LightmapQuantity, LightmapSettings, LightmapTexels, Texel,
+    assemble_lightmap, bake_lightmap, gather_guide, gather_texels, lay_out_texels,
 };
 pub use mesh::ShadedMesh;
 pub use metrics::{

@@ -135,18 +135,13 @@ pub fn bake_lightmap(
     } else {
         None
     };
-    let (gathered, _) = gather_texels(
-        domain,
-        trained,
-        config,
-        settings,
-        (&texels, guide.as_deref()),
-    )?;
+    let (gathered, _) =
+        gather_texels(domain, trained, config, settings, (&texels, guide.as_ref()))?;
     Ok(assemble_lightmap(
         domain,
         texels,
         &gathered,
-        guide.as_deref(),
+        guide.as_ref(),
         settings,
     ))
 }
@@ -211,7 +206,7 @@ pub fn gather_texels(
     trained: &Trained,
     config: &SolveConfig,
     settings: &LightmapSettings,
-    (texels, guide): (&LightmapTexels, Option<&[Gathered]>),
+    (texels, guide): (&LightmapTexels, Option<&LightmapGuide>),
 ) -> Result<(Vec<Gathered>, Vec<usize>), LightmapError> {
     let emitters = Emitters::new(domain);
     let at = texels.points();
@@ -220,11 +215,15 @@ pub fn gather_texels(
         let guide = guide?;
         let pick = |i: &usize| texels.texels[*i];
         let block: Vec<Texel> = members.iter().map(pick).collect();
-        let block_guide: Vec<Gathered> = members.iter().map(|&i| guide[i]).collect();
+        let block_guide: Vec<Gathered> = members.iter().map(|&i| guide.values[i]).collect();
         let block_material: Option<Vec<_>> =
             (material.as_ref()).map(|m| members.iter().map(|&i| m[i]).collect());
         let values = (values, &block_guide[..]);
-        denoise::denoised_error(&texels.atlas, &block, values, block_material.as_deref())
+        let (bound, chosen) =
+            denoise::denoised_error(&texels.atlas, &block, values, block_material.as_deref());
+        // (the last test's choice is the final pass's, if it saw the same values)
+        *guide.last.lock().unwrap_or_else(|e| e.into_inner()) = chosen;
+        bound
     };
     let stop = guide.map(|_| &stop as &crate::estimator::StopOn);
     Ok(match settings.quantity {
@@ -257,6 +256,22 @@ fn texel_materials(
     })
 }
 
+/// The denoiser's guide ([`gather_guide`]): its values, and the candidates that the rounds' last
+/// stopping test chose (`lightmap/denoise.rs`), so that the final pass does not choose again
+/// when it denoises the values that test saw (a third of the filters' time).
+pub struct LightmapGuide {
+    values: Vec<Gathered>,
+    last: std::sync::Mutex<Option<denoise::Chosen>>,
+}
+
+impl LightmapGuide {
+    /// The guide's estimates, one per texel (every second texel of every second row; the others
+    /// `Gathered::default()`).
+    pub fn values(&self) -> &[Gathered] {
+        &self.values
+    }
+}
+
 /// Rays per texel of the denoiser's guide ([`gather_guide`]).
 pub const GUIDE_RAYS: usize = 8;
 
@@ -282,7 +297,7 @@ pub fn gather_guide(
     config: &SolveConfig,
     settings: &LightmapSettings,
     texels: &LightmapTexels,
-) -> Result<Vec<Gathered>, LightmapError> {
+) -> Result<LightmapGuide, LightmapError> {
     let _phase = crate::progress::phase("denoiser's guide");
     let mut which: Vec<usize> = (0..texels.texels.len())
         .filter(|&i| denoise::guides(&texels.texels[i]))
@@ -303,7 +318,10 @@ pub fn gather_guide(
         // ⟨The next look: where this one found no light⟩
         which.retain(|&i| out[i].radiosity == domain.emission(texels.texels[i].face));
     }
-    Ok(out)
+    Ok(LightmapGuide {
+        values: out,
+        last: std::sync::Mutex::new(None),
+    })
 }
 
 /// One pass of [`gather_guide`] at `texels`' texels `which`, with `rays` rays each, one round,
@@ -352,7 +370,7 @@ pub fn assemble_lightmap(
     domain: &Domain,
     texels: LightmapTexels,
     gathered: &[Gathered],
-    guide: Option<&[Gathered]>,
+    guide: Option<&LightmapGuide>,
     settings: &LightmapSettings,
 ) -> Lightmap {
     let LightmapTexels {
@@ -365,8 +383,14 @@ pub fn assemble_lightmap(
     let denoised_values;
     let gathered = if let Some(guide) = guide {
         let material = texel_materials(domain, &texels, settings.quantity);
-        let (values, report) =
-            denoise::denoise(&atlas, &texels, (gathered, guide), material.as_deref());
+        let last = guide.last.lock().unwrap_or_else(|e| e.into_inner()).take();
+        let (values, report) = denoise::denoise(
+            &atlas,
+            &texels,
+            (gathered, &guide.values),
+            material.as_deref(),
+            last,
+        );
         denoised = Some(report);
         denoised_values = values;
         &denoised_values[..]

@@ -71,7 +71,7 @@ pub(super) fn write_lightmap(
     // ⟨The texels' values: gathered (all of them, or a shard's), or the shards' merged⟩
     let (gathered, mine) = if !plan.merges(super::shards::Kind::Lightmap) {
         let _phase = crate::progress::phase("lightmap");
-        let at = (&texels, guide.as_deref());
+        let at = (&texels, guide.as_ref());
         crate::lightmap::gather_texels(domain, trained, config, settings, at)?
     } else {
         let merged = plan.merged_shards(super::shards::Kind::Lightmap, print())?;
@@ -93,7 +93,7 @@ pub(super) fn write_lightmap(
     }
     stage.metrics.warnings.extend(texels.atlas.note.clone());
     let lightmap =
-        crate::lightmap::assemble_lightmap(domain, texels, &gathered, guide.as_deref(), settings);
+        crate::lightmap::assemble_lightmap(domain, texels, &gathered, guide.as_ref(), settings);
     stage.gathers.push(lightmap.stats);
     let (metrics, staged) = (&mut stage.metrics, &mut stage.files);
     metrics.seconds.gather += tg.elapsed().as_secs_f64();

@@ -834,6 +834,7 @@ impl Grid {
                 .filter(|(w, _)| **w)
                 .fold(0, |m, (_, l)| m | l);
             let mut acc = [Moments::default(); TAUS.len()];
+            let per_sigma = 1.0 / sigma;
             self.neighbours(samples, texels, i, (sigma, lattices), |j, w, offset, on| {
                 let s = &samples[j];
                 // light found around one and none around the other: a wall between them (a
@@ -852,20 +853,17 @@ impl Grid {
                 };
                 // exp(−r/τ²) for τ = 1, 3, ∞: the first the second to the 9th power
                 let (wide, narrow) = if on & TEXEL_LATTICE != 0 && (want[0] || want[1]) {
-                    let wide = (-range / 9.0).exp();
+                    let wide = (-range * (1.0 / 9.0)).exp();
                     (wide, wide.powi(9))
                 } else {
                     (0.0, 0.0)
                 };
-                let at = (offset.0 / sigma, offset.1 / sigma);
-                for (((a, r), wanted), l) in acc
-                    .iter_mut()
-                    .zip([narrow, wide, 1.0])
-                    .zip(want)
-                    .zip(lattice)
-                {
-                    if wanted && on & l != 0 {
-                        a.add(w * r, at, s, terms);
+                let at = (offset.0 * per_sigma, offset.1 * per_sigma);
+                // (indexed: zipping the arrays by value copied them on every neighbour)
+                let r = [narrow, wide, 1.0];
+                for f in 0..TAUS.len() {
+                    if want[f] && on & lattice[f] != 0 {
+                        acc[f].add(w * r[f], at, s, terms);
                     }
                 }
             });

@@ -59,7 +59,7 @@ use super::atlas::Atlas;
 use super::texels::Texel;
 use crate::element::{BANDS, Bands};
 use crate::gather::Gathered;
-use glam::DVec3;
+use glam::Vec3;
 use rayon::prelude::*;
 
 /// The candidates' spatial σ, in texels.
@@ -108,7 +108,7 @@ const TEXEL_LATTICE: u8 = 2;
 const EDGE: i64 = 3;
 
 /// Neighbours are on the same surface when their normals' cosine is at least this (18°).
-const SAME_NORMAL: f64 = 0.95;
+const SAME_NORMAL: f32 = 0.95;
 
 /// A fit needs every Cholesky pivot of its moments above this share of its diagonal element
 /// (else its neighbours do not determine it: a strip of texels, a chart's corner).
@@ -141,17 +141,22 @@ fn candidate_sigma(k: usize) -> f64 {
 }
 
 /// A texel's data for filtering: its point and normal, its demodulated value L and spread, the
-/// weight ρ² of its bands back in the output's units (0: a band that does not reflect, left as it
-/// is), and the guide's demodulated luminance and that one's variance.
+/// bands it reflects (the others are left as they are), and the guide's demodulated luminance and
+/// that one's variance. In single precision, one cache line: a filter reads it for each of its
+/// neighbours (some 80 a scale), and in double precision, 144 bytes, the reads were the filters'
+/// cost (the values are noisy to a per cent, the points needed to a hundredth of a texel; the
+/// sums are in double precision).
 #[derive(Clone, Copy)]
+#[repr(C, align(64))]
 struct Sample {
-    point: DVec3,
-    normal: DVec3,
-    value: Bands,
-    spread: Bands,
-    weight: Bands,
-    guide: f64,
-    guide_var: f64,
+    point: Vec3,
+    normal: Vec3,
+    value: [f32; BANDS],
+    spread: [f32; BANDS],
+    guide: f32,
+    guide_var: f32,
+    /// Bit k: band k reflects (ρ > 0).
+    bands: u8,
     has_guide: bool,
     /// Whether the texel is within [`EDGE`] texels of its surface's edge on the page (its
     /// region chooses for these texels apart: light bends at a surface's edge, the corner of
@@ -161,7 +166,12 @@ struct Sample {
 
 impl Sample {
     fn measured(&self) -> bool {
-        self.weight.iter().any(|w| *w > 0.0)
+        self.bands != 0
+    }
+
+    /// Whether band `k` reflects.
+    fn reflects(&self, k: usize) -> bool {
+        self.bands & (1 << k) != 0
     }
 
     /// Whether the guide found no light at all around the texel (a closed room's texels).
@@ -171,7 +181,17 @@ impl Sample {
 
     /// Whether `other` has the same bands filtered (a neighbour must: its L is unknown where ρ = 0).
     fn same_bands(&self, other: &Sample) -> bool {
-        (0..BANDS).all(|k| (self.weight[k] > 0.0) == (other.weight[k] > 0.0))
+        self.bands == other.bands
+    }
+
+    /// The demodulated value, in double precision.
+    fn value(&self) -> Bands {
+        self.value.map(f64::from)
+    }
+
+    /// The spread, in double precision.
+    fn spread(&self) -> Bands {
+        self.spread.map(f64::from)
     }
 }
 
@@ -188,13 +208,13 @@ pub fn denoise(
     last: Option<Chosen>,
 ) -> (Vec<Gathered>, DenoiseReport) {
     let started = std::time::Instant::now();
-    let (grid, samples) = prepare(atlas, texels, (gathered, guide), material);
+    let (grid, samples, weights) = prepare(atlas, texels, (gathered, guide), material);
     // ⟨Per region the candidate of least summed SURE over the texels it chooses by — as the
     // rounds' last stopping test chose, if that test saw these values⟩
     let print = fingerprint(texels, gathered);
     let choice = match last {
         Some(last) if last.print == print => last.choice,
-        _ => grid.choose(texels, &samples),
+        _ => grid.choose(texels, &samples, &weights),
     };
     // ⟨Every texel's blend of its regions' candidates: its value and SURE; the error over the
     // measured⟩
@@ -203,7 +223,7 @@ pub fn denoise(
         .collect();
     let chosen: Vec<(Bands, f64)> = (0..texels.len())
         .into_par_iter()
-        .map(|i| grid.filtered(&samples, texels, i, &mixes[i]))
+        .map(|i| grid.filtered(&samples, texels, i, (&mixes[i], &weights[i])))
         .collect();
     let mut report = DenoiseReport {
         raw_error: crate::estimator::relative_std_error(gathered),
@@ -231,7 +251,7 @@ pub fn denoise(
         // (light is never negative: a fit's value below 0 is raised to 0, which only brings it
         // nearer the truth, so SURE still bounds the error)
         for b in 0..BANDS {
-            if samples[i].weight[b] > 0.0 {
+            if samples[i].reflects(b) {
                 o.radiosity[b] = e[b] + rho[b] * f[b].max(0.0);
             }
         }
@@ -266,15 +286,15 @@ pub(crate) fn denoised_error(
     (gathered, guide): (&[Gathered], &[Gathered]),
     material: Option<&[(Bands, Bands)]>,
 ) -> (Option<f64>, Option<Chosen>) {
-    let (grid, samples) = prepare(atlas, texels, (gathered, guide), material);
-    let choice = grid.choose(texels, &samples);
+    let (grid, samples, weights) = prepare(atlas, texels, (gathered, guide), material);
+    let choice = grid.choose(texels, &samples, &weights);
     let others: Vec<usize> = (0..texels.len())
         .filter(|&i| checks(&texels[i]) && samples[i].measured())
         .collect();
     let sure: Vec<f64> = (others.par_iter())
         .map(|&i| {
             let mix = choice.mix(&texels[i], samples[i].edge);
-            grid.filtered(&samples, texels, i, &mix).1
+            grid.filtered(&samples, texels, i, (&mix, &weights[i])).1
         })
         .collect();
     // ⟨Per block of 2 × 2 regions: its SURE sum and Σ y²⟩
@@ -288,9 +308,9 @@ pub(crate) fn denoised_error(
         e.0 += s;
         e.1 += gathered[i].radiosity.iter().map(|b| b * b).sum::<f64>();
         let c = &samples[i];
-        e.2 += c.weight.iter().sum::<f64>()
+        e.2 += weights[i].iter().sum::<f64>()
             * if c.guide_var.is_finite() {
-                c.guide_var
+                f64::from(c.guide_var)
             } else {
                 0.0
             };
@@ -350,15 +370,16 @@ fn fingerprint(texels: &[Texel], gathered: &[Gathered]) -> u64 {
     h.finish()
 }
 
-/// The texels' grid and their samples, the guide smoothed over each texel's neighbourhood.
+/// The texels' grid, their samples (the guide smoothed over each texel's neighbourhood) and the
+/// weights ρ² of their bands back in the output's units (0: a band that does not reflect).
 fn prepare(
     atlas: &Atlas,
     texels: &[Texel],
     (gathered, guide): (&[Gathered], &[Gathered]),
     material: Option<&[(Bands, Bands)]>,
-) -> (Grid, Vec<Sample>) {
+) -> (Grid, Vec<Sample>, Vec<Bands>) {
     let grid = Grid::new(atlas, texels, 1.0 / atlas.texels_per_unit);
-    let raw: Vec<Sample> = (0..texels.len())
+    let (raw, weights): (Vec<Sample>, Vec<Bands>) = (0..texels.len())
         .map(|i| {
             sample(
                 &texels[i],
@@ -366,7 +387,7 @@ fn prepare(
                 material.map(|m| m[i]),
             )
         })
-        .collect();
+        .unzip();
     let samples = (0..texels.len())
         .into_par_iter()
         .map(|i| Sample {
@@ -374,7 +395,7 @@ fn prepare(
             ..grid.smooth_guide(&raw, texels, i)
         })
         .collect();
-    (grid, samples)
+    (grid, samples, weights)
 }
 
 /// Whether texel `t` carries the guide: the guide bake (`super::gather_guide`) estimates every
@@ -399,53 +420,56 @@ fn checks(t: &Texel) -> bool {
     (t.x + t.y) % 8 == 4
 }
 
-/// A texel's [`Sample`]: L = (y − E)/ρ and s/ρ per band with ρ > 0, weight ρ² (ρ = 1 for
-/// irradiance); the guide's L and its spread² as the mean over those bands. A texel that does
+/// A texel's [`Sample`] and weights: L = (y − E)/ρ and s/ρ per band with ρ > 0, weight ρ² (ρ = 1
+/// for irradiance); the guide's L and its spread² as the mean over those bands. A texel that does
 /// not reflect has weight 0 in every band.
 fn sample(
     t: &Texel,
     (g, guide): (&Gathered, &Gathered),
     material: Option<(Bands, Bands)>,
-) -> Sample {
+) -> (Sample, Bands) {
     let (rho, e) = material.unwrap_or(([1.0; BANDS], [0.0; BANDS]));
     let mut s = Sample {
-        point: t.point,
-        normal: t.normal,
+        point: t.point.as_vec3(),
+        normal: t.normal.as_vec3(),
         value: [0.0; BANDS],
         spread: [0.0; BANDS],
-        weight: [0.0; BANDS],
         guide: 0.0,
         guide_var: 0.0,
+        bands: 0,
         has_guide: guides(t),
         edge: false,
     };
-    let (mut bands, mut guide_spread) = (0.0, 0.0);
+    let mut weight = [0.0; BANDS];
+    let (mut bands, mut guide_sum, mut guide_spread) = (0.0, 0.0, 0.0);
     for k in 0..BANDS {
         // every reflecting texel, also one whose replicates agree (both 0 where light is rare):
         // leaving those out made the neighbours a choice by the values, and SURE 2.6× low
         if rho[k] > 0.0 {
-            s.value[k] = (g.radiosity[k] - e[k]) / rho[k];
-            s.spread[k] = g.spread[k] / rho[k];
-            s.weight[k] = rho[k] * rho[k];
-            s.guide += (guide.radiosity[k] - e[k]) / rho[k];
+            s.value[k] = ((g.radiosity[k] - e[k]) / rho[k]) as f32;
+            s.spread[k] = (g.spread[k] / rho[k]) as f32;
+            s.bands |= 1 << k;
+            weight[k] = rho[k] * rho[k];
+            guide_sum += (guide.radiosity[k] - e[k]) / rho[k];
             guide_spread += guide.spread[k] / rho[k];
             bands += 1.0;
         }
     }
     if bands > 0.0 {
-        s.guide /= bands;
-        s.guide_var = (guide_spread / bands).powi(2);
+        s.guide = (guide_sum / bands) as f32;
+        s.guide_var = (guide_spread / bands).powi(2) as f32;
     }
-    s
+    (s, weight)
 }
 
 /// SURE of one candidate at texel `t` (module docs), summed over the bands in the output's
 /// units: its value `f` and the filtered spreads `ws`.
-fn sure(t: &Sample, f: &Bands, ws: &Bands) -> f64 {
+fn sure(t: &Sample, weight: &Bands, f: &Bands, ws: &Bands) -> f64 {
+    let (value, spread) = (t.value(), t.spread());
     (0..BANDS)
         .map(|k| {
-            let s = t.spread[k];
-            t.weight[k] * ((f[k] - t.value[k]).powi(2) - s * s + 2.0 * s * ws[k])
+            let s = spread[k];
+            weight[k] * ((f[k] - value[k]).powi(2) - s * s + 2.0 * s * ws[k])
         })
         .sum()
 }
@@ -499,8 +523,8 @@ impl Moments {
                 self.m[pair(a, b)] += wa * phi[b];
             }
             for k in 0..BANDS {
-                self.y[k][a] += wa * n.value[k];
-                self.s[k][a] += wa * n.spread[k];
+                self.y[k][a] += wa * f64::from(n.value[k]);
+                self.s[k][a] += wa * f64::from(n.spread[k]);
             }
         }
     }
@@ -710,7 +734,8 @@ impl Grid {
     ) {
         let (t, c) = (&texels[i], &samples[i]);
         visit(i, 1.0, (0.0, 0.0), PAGE_LATTICE | TEXEL_LATTICE);
-        let (tu, tv) = scene_sampler::orthonormal_basis(c.normal);
+        let (tu, tv) = scene_sampler::orthonormal_basis(c.normal.as_dvec3());
+        let (tu, tv, per_h) = (tu.as_vec3(), tv.as_vec3(), 1.0 / self.h);
         let reach = reach(sigma);
         let step = ((sigma / 2.0).floor() as i64).max(1);
         // the weight by the offset on the page (a chart keeps the density: the same distance in
@@ -758,7 +783,7 @@ impl Grid {
                     continue;
                 }
                 let d = s.point - c.point;
-                let offset = (d.dot(tu) / self.h, d.dot(tv) / self.h);
+                let offset = (f64::from(d.dot(tu)) * per_h, f64::from(d.dot(tv)) * per_h);
                 visit(j as usize, wy * wx, offset, on);
             }
         }
@@ -772,9 +797,9 @@ impl Grid {
         if !s.measured() || !c.same_bands(s) || s.normal.dot(c.normal) < SAME_NORMAL {
             return false;
         }
-        let d = s.point - c.point;
-        let page_distance = ((dx * dx + dy * dy) as f64).sqrt() + 1.0;
-        c.normal.dot(d).abs() <= self.h && d.length_squared() <= (page_distance * self.h).powi(2)
+        let (d, h) = (s.point - c.point, self.h as f32);
+        let page_distance = ((dx * dx + dy * dy) as f32).sqrt() + 1.0;
+        c.normal.dot(d).abs() <= h && d.length_squared() <= (page_distance * h).powi(2)
     }
 
     /// Texel `i`'s sample with its guide the mean over the guide's texels around it ([`guides`];
@@ -786,15 +811,15 @@ impl Grid {
         let both = PAGE_LATTICE | TEXEL_LATTICE;
         self.neighbours(raw, texels, i, (GUIDE_SIGMA, both), |j, w, _, _| {
             if raw[j].has_guide {
-                sum += w * raw[j].guide;
-                var += w * w * raw[j].guide_var;
+                sum += w * f64::from(raw[j].guide);
+                var += w * w * f64::from(raw[j].guide_var);
                 total += w;
             }
         });
         let (guide, guide_var) = if total > 0.0 {
-            (sum / total, var / (total * total))
+            ((sum / total) as f32, (var / (total * total)) as f32)
         } else {
-            (0.0, f64::INFINITY)
+            (0.0, f32::INFINITY)
         };
         Sample {
             guide,
@@ -813,7 +838,7 @@ impl Grid {
         wanted: &[bool; CANDIDATES],
     ) -> [(Bands, Bands); CANDIDATES] {
         let c = &samples[i];
-        let mut out = [(c.value, c.spread); CANDIDATES];
+        let mut out = [(c.value(), c.spread()); CANDIDATES];
         let wanted = |k: usize| wanted[k];
         for (si, &sigma) in SIGMAS.iter().enumerate() {
             // the fits of this σ wanted: their range τs and the most terms they take
@@ -842,8 +867,8 @@ impl Grid {
                 if c.dark() != s.dark() {
                     return;
                 }
-                let scale = c.guide_var + s.guide_var;
-                let diff = (c.guide - s.guide).powi(2);
+                let scale = f64::from(c.guide_var) + f64::from(s.guide_var);
+                let diff = (f64::from(c.guide) - f64::from(s.guide)).powi(2);
                 let range = if scale > 0.0 {
                     diff / (2.0 * scale)
                 } else if diff == 0.0 {
@@ -879,7 +904,13 @@ impl Grid {
 
     /// Texel `i` filtered by the blend `mix` of candidates: its value (demodulated) and SURE
     /// (linear in the candidates: F = Σ a_k F_k, W s = Σ a_k W_k s).
-    fn filtered(&self, samples: &[Sample], texels: &[Texel], i: usize, mix: &Mix) -> (Bands, f64) {
+    fn filtered(
+        &self,
+        samples: &[Sample],
+        texels: &[Texel],
+        i: usize,
+        (mix, weight): (&Mix, &Bands),
+    ) -> (Bands, f64) {
         let mut wanted = [false; CANDIDATES];
         mix.iter()
             .filter(|m| m.1 > 0.0)
@@ -892,7 +923,7 @@ impl Grid {
                 ws[b] += a * candidates[k].1[b];
             }
         }
-        (f, sure(&samples[i], &f, &ws))
+        (f, sure(&samples[i], weight, &f, &ws))
     }
 
     /// Whether texel `i` is within [`EDGE`] texels of its surface's edge on the page: a place
@@ -918,7 +949,7 @@ impl Grid {
     /// Each region's candidates ([`Choice`]): for each class of texels (inside, edge), the one
     /// of least SURE summed over the region and the regions around it, over the reflecting
     /// texels of the class it [`chooses`] by.
-    fn choose(&self, texels: &[Texel], samples: &[Sample]) -> Choice {
+    fn choose(&self, texels: &[Texel], samples: &[Sample], weights: &[Bands]) -> Choice {
         let (across, down) = (self.width.div_ceil(REGION), self.height.div_ceil(REGION));
         let region = |t: &Texel| {
             (t.page as usize * down + t.y as usize / REGION) * across + t.x as usize / REGION
@@ -932,7 +963,7 @@ impl Grid {
             .map(|&i| {
                 let c = &samples[i];
                 self.candidates(samples, texels, i, &all)
-                    .map(|(f, ws)| sure(c, &f, &ws))
+                    .map(|(f, ws)| sure(c, &weights[i], &f, &ws))
             })
             .collect();
         let mut sums = vec![[[0.0; CANDIDATES]; 2]; regions];

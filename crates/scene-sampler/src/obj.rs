@@ -173,6 +173,9 @@ pub(crate) fn obj_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
     for m in &models {
         faces.add_model(m, &looks, &mut warnings)?;
     }
+    // (the parser's models and the text are no longer needed: not held through the scene's
+    // checks, a large model's peak)
+    drop((models, looks, statements, text));
     faces.into_scene(path, &source, (textures, emissive.0), masks, warnings)
 }
 

@@ -78,6 +78,27 @@ impl ProgressLine {
         let _ = err.flush();
     }
 
+    /// A step before the solve (loading the scene, building its BVH): its name and what it
+    /// works on, until [`ProgressLine::step_done`] clears it.
+    pub fn step(&mut self, step: &str, what: &str) {
+        if self.quiet {
+            return;
+        }
+        let mut err = std::io::stderr().lock();
+        let _ = write!(err, "\r{step:>8}  {what}   ");
+        let _ = err.flush();
+    }
+
+    /// Clears a [`ProgressLine::step`]'s line (a warning or the next line takes its place).
+    pub fn step_done(&mut self) {
+        if self.quiet {
+            return;
+        }
+        let mut err = std::io::stderr().lock();
+        let _ = write!(err, "\r{:80}\r", "");
+        let _ = err.flush();
+    }
+
     /// Ends the progress line before the outputs are written.
     pub fn solved(&mut self) {
         if !self.quiet && self.shown {

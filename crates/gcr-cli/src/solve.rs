@@ -13,8 +13,12 @@ pub fn run(args: &SolveArgs) -> Result<()> {
     let config = args.config();
     config.validate()?;
     let started = Instant::now();
+    let mut progress = ProgressLine::new(args.quiet);
+    progress.step("loading", &args.scene);
     let loaded = scene_sampler::load_or_builtin_with(&args.scene, &args.input.load_options())
         .with_context(|| format!("loading scene `{}`", args.scene))?;
+    let load = started.elapsed().as_secs_f64();
+    progress.step_done();
     for w in loaded.warnings() {
         eprintln!("warning: {w}");
     }
@@ -25,22 +29,26 @@ pub fn run(args: &SolveArgs) -> Result<()> {
         .with_context(|| format!("lighting `{}`", args.scene))?;
     // ⟨The scene as the estimators see it (a 3-D scene with its BVH, or Flatland)⟩
     let bvh;
+    let built = Instant::now();
     let domain = match &loaded {
         AnyScene::ThreeD(s) => {
+            progress.step("BVH", &format!("{} triangles", s.faces.len()));
             bvh = SceneBvh::new(s);
+            progress.step_done();
             Domain::ThreeD(KernelSampler::new(s, &bvh))
         }
         AnyScene::Flatland(s) => Domain::Flat(FlatKernelSampler::new(s)),
     };
-    solve_and_write(&domain, args, &config, started)
+    let times = (load, built.elapsed().as_secs_f64());
+    solve_and_write(&domain, (args, progress), &config, (started, times))
 }
 
 /// Checks the outputs (paths, probes) first, so that a bad one is reported before the solve.
 fn solve_and_write(
     domain: &Domain,
-    args: &SolveArgs,
+    (args, mut progress): (&SolveArgs, ProgressLine),
     config: &SolveConfig,
-    started: Instant,
+    (started, (load, bvh)): (Instant, (f64, f64)),
 ) -> Result<()> {
     let (options, outputs) = (args.options(), args.outputs());
     let (images, probes, lightmap) = (
@@ -51,12 +59,12 @@ fn solve_and_write(
     let parts = gcr::output::shards::read_parts(&args.from_shards)?;
     let plan = OutputPlan::checked(domain, (outputs, images, probes), (lightmap, parts), config)
         .with_context(|| format!("checking the outputs for `{}`", args.scene))?;
-    let mut progress = ProgressLine::new(args.quiet);
     // ⟨Train the networks only when something reads them⟩
-    let trained =
+    let mut trained =
         gcr::solve_for_outputs(domain, &options, config, plan.needs_networks(), &mut |p| {
             progress.update(p)
         })?;
+    (trained.metrics.seconds.load, trained.metrics.seconds.bvh) = (load, bvh);
     progress.solved();
     for w in &trained.metrics.warnings {
         eprintln!("warning: {w}");

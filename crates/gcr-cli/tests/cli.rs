@@ -341,6 +341,14 @@ fn the_paths_gather_reports_its_estimated_error() {
         assert_eq!(err.contains("estimated error"), reported, "{err}");
         let m: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&metrics).unwrap()).unwrap();
+        // the times of loading and of the BVH are in the metrics, within the whole
+        let t = |phase: &str| m["seconds"][phase].as_f64().expect("a phase's time");
+        assert!(t("load") > 0.0 && t("bvh") > 0.0, "{}", m["seconds"]);
+        assert!(
+            t("load") + t("bvh") + t("gather") <= t("total"),
+            "{}",
+            m["seconds"]
+        );
         let e = &m["relative_std_error"];
         if reported {
             let e = e.as_f64().expect("an estimate");

@@ -6,6 +6,10 @@ use serde::Serialize;
 /// Wall time spent per phase of a solve, in seconds.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct PhaseTimes {
+    /// Reading the scene and checking it (its files, textures, faces), by the program.
+    pub load: f64,
+    /// Building the scene's BVH, by the program.
+    pub bvh: f64,
     /// Drawing rays and evaluating the kernel goal function (tracing visibility).
     pub sampling: f64,
     /// Training steps of the kernel network (USL, SL, insertions, deletions).

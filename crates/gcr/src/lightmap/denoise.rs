@@ -208,13 +208,20 @@ pub fn denoise(
     last: Option<Chosen>,
 ) -> (Vec<Gathered>, DenoiseReport) {
     let started = std::time::Instant::now();
-    let (grid, samples, weights) = prepare(atlas, texels, (gathered, guide), material);
-    // ⟨Per region the candidate of least summed SURE over the texels it chooses by — as the
-    // rounds' last stopping test chose, if that test saw these values⟩
+    // ⟨The samples, and per region the candidate of least summed SURE over the texels it
+    // chooses by — as the rounds' last stopping test prepared and chose them, if that test saw
+    // these values⟩
     let print = fingerprint(texels, gathered);
-    let choice = match last {
-        Some(last) if last.print == print => last.choice,
-        _ => grid.choose(texels, &samples, &weights),
+    let (grid, samples, weights, choice) = match last {
+        Some(last) if last.print == print => {
+            let (grid, samples, weights) = last.prepared;
+            (grid, samples, weights, last.choice)
+        }
+        _ => {
+            let (grid, samples, weights) = prepare(atlas, texels, (gathered, guide), material);
+            let choice = grid.choose(texels, &samples, &weights);
+            (grid, samples, weights, choice)
+        }
     };
     // ⟨Every texel's blend of its regions' candidates: its value and SURE; the error over the
     // measured⟩
@@ -320,6 +327,7 @@ pub(crate) fn denoised_error(
     let chosen = Some(Chosen {
         print: fingerprint(texels, gathered),
         choice,
+        prepared: (grid, samples, weights),
     });
     if square <= 0.0 {
         return (None, chosen);
@@ -347,12 +355,14 @@ pub(crate) fn denoised_error(
     )
 }
 
-/// The candidates [`denoised_error`] chose, for [`denoise`] to take instead of choosing again
-/// when it denoises the same values of the same texels.
+/// The samples [`denoised_error`] prepared and the candidates it chose, for [`denoise`] to take
+/// instead of preparing and choosing again when it denoises the same values of the same texels
+/// (88 bytes a texel, held from one round's stopping test to the next).
 pub(crate) struct Chosen {
     /// [`fingerprint`] of the texels and values chosen by.
     print: u64,
     choice: Choice,
+    prepared: (Grid, Vec<Sample>, Vec<Bands>),
 }
 
 /// A hash of the texels' places and their values with spreads: what the choice depends on
@@ -1157,12 +1167,10 @@ mod tests {
         let mine = denoise(&atlas, &texels, (&g, &guide), None, theirs);
         assert_eq!(fresh.0, mine.0);
         // (and a choice for other values would change the page: the test can fail)
+        let theirs = denoised_error(&atlas, &texels, (&other, &guide), None).1;
         let forced = Chosen {
             print: fingerprint(&texels, &g),
-            choice: denoised_error(&atlas, &texels, (&other, &guide), None)
-                .1
-                .expect("a choice")
-                .choice,
+            ..theirs.expect("a choice")
         };
         let wrong = denoise(&atlas, &texels, (&g, &guide), None, Some(forced));
         assert_ne!(fresh.0, wrong.0);

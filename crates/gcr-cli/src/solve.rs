@@ -15,10 +15,11 @@ pub fn run(args: &SolveArgs) -> Result<()> {
     let started = Instant::now();
     let mut progress = ProgressLine::new(args.quiet);
     progress.step("loading", &args.scene);
-    let loaded = scene_sampler::load_or_builtin_with(&args.scene, &args.input.load_options())
-        .with_context(|| format!("loading scene `{}`", args.scene))?;
-    let load = started.elapsed().as_secs_f64();
+    let loaded = scene_sampler::load_or_builtin_with(&args.scene, &args.input.load_options());
+    // (cleared before an error too: the error's line must start the line)
     progress.step_done();
+    let loaded = loaded.with_context(|| format!("loading scene `{}`", args.scene))?;
+    let load = started.elapsed().as_secs_f64();
     for w in loaded.warnings() {
         eprintln!("warning: {w}");
     }

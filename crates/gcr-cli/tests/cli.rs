@@ -172,6 +172,12 @@ fn bad_input_gives_a_message_and_a_non_zero_exit() {
             "{args:?}: message {err:?} does not mention {needle:?}"
         );
         assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+        // the message starts a line of its own (a progress line before it is cleared: terminals
+        // and scripts that read the `error: ` line see it whole)
+        assert!(
+            err.split(['\r', '\n']).any(|l| l.starts_with("error: ")),
+            "{args:?}: no line starts with the error: {err:?}"
+        );
     }
 }
 

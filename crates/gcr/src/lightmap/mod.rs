@@ -221,7 +221,7 @@ pub fn gather_texels(
         let values = (values, &block_guide[..]);
         let (bound, chosen) =
             denoise::denoised_error(&texels.atlas, &block, values, block_material.as_deref());
-        // (the last test's choice is the final pass's, if it saw the same values)
+        // (the last test's samples and choice are the final pass's, if it saw the same values)
         *guide.last.lock().unwrap_or_else(|e| e.into_inner()) = chosen;
         bound
     };
@@ -256,9 +256,10 @@ fn texel_materials(
     })
 }
 
-/// The denoiser's guide ([`gather_guide`]): its values, and the candidates that the rounds' last
-/// stopping test chose (`lightmap/denoise.rs`), so that the final pass does not choose again
-/// when it denoises the values that test saw (a third of the filters' time).
+/// The denoiser's guide ([`gather_guide`]): its values, and the samples that the rounds' last
+/// stopping test prepared and the candidates it chose (`lightmap/denoise.rs`), so that the final
+/// pass does not prepare and choose again when it denoises the values that test saw (some 0.5 s
+/// of a 230 000-texel bake).
 pub struct LightmapGuide {
     values: Vec<Gathered>,
     last: std::sync::Mutex<Option<denoise::Chosen>>,

@@ -285,13 +285,15 @@ impl Scene {
         });
         let degenerate =
             |f: &Face| f.area <= 1e-14 * diag2 || f.normal == DVec3::ZERO || !f.normal.is_finite();
-        let dropped_ids: Vec<usize> = (kept.iter().enumerate())
-            .filter(|(_, f)| degenerate(f))
-            .map(|(i, _)| i)
-            .collect();
-        if !dropped_ids.is_empty() {
-            kept.retain(|f| !degenerate(f));
-        }
+        let (mut dropped_ids, mut i) = (Vec::new(), 0);
+        kept.retain(|f| {
+            let keep = !degenerate(f);
+            if !keep {
+                dropped_ids.push(i);
+            }
+            i += 1;
+            keep
+        });
         if !dropped_ids.is_empty() {
             let shown: Vec<String> = dropped_ids.iter().take(10).map(|i| i.to_string()).collect();
             warnings.push(format!(

@@ -211,9 +211,8 @@ pub fn denoise(
     // ⟨The samples, and per region the candidate of least summed SURE over the texels it
     // chooses by — as the rounds' last stopping test prepared and chose them, if that test saw
     // these values⟩
-    let print = fingerprint(texels, gathered);
     let (grid, samples, weights, choice) = match last {
-        Some(last) if last.print == print => {
+        Some(last) if last.print == fingerprint(texels, gathered) => {
             let (grid, samples, weights) = last.prepared;
             (grid, samples, weights, last.choice)
         }

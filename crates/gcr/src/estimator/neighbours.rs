@@ -42,7 +42,7 @@
 //! group's guide toward the direction), so the mixture's density at x is Σ_a G(y_a, x)·V·q_a(x)
 //! and the MIS weights count q_a cosine rays; a group of one takes the same road.
 
-use super::guide::{GroupGuide, Guide, Learner, Record, SpatialGuides, to_square};
+use super::guide::{GroupGuide, Guide, Learner, Record, SpatialGuides};
 use super::paths::{PathGather, PointEstimate, REPLICATES, SobolRay, Vertex};
 use crate::config::GatherSamples;
 use crate::domain::Domain;
@@ -232,7 +232,7 @@ impl Group<'_> {
     /// normal `n`; 1 unguided.
     fn q(&self, n: DVec3, d: DVec3) -> f64 {
         match self.guide {
-            Some(g) => g.density(to_square(n, d.normalize())),
+            Some(g) => g.density_toward(n, d),
             None => 1.0,
         }
     }

@@ -21,9 +21,12 @@
 //! What is learned: each ray adds the luminance of the light it brought divided by its density q
 //! to its bin, an unbiased estimate of ∫_bin L du; h is those sums normalized. A group's first
 //! bounces learn in a [`Learner`] of their own ([`GroupGuide`]); the paths' later bounces in
-//! spatial cells shared by all groups ([`SpatialLearner`], [`SpatialGuides`]). A round's guides
-//! are fixed before it starts and built from earlier rounds only, so each replicate of the round
-//! is unbiased given them and the replicates stay uncorrelated (the standard error remains honest).
+//! spatial cells shared by all groups ([`SpatialLearner`], [`SpatialGuides`]), which also learn
+//! the mean light that rays brought from each cell (its outgoing radiance, as the paths saw it:
+//! what splits a path where it meets more light than it started from, `PathGather::reflected`).
+//! A round's guides are fixed before it starts and built from earlier rounds only, so each
+//! replicate of the round is unbiased given them and the replicates stay uncorrelated (the
+//! standard error remains honest).
 
 use glam::DVec3;
 use scene_sampler::orthonormal_basis;
@@ -197,9 +200,9 @@ pub(crate) struct GroupGuide {
 }
 
 /// Path vertices a group records per round for the spatial guides, at most: all groups' records
-/// are held until the round ends (12 bytes each), so the groups share [`RECORDS_PER_ROUND`].
+/// are held until the round ends (20 bytes each), so the groups share [`RECORDS_PER_ROUND`].
 const RECORDS_PER_GROUP: usize = 8192;
-/// Path vertices all groups record per round, at most (48 MB), but at least 256 per group.
+/// Path vertices all groups record per round, at most (80 MB), but at least 256 per group.
 const RECORDS_PER_ROUND: usize = 1 << 22;
 /// Spatial cells per diagonal of the scene (16; 32 left too few rays per cell).
 const CELLS: f64 = 16.0;
@@ -263,10 +266,10 @@ type CellMap<V> = std::collections::HashMap<u32, V, std::hash::BuildHasherDefaul
 
 /// What a spatial cell holds for a round: its guide (if it learned one) and the mean light that
 /// rays brought from it (the paths' estimate of the radiance leaving it, for splitting).
-#[derive(Clone, Debug)]
-pub(crate) struct Cell {
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Cell<'a> {
     /// The guide of the bounces from the cell's vertices.
-    pub(crate) guide: Option<Guide>,
+    pub(crate) guide: Option<&'a Guide>,
     /// The mean luminance of the light that rays brought from the cell.
     pub(crate) light: f64,
 }
@@ -277,7 +280,10 @@ pub(crate) struct Cell {
 pub(crate) struct SpatialGuides {
     frame: (DVec3, f64),
     cap: usize,
-    cells: CellMap<Cell>,
+    /// Per cell: its guide's index in `guides` (`u32::MAX`: none) and its mean light (a small
+    /// map that stays in the cache; the guides apart).
+    cells: CellMap<(u32, f64)>,
+    guides: Vec<Guide>,
 }
 
 impl SpatialGuides {
@@ -287,11 +293,15 @@ impl SpatialGuides {
     }
 
     /// The cell of a path vertex (p, n), if earlier rounds learned there.
-    pub(crate) fn at(&self, p: DVec3, n: DVec3) -> Option<&Cell> {
+    pub(crate) fn at(&self, p: DVec3, n: DVec3) -> Option<Cell<'_>> {
         if self.cells.is_empty() {
             return None;
         }
-        self.cells.get(&cell_key(self.frame, p, n))
+        let &(guide, light) = self.cells.get(&cell_key(self.frame, p, n))?;
+        Some(Cell {
+            guide: self.guides.get(guide as usize),
+            light,
+        })
     }
 
     /// The record of a bounce at (p, n) through square point `u` with density `q` that brought
@@ -355,29 +365,21 @@ impl SpatialLearner {
 
     /// The guides of everything learned so far.
     pub(crate) fn guides(&self) -> SpatialGuides {
-        let mut cells: CellMap<Cell> = (self.light.iter())
-            .map(|(k, (sum, count))| {
-                let cell = Cell {
-                    guide: None,
-                    light: sum / count,
-                };
-                (*k, cell)
-            })
+        let mut cells: CellMap<(u32, f64)> = (self.light.iter())
+            .map(|(k, (sum, count))| (*k, (u32::MAX, sum / count)))
             .collect();
+        let mut guides = Vec::new();
         for (k, s) in &self.sums {
-            let guide = Guide::from_sums(&s[..RES * RES], s[RES * RES]);
-            cells
-                .entry(*k)
-                .or_insert(Cell {
-                    guide: None,
-                    light: 0.0,
-                })
-                .guide = guide;
+            if let Some(guide) = Guide::from_sums(&s[..RES * RES], s[RES * RES]) {
+                cells.entry(*k).or_insert((u32::MAX, 0.0)).0 = guides.len() as u32;
+                guides.push(guide);
+            }
         }
         SpatialGuides {
             frame: self.frame,
             cap: self.cap,
             cells,
+            guides,
         }
     }
 }

@@ -29,7 +29,7 @@
 //! few hundred 6-D Gaussians does not follow K's 1/r² and cosines pointwise, and Ψ/p is large where
 //! the cosine density p is small.
 
-use super::guide::{Record, SpatialGuides};
+use super::guide::{Guide, Record, SpatialGuides};
 use crate::config::{GatherSamples, PathSettings};
 use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
@@ -135,6 +135,40 @@ pub(crate) enum FirstHit {
 /// A guided bounce of [`PathGather::reflected`], to learn from once its path ends: the vertex,
 /// its square point, q·q_g, q_g, its hit's light, `out` after it, β after it, the hit.
 type Bounce = (Vertex, [f64; 2], f64, f64, Bands, Bands, Bands, Vertex);
+
+/// The branches of a bounce whose expected light is `r` times its path's start's
+/// ([`PathGather::reflected`]): 1 up to [`SPLIT_ABOVE`], then ⌊r + ½⌋, at most [`SPLIT_MOST`].
+fn branches(r: f64) -> usize {
+    if r > SPLIT_ABOVE {
+        (r + 0.5).min(SPLIT_MOST) as usize
+    } else {
+        1
+    }
+}
+
+/// Records what each of a path's guided `bounces` brought, for the spatial guides: its hit's
+/// emission (d·q·q_g undoes the 1/(q·q_g) in d) and L̂ beyond it ((`out` − out after the
+/// bounce)/β after it).
+fn record_bounces(
+    guides: &SpatialGuides,
+    records: &mut Vec<Record>,
+    bounces: &[Bounce],
+    out: Bands,
+) {
+    for &(v, u, qq, q_g, d, after, b, h) in bounces {
+        if records.len() >= guides.cap() {
+            break;
+        }
+        let mut l = 0.0;
+        for k in 0..BANDS {
+            l += d[k] * qq;
+            if b[k] > 0.0 {
+                l += (out[k] - after[k]) / b[k];
+            }
+        }
+        records.push(guides.record((v.p, v.n), u, q_g, l / BANDS as f64, (h.p, h.n)));
+    }
+}
 
 /// Splitting ([`PathGather::reflected`]): a bounce splits where its expected light exceeds this
 /// multiple of the path's start's,
@@ -508,8 +542,9 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         first: Option<[f64; 5]>,
         rng: &mut ChaCha8Rng,
         mut guiding: Option<(&SpatialGuides, &mut Vec<Record>)>,
-        (w, start, splits): (f64, f64, usize),
+        w_start: (f64, f64, usize),
     ) -> Bands {
+        let (w, start, splits) = w_start;
         let (mut out, mut beta) = ([0.0; BANDS], [1.0; BANDS]);
         let (mut x, mut first) = (*x, first);
         let mut bounces: Vec<Bounce> = Vec::new();
@@ -535,12 +570,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             let m = match cell {
                 Some(c) if start > 0.0 && q > 0.0 && splits < MAX_SPLITS => {
                     let b = beta.iter().fold(0.0f64, |m, b| m.max(*b));
-                    let r = w * b * c.light / start;
-                    if r > SPLIT_ABOVE {
-                        (r + 0.5).min(SPLIT_MOST) as usize
-                    } else {
-                        1
-                    }
+                    branches(w * b * c.light / start)
                 }
                 _ => 1,
             };
@@ -557,53 +587,17 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
                     self.next_event_scaled(&x, &mis, (u[0], [u[1], u[2]]), q)
                 }
             };
-            // ⟨The bounce, warped by the cell's guide (density q_g; 1 unguided)⟩
-            let bounce = |u: [f64; 5], rng: &mut ChaCha8Rng| {
-                let (v, q_g) = guide.map_or(([u[3], u[4]], 1.0), |g| g.sample([u[3], u[4]]));
-                if q > 0.0 && (q >= 1.0 || rng.random::<f64>() < q) {
-                    let mis = Mis {
-                        n_c: q * q_g * m as f64,
-                        ..mis
-                    };
-                    let (_, d, hit) = self.cosine_ray(&x, &mis, false, v);
-                    (v, q_g, d, hit)
-                } else {
-                    (v, q_g, [0.0; BANDS], None)
-                }
-            };
             if m > 1 {
                 // ⟨m branches, each continued on its own; the path ends here⟩
+                let step = (beta, rho, light);
+                let branch = guiding.as_mut().map(|(g, r)| (*g, &mut **r));
+                let split = self.branches(&x, u, (guide, &mis, q, m), step, rng, branch, w_start);
                 for k in 0..BANDS {
-                    out[k] += beta[k] * rho[k] * light[k];
-                }
-                for j in 0..m {
-                    let uj = if j == 0 {
-                        u
-                    } else {
-                        std::array::from_fn(|_| rng.random())
-                    };
-                    let (v, q_g, d, hit) = bounce(uj, rng);
-                    let qq = q * q_g * m as f64;
-                    let wj: Bands = std::array::from_fn(|k| beta[k] * rho[k] / qq);
-                    let mut beyond = [0.0; BANDS];
-                    if let Some(h) = hit {
-                        let wmax = wj.iter().fold(0.0f64, |m, b| m.max(*b));
-                        let branch = guiding.as_mut().map(|(g, r)| (*g, &mut **r));
-                        beyond = self.walk(&h, None, rng, branch, (w * wmax, start, splits + 1));
-                    }
-                    for k in 0..BANDS {
-                        out[k] += beta[k] * rho[k] * d[k] + wj[k] * beyond[k];
-                    }
-                    if let (Some((g, records)), Some(h)) = (guiding.as_mut(), hit)
-                        && records.len() < g.cap()
-                    {
-                        let l = (0..BANDS).map(|k| d[k] * qq + beyond[k]).sum::<f64>();
-                        records.push(g.record((x.p, x.n), v, q_g, l / BANDS as f64, (h.p, h.n)));
-                    }
+                    out[k] += split[k];
                 }
                 break;
             }
-            let (v, q_g, d, next) = bounce(u, rng);
+            let (v, q_g, d, next) = self.bounce(&x, guide, (&mis, q, m), [u[3], u[4]], rng);
             for k in 0..BANDS {
                 light[k] += d[k];
             }
@@ -619,24 +613,78 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             }
             x = n;
         }
-        // ⟨What each bounce brought: its hit's emission (d·q·q_g undoes the 1/(q·q_g) in d) and
-        // L̂ beyond it ((out − out after the bounce)/β after it)⟩
         if let Some((guides, records)) = guiding.as_mut() {
-            for (v, u, qq, q_g, d, after, b, h) in bounces {
-                if records.len() >= guides.cap() {
-                    break;
-                }
-                let mut l = 0.0;
-                for k in 0..BANDS {
-                    l += d[k] * qq;
-                    if b[k] > 0.0 {
-                        l += (out[k] - after[k]) / b[k];
-                    }
-                }
-                records.push(guides.record((v.p, v.n), u, q_g, l / BANDS as f64, (h.p, h.n)));
+            record_bounces(guides, records, &bounces, out);
+        }
+        out
+    }
+
+    /// A vertex x's light and its bounce cast m times ([`PathGather::reflected`]'s splitting),
+    /// each branch continued on its own: β·ρ·(NEE + Σ hits) + Σ_j β·ρ/(q·q_g,j·m)·L̂(branch j),
+    /// for a path at x with throughput β, reflectance ρ and the shadow ray's `light`; `u` the
+    /// first branch's square points (the others random).
+    #[allow(clippy::too_many_arguments)]
+    fn branches(
+        &self,
+        x: &Vertex,
+        u: [f64; 5],
+        (guide, mis, q, m): (Option<&Guide>, &Mis, f64, usize),
+        (beta, rho, light): (Bands, Bands, Bands),
+        rng: &mut ChaCha8Rng,
+        mut guiding: Option<(&SpatialGuides, &mut Vec<Record>)>,
+        (w, start, splits): (f64, f64, usize),
+    ) -> Bands {
+        let mut out: Bands = std::array::from_fn(|k| beta[k] * rho[k] * light[k]);
+        for j in 0..m {
+            let uj = if j == 0 {
+                u
+            } else {
+                std::array::from_fn(|_| rng.random())
+            };
+            let (v, q_g, d, hit) = self.bounce(x, guide, (mis, q, m), [uj[3], uj[4]], rng);
+            let qq = q * q_g * m as f64;
+            let wj: Bands = std::array::from_fn(|k| beta[k] * rho[k] / qq);
+            let mut beyond = [0.0; BANDS];
+            if let Some(h) = hit {
+                let wmax = wj.iter().fold(0.0f64, |m, b| m.max(*b));
+                let branch = guiding.as_mut().map(|(g, r)| (*g, &mut **r));
+                beyond = self.walk(&h, None, rng, branch, (w * wmax, start, splits + 1));
+            }
+            for k in 0..BANDS {
+                out[k] += beta[k] * rho[k] * d[k] + wj[k] * beyond[k];
+            }
+            if let (Some((g, records)), Some(h)) = (guiding.as_mut(), hit)
+                && records.len() < g.cap()
+            {
+                let l = (0..BANDS).map(|k| d[k] * qq + beyond[k]).sum::<f64>();
+                records.push(g.record((x.p, x.n), v, q_g, l / BANDS as f64, (h.p, h.n)));
             }
         }
         out
+    }
+
+    /// One bounce from x, its square point `u` warped by the cell's `guide` (density q_g; 1
+    /// unguided), cast with probability q as one of `m` (the MIS count m·q·q_g): (the warped
+    /// point, q_g, the light the ray brought from an emitter per `mis`, the hit).
+    fn bounce(
+        &self,
+        x: &Vertex,
+        guide: Option<&Guide>,
+        (mis, q, m): (&Mis, f64, usize),
+        u: [f64; 2],
+        rng: &mut ChaCha8Rng,
+    ) -> ([f64; 2], f64, Bands, Option<Vertex>) {
+        let (v, q_g) = guide.map_or((u, 1.0), |g| g.sample(u));
+        if q > 0.0 && (q >= 1.0 || rng.random::<f64>() < q) {
+            let mis = Mis {
+                n_c: q * q_g * m as f64,
+                ..*mis
+            };
+            let (_, d, hit) = self.cosine_ray(x, &mis, false, v);
+            (v, q_g, d, hit)
+        } else {
+            (v, q_g, [0.0; BANDS], None)
+        }
     }
 
     /// One shadow ray from z to a light drawn by power from `u0` and sampled from `u`: its

@@ -245,25 +245,14 @@ pub(crate) fn rounds_to_target(
             .saturating_sub(rays)
             .max(REPLICATES);
         if fresh {
-            // each round its own scrambling from index 0 (guided rounds): the missing rays —
-            // after a guided round, as many as rays as good as its own need (the rounds are
-            // combined by their variances, `next_weight`: the pilot's and the first guides'
-            // worse rays count less than their number), else by the error so far — a quarter to
-            // three times those so far, a power of two per replicate below 1 024 and a multiple
-            // of 1 024 above (unions of balanced nets), at most the ray cap
+            // each round its own scrambling from index 0 (guided rounds)
             let missing = match (last, relative_std_error(&gathered)) {
                 (Some(last), Some(error)) => {
                     guided_rays_needed(error, last, target, chi2_scale(dof))
                 }
                 _ => needed.saturating_sub(rays),
             };
-            let missing = (missing.div_ceil(REPLICATES)).clamp(per / 4 + 1, 3 * per + 1);
-            let per_round = if missing < 1024 {
-                missing.next_power_of_two()
-            } else {
-                missing.next_multiple_of(1024)
-            };
-            more = (per_round * REPLICATES).min(max_rays.saturating_sub(rays).max(REPLICATES));
+            more = guided_round(missing, rays, max_rays);
         }
         reporter.round(bound, rays + more, needed.min(max_rays));
         // Each replicate has used ⌈rays / REPLICATES⌉ Sobol points of its sequence so far.
@@ -277,13 +266,19 @@ pub(crate) fn rounds_to_target(
             .then(|| next_weight(&gathered, &next))
             .flatten();
         last = weight.map(|(_, v)| (v, more));
-        for (e, n) in estimates.iter_mut().zip(&next) {
-            match weight {
-                Some((v, _)) => e.merge_weighted(n, v),
-                None => e.merge(n),
-            }
-        }
+        combine(&mut estimates, &next, weight.map(|(v, _)| v));
         rays += more;
+    }
+}
+
+/// Merges a round's estimates `next` into `estimates`: with weight `weight` on the round, or by
+/// their ray counts.
+fn combine(estimates: &mut [PointEstimate], next: &[PointEstimate], weight: Option<f64>) {
+    for (e, n) in estimates.iter_mut().zip(next) {
+        match weight {
+            Some(v) => e.merge_weighted(n, v),
+            None => e.merge(n),
+        }
     }
 }
 
@@ -305,6 +300,23 @@ fn next_weight(so_far: &[Gathered], next: &[PointEstimate]) -> Option<(f64, f64)
     let (v, v_next) = (relative_std_error(so_far)?, relative_std_error(&next)?);
     let (v, v_next) = (v * v, v_next * v_next);
     Some((v / (v + v_next), v_next))
+}
+
+/// The rays of a guided round (each its own scrambling from index 0) after `rays` rays so far:
+/// the `missing` ones — after a guided round, as many as rays as good as its own need
+/// ([`guided_rays_needed`]: the rounds are combined by their variances, [`next_weight`], so the
+/// pilot's and the first guides' worse rays count less than their number), else by the error so
+/// far — a quarter to three times those so far, a power of two per replicate below 1 024 and a
+/// multiple of 1 024 above (unions of balanced nets), at most the ray cap.
+fn guided_round(missing: usize, rays: usize, max_rays: usize) -> usize {
+    let per = rays.div_ceil(REPLICATES);
+    let missing = (missing.div_ceil(REPLICATES)).clamp(per / 4 + 1, 3 * per + 1);
+    let per_round = if missing < 1024 {
+        missing.next_power_of_two()
+    } else {
+        missing.next_multiple_of(1024)
+    };
+    (per_round * REPLICATES).min(max_rays.saturating_sub(rays).max(REPLICATES))
 }
 
 /// The rays a guided round needs so that the rounds combined by their variances meet `target`

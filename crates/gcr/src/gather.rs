@@ -408,7 +408,7 @@ pub(crate) fn emitter_geometry(
 /// The first surface point (x, n_x, face_x) along a cosine-weighted direction from (y, n, face)
 /// drawn with `u` (3-D: about the hemisphere; Flatland: the half-plane, from u[0]); `Err` with the
 /// direction (3-D; zero in Flatland) when the ray leaves the scene.
-pub(crate) fn trace_cosine(
+fn trace_cosine(
     domain: &Domain,
     y: DVec3,
     n: DVec3,

@@ -528,23 +528,20 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         rng: &mut ChaCha8Rng,
         guiding: Option<(&SpatialGuides, &mut Vec<Record>)>,
     ) -> Bands {
-        let start = (guiding.as_ref())
-            .and_then(|(g, _)| g.at(x.p, x.n))
-            .map_or(0.0, |c| c.light);
-        self.walk(x, first, rng, guiding, (1.0, start, 0))
+        self.walk(x, first, rng, guiding, (1.0, None, 0))
     }
 
     /// [`PathGather::reflected`] from `x` on a branch of weight `w` relative to its path, whose
-    /// start's cell has mean light `start`, after `splits` splits.
+    /// start's cell has mean light `start` (None: x is the start, its cell read at the first
+    /// vertex), after `splits` splits.
     fn walk(
         &self,
         x: &Vertex,
         first: Option<[f64; 5]>,
         rng: &mut ChaCha8Rng,
         mut guiding: Option<(&SpatialGuides, &mut Vec<Record>)>,
-        w_start: (f64, f64, usize),
+        (w, mut start, splits): (f64, Option<f64>, usize),
     ) -> Bands {
-        let (w, start, splits) = w_start;
         let (mut out, mut beta) = ([0.0; BANDS], [1.0; BANDS]);
         let (mut x, mut first) = (*x, first);
         let mut bounces: Vec<Bounce> = Vec::new();
@@ -566,6 +563,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
                 .unwrap_or_else(|| std::array::from_fn(|_| rng.random()));
             let cell = guiding.as_ref().and_then(|(g, _)| g.at(x.p, x.n));
             let guide = cell.and_then(|c| c.guide);
+            let start = *start.get_or_insert_with(|| cell.map_or(0.0, |c| c.light));
             // ⟨Splitting: the bounce's expected light against the start's (doc comment)⟩
             let m = match cell {
                 Some(c) if start > 0.0 && q > 0.0 && splits < MAX_SPLITS => {
@@ -591,7 +589,15 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
                 // ⟨m branches, each continued on its own; the path ends here⟩
                 let step = (beta, rho, light);
                 let branch = guiding.as_mut().map(|(g, r)| (*g, &mut **r));
-                let split = self.branches(&x, u, (guide, &mis, q, m), step, rng, branch, w_start);
+                let split = self.branches(
+                    &x,
+                    u,
+                    (guide, &mis, q, m),
+                    step,
+                    rng,
+                    branch,
+                    (w, start, splits),
+                );
                 for k in 0..BANDS {
                     out[k] += split[k];
                 }
@@ -648,7 +654,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             if let Some(h) = hit {
                 let wmax = wj.iter().fold(0.0f64, |m, b| m.max(*b));
                 let branch = guiding.as_mut().map(|(g, r)| (*g, &mut **r));
-                beyond = self.walk(&h, None, rng, branch, (w * wmax, start, splits + 1));
+                beyond = self.walk(&h, None, rng, branch, (w * wmax, Some(start), splits + 1));
             }
             for k in 0..BANDS {
                 out[k] += beta[k] * rho[k] * d[k] + wj[k] * beyond[k];
@@ -977,12 +983,11 @@ mod guide_diagnostics {
         }
         let guides = learner.guides();
         let t = std::time::Instant::now();
-        let start = guides.at(x.p, x.n).map_or(0.0, |c| c.light);
         let guided: Vec<f64> = (0..n_paths)
             .map(|_| {
                 records.clear();
                 let guiding = Some((&guides, &mut records));
-                g.walk(&x, None, &mut rng, guiding, (w, start, 0))[0]
+                g.walk(&x, None, &mut rng, guiding, (w, None, 0))[0]
             })
             .collect();
         [plain, (guided, t.elapsed().as_secs_f64())]

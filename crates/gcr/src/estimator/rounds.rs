@@ -244,9 +244,11 @@ pub(crate) fn rounds_to_target(
             .min(max_rays)
             .saturating_sub(rays)
             .max(REPLICATES);
+        // the relative error so far (guided rounds: their sizes and weights)
+        let error = fresh.then(|| relative_std_error(&gathered)).flatten();
         if fresh {
             // each round its own scrambling from index 0 (guided rounds)
-            let missing = match (last, relative_std_error(&gathered)) {
+            let missing = match (last, error) {
                 (Some(last), Some(error)) => {
                     guided_rays_needed(error, last, target, chi2_scale(dof))
                 }
@@ -263,7 +265,7 @@ pub(crate) fn rounds_to_target(
         let next = round(rays.div_ceil(REPLICATES), samples, fresh);
         // ⟨Combine the rounds: by their ray counts, or guided by their variances (below)⟩
         let weight = (fresh && dof >= WEIGHTED_FROM)
-            .then(|| next_weight(&gathered, &next))
+            .then(|| next_weight(error, &next))
             .flatten();
         last = weight.map(|(_, v)| (v, more));
         combine(&mut estimates, &next, weight.map(|(v, _)| v));
@@ -286,7 +288,8 @@ fn combine(estimates: &mut [PointEstimate], next: &[PointEstimate], weight: Opti
 /// ([`next_weight`]).
 const WEIGHTED_FROM: usize = 64;
 
-/// The weight of a guided round's estimates `next` against those of the rounds so far, `so_far`:
+/// The weight of a guided round's estimates `next` against those of the rounds so far (their
+/// relative error `so_far`):
 /// the inverse-variance weight V/(V + V') of their relative variances over all the points (V so
 /// far, V' the round's; None when either was not measured). Guided rounds differ in kind — the
 /// unguided pilot, guides that learned from a few rays, guides that learned from many — so their
@@ -295,9 +298,9 @@ const WEIGHTED_FROM: usize = 64;
 /// points, from at least [`WEIGHTED_FROM`] groups' spreads: it hardly depends on any one point's
 /// values (a weight that followed a point's own spread would bias it toward its lucky rounds).
 /// Also returns V'.
-fn next_weight(so_far: &[Gathered], next: &[PointEstimate]) -> Option<(f64, f64)> {
+fn next_weight(so_far: Option<f64>, next: &[PointEstimate]) -> Option<(f64, f64)> {
     let next: Vec<Gathered> = next.iter().map(PointEstimate::gathered).collect();
-    let (v, v_next) = (relative_std_error(so_far)?, relative_std_error(&next)?);
+    let (v, v_next) = (so_far?, relative_std_error(&next)?);
     let (v, v_next) = (v * v, v_next * v_next);
     Some((v / (v + v_next), v_next))
 }

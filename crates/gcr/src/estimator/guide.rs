@@ -200,31 +200,46 @@ pub(crate) struct GroupGuide {
 }
 
 /// Path vertices a group records per round for the spatial guides, at most: all groups' records
-/// are held until the round ends (20 bytes each), so the groups share [`RECORDS_PER_ROUND`].
-const RECORDS_PER_GROUP: usize = 8192;
-/// Path vertices all groups record per round, at most (80 MB), but at least 256 per group.
-const RECORDS_PER_ROUND: usize = 1 << 22;
+/// are held until the round ends (16 bytes each), so the groups share [`RECORDS_PER_ROUND`].
+/// 32 768: the door gap's work plane (125 groups) met 2 % in 0.80× the time it took with 8 192
+/// (`farm-bench -n 3`, 15.8 s against 19.8 s; 17 744 rays per point against 21 840): the guides
+/// of a round learn from the records of the rounds before it, and the early rounds are where
+/// they are poor. The merge of the records is a pass over a dense array ([`CELL_COUNT`]); with a
+/// hash map it cost more than the extra records gained.
+const RECORDS_PER_GROUP: usize = 32_768;
+/// Path vertices all groups record per round, at most (128 MB), but at least 256 per group.
+const RECORDS_PER_ROUND: usize = 1 << 23;
 /// Spatial cells per diagonal of the scene (16; 32 left too few rays per cell).
 const CELLS: f64 = 16.0;
 
-/// One bounce of a path for the spatial guides: its cell, the bin of its square point, and the
-/// light it brought divided by its density (an unbiased estimate of ∫_bin L du); the cell of its
-/// hit and the light it brought (for the cells' mean light, [`Cell::light`]).
+/// One bounce of a path for the spatial guides: its cell and the bin of its square point, the
+/// light it brought divided by its density (an unbiased estimate of ∫_bin L du), the cell of its
+/// hit and the light it brought (for the cells' mean light, [`Cell::light`]). 16 bytes.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Record {
-    key: u32,
-    hit: u32,
+    /// The cell ([`cell_index`], below 2¹⁶) and, from bit 16, the bin.
+    key_bin: u32,
     value: f32,
     light: f32,
-    bin: u16,
+    hit: u16,
 }
 
-/// The key of a path vertex's cell: its position on a grid of [`CELLS`] per diagonal of the
+/// Cells per axis of the grid: [`CELLS`] per diagonal of the scene's frame cover at most
+/// `CELLS + 1` along any axis.
+const AXIS: usize = CELLS as usize + 1;
+/// Cells in all: the grid times the six dominant directions of a normal (29 478; a dense index,
+/// 118 KB, instead of a hash map: a look-up per bounce and per record).
+const CELL_COUNT: usize = AXIS * AXIS * AXIS * 6;
+const _: () = assert!(CELL_COUNT <= 1 << 16, "a record holds a cell in 16 bits");
+/// No slot.
+const NONE: u32 = u32::MAX;
+
+/// The index of a path vertex's cell: its position on a grid of [`CELLS`] per diagonal of the
 /// scene's frame and the dominant axis of its normal (6 directions), so that a floor and the
 /// ceiling above it, or the two sides of a thin wall, learn apart.
-fn cell_key((origin, diagonal): (DVec3, f64), p: DVec3, n: DVec3) -> u32 {
+fn cell_index((origin, diagonal): (DVec3, f64), p: DVec3, n: DVec3) -> u32 {
     let q = ((p - origin) / diagonal.max(f64::MIN_POSITIVE) * CELLS)
-        .clamp(DVec3::ZERO, DVec3::splat(255.0));
+        .clamp(DVec3::ZERO, DVec3::splat(CELLS));
     let a = n.abs();
     let axis = if a.x >= a.y && a.x >= a.z {
         0
@@ -233,36 +248,10 @@ fn cell_key((origin, diagonal): (DVec3, f64), p: DVec3, n: DVec3) -> u32 {
     } else {
         2
     };
-    let side = u32::from(n[axis] < 0.0);
-    (q.x as u32) | (q.y as u32) << 8 | (q.z as u32) << 16 | (2 * axis as u32 + side) << 24
+    let side = usize::from(n[axis] < 0.0);
+    let (x, y, z) = (q.x as usize, q.y as usize, q.z as usize);
+    (((z * AXIS + y) * AXIS + x) * 6 + 2 * axis + side) as u32
 }
-
-/// A hasher for the cells' keys (a SplitMix64 finaliser; the standard SipHash was a few per cent
-/// of a guided run's time: a look-up per bounce).
-#[derive(Default)]
-pub(crate) struct KeyHasher(u64);
-
-impl std::hash::Hasher for KeyHasher {
-    fn finish(&self) -> u64 {
-        let mut z = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    fn write(&mut self, bytes: &[u8]) {
-        for b in bytes {
-            self.0 = (self.0 << 8) | u64::from(*b);
-        }
-    }
-
-    fn write_u32(&mut self, v: u32) {
-        self.0 = u64::from(v);
-    }
-}
-
-/// Maps keyed by cell.
-type CellMap<V> = std::collections::HashMap<u32, V, std::hash::BuildHasherDefault<KeyHasher>>;
 
 /// What a spatial cell holds for a round: its guide (if it learned one) and the mean light that
 /// rays brought from it (the paths' estimate of the radiance leaving it, for splitting).
@@ -275,14 +264,14 @@ pub(crate) struct Cell<'a> {
 }
 
 /// The guides of the continuation bounces (path vertices beyond the output points): one per
-/// spatial cell ([`cell_key`]) that earlier rounds learned in, frozen during a round.
+/// spatial cell ([`cell_index`]) that earlier rounds learned in, frozen during a round.
 #[derive(Debug, Default)]
 pub(crate) struct SpatialGuides {
     frame: (DVec3, f64),
     cap: usize,
-    /// Per cell: its guide's index in `guides` (`u32::MAX`: none) and its mean light (a small
-    /// map that stays in the cache; the guides apart).
-    cells: CellMap<(u32, f64)>,
+    /// Per cell of the grid ([`CELL_COUNT`], empty while nothing was learned): its guide's index
+    /// in `guides` ([`NONE`]: none) and its mean light (negative: no ray came from it).
+    cells: Vec<(u32, f32)>,
     guides: Vec<Guide>,
 }
 
@@ -294,13 +283,13 @@ impl SpatialGuides {
 
     /// The cell of a path vertex (p, n), if earlier rounds learned there.
     pub(crate) fn at(&self, p: DVec3, n: DVec3) -> Option<Cell<'_>> {
-        if self.cells.is_empty() {
+        let &(guide, light) = self.cells.get(cell_index(self.frame, p, n) as usize)?;
+        if guide == NONE && light < 0.0 {
             return None;
         }
-        let &(guide, light) = self.cells.get(&cell_key(self.frame, p, n))?;
         Some(Cell {
             guide: self.guides.get(guide as usize),
-            light,
+            light: f64::from(light.max(0.0)),
         })
     }
 
@@ -315,24 +304,35 @@ impl SpatialGuides {
         (hp, hn): (DVec3, DVec3),
     ) -> Record {
         Record {
-            key: cell_key(self.frame, p, n),
-            hit: cell_key(self.frame, hp, hn),
+            key_bin: cell_index(self.frame, p, n) | ((bin(u[0]) * RES + bin(u[1])) as u32) << 16,
             value: (light / q) as f32,
             light: light as f32,
-            bin: (bin(u[0]) * RES + bin(u[1])) as u16,
+            hit: cell_index(self.frame, hp, hn) as u16,
         }
     }
 }
 
-/// Everything the rounds so far have learned for the spatial guides: per cell, per bin, Σ L/q.
+/// What the rounds so far learned in one spatial cell.
+#[derive(Clone, Debug)]
+struct CellSums {
+    /// Per bin Σ L/q of the bounces from the cell.
+    bins: [f64; RES * RES],
+    /// The bounces from the cell.
+    count: f64,
+    /// Σ of the light that rays brought from the cell, and their count.
+    light: (f64, f64),
+}
+
+/// Everything the rounds so far have learned for the spatial guides: per cell, per bin, Σ L/q,
+/// and the light that rays brought from it.
 #[derive(Debug)]
 pub(crate) struct SpatialLearner {
     frame: (DVec3, f64),
     cap: usize,
-    /// Per cell: per bin Σ L/q, and (the last entry) the count of records.
-    sums: CellMap<Vec<f64>>,
-    /// Per cell: Σ of the light that rays brought from it, and their count.
-    light: CellMap<(f64, f64)>,
+    /// Per cell of the grid ([`CELL_COUNT`]): its slot in `sums` ([`NONE`]: nothing learned).
+    slots: Vec<u32>,
+    /// The cells that learned something, in the order they first did.
+    sums: Vec<CellSums>,
 }
 
 impl SpatialLearner {
@@ -341,21 +341,38 @@ impl SpatialLearner {
         Self {
             frame,
             cap: (RECORDS_PER_ROUND / groups.max(1)).clamp(256, RECORDS_PER_GROUP),
-            sums: Default::default(),
-            light: Default::default(),
+            slots: Vec::new(),
+            sums: Vec::new(),
         }
+    }
+
+    /// The sums of cell `index`, new when it had none.
+    fn cell(&mut self, index: u32) -> &mut CellSums {
+        if self.slots.is_empty() {
+            self.slots = vec![NONE; CELL_COUNT];
+        }
+        let slot = &mut self.slots[index as usize];
+        if *slot == NONE {
+            *slot = self.sums.len() as u32;
+            self.sums.push(CellSums {
+                bins: [0.0; RES * RES],
+                count: 0.0,
+                light: (0.0, 0.0),
+            });
+        }
+        &mut self.sums[*slot as usize]
     }
 
     /// Adds a group's records (call in a fixed order of the groups: the sums, and so the guides,
     /// do not depend on the thread count).
     pub(crate) fn learn(&mut self, records: &[Record]) {
         for r in records {
-            let sums = (self.sums.entry(r.key)).or_insert_with(|| vec![0.0; RES * RES + 1]);
-            sums[RES * RES] += 1.0;
+            let cell = self.cell(r.key_bin & 0xffff);
+            cell.count += 1.0;
             if r.value > 0.0 && r.value.is_finite() {
-                sums[r.bin as usize] += f64::from(r.value);
+                cell.bins[(r.key_bin >> 16) as usize] += f64::from(r.value);
             }
-            let light = self.light.entry(r.hit).or_insert((0.0, 0.0));
+            let light = &mut self.cell(u32::from(r.hit)).light;
             light.1 += 1.0;
             if r.light > 0.0 && r.light.is_finite() {
                 light.0 += f64::from(r.light);
@@ -365,14 +382,25 @@ impl SpatialLearner {
 
     /// The guides of everything learned so far.
     pub(crate) fn guides(&self) -> SpatialGuides {
-        let mut cells: CellMap<(u32, f64)> = (self.light.iter())
-            .map(|(k, (sum, count))| (*k, (u32::MAX, sum / count)))
-            .collect();
+        let mut cells = Vec::new();
         let mut guides = Vec::new();
-        for (k, s) in &self.sums {
-            if let Some(guide) = Guide::from_sums(&s[..RES * RES], s[RES * RES]) {
-                cells.entry(*k).or_insert((u32::MAX, 0.0)).0 = guides.len() as u32;
-                guides.push(guide);
+        if !self.sums.is_empty() {
+            cells = vec![(NONE, -1.0f32); CELL_COUNT];
+            for (cell, &slot) in cells.iter_mut().zip(&self.slots) {
+                let Some(s) = self.sums.get(slot as usize) else {
+                    continue;
+                };
+                let (sum, count) = s.light;
+                let light = if count > 0.0 {
+                    (sum / count) as f32
+                } else {
+                    0.0
+                };
+                let guide = Guide::from_sums(&s.bins, s.count).map_or(NONE, |g| {
+                    guides.push(g);
+                    (guides.len() - 1) as u32
+                });
+                *cell = (guide, light);
             }
         }
         SpatialGuides {

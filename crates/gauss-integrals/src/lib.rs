@@ -8,7 +8,7 @@
 //! - [`closed_form`], [`wedge`]: exact integrals over segments and triangles (docs/design/math.md §2);
 //! - [`cubature`]: adaptive cubature, the reference of the tests;
 //! - [`criteria`]: the error estimates of sec. 3.9.4 and the decision of fig. 3.6;
-//! - [`gram`]: sparse Gram matrices of Gaussian bases on triangulated or segmented domains
+//! - [`gram`](mod@gram): sparse Gram matrices of Gaussian bases on triangulated or segmented domains
 //!   (zero rules, flat closed form eq. 3.52, exact element sums);
 //! - [`orthonormal`]: the Cholesky orthonormalization (docs/design/math.md §5);
 //! - [`transfer`]: the factorized transfer coefficients of docs/design/math.md §3.

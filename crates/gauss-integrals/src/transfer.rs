@@ -16,7 +16,7 @@
 //!   comparing test and the benchmark.
 //!
 //! Each α, β entry and each `c_o` is the flat closed form or the exact element sum, as for the
-//! Gram matrix ([`crate::gram`]). The zero rule "normals not facing" of fig. 3.6 is not applied:
+//! Gram matrix ([`crate::gram`](mod@crate::gram)). The zero rule "normals not facing" of fig. 3.6 is not applied:
 //! it only saves work, the kernel network gives 0 there anyway (footnote 12 of sec. 3.9.1).
 
 use crate::criteria::Integration;

@@ -215,7 +215,7 @@ pub struct SolveArgs {
     pub mesh: Option<PathBuf>,
     /// A lightmap bake (.glb): the scene with a second UV set (TEXCOORD_1) and the light baked
     /// into texture pages there (MOZ_lightmap, 8-bit PNG with its scale), the linear pages beside
-    /// it as <NAME>-lightmap-<K>.exr (docs/guide/lightmaps.md).
+    /// it as `<NAME>-lightmap-<K>.exr` (docs/guide/lightmaps.md).
     #[arg(long, help_heading = "Lightmaps", value_name = "OUT.glb")]
     pub lightmap: Option<PathBuf>,
     /// Lightmap texels per scene unit [default: the highest density that fits one page].
@@ -249,7 +249,7 @@ pub struct SolveArgs {
     #[arg(long, help_heading = "Lightmaps", requires = "lightmap")]
     pub lightmap_denoise: bool,
     /// Take the lightmap's texels, or the per-pixel image's pixels, from the partial outputs of
-    /// `--shard` runs (<NAME>.shard-I-of-N.txt, every shard once) instead of gathering them, and
+    /// `--shard` runs (`<NAME>.shard-I-of-N.txt`, every shard once) instead of gathering them, and
     /// write the files a single run writes, byte for byte; give the shard runs' options, --shard
     /// excepted.
     #[arg(
@@ -273,7 +273,7 @@ pub struct SolveArgs {
     /// Estimate only shard INDEX of COUNT of the probes, of the lightmap's texels and of a
     /// per-pixel image's pixels (0 <= INDEX < COUNT; e.g. a Slurm array or Kubernetes indexed
     /// job's index): the probes with their indices to --probe-out, joined by `gcr merge`
-    /// (docs/guide/probes.md, "Sharded runs"); the texels to <NAME>.shard-INDEX-of-COUNT.txt
+    /// (docs/guide/probes.md, "Sharded runs"); the texels to `<NAME>.shard-INDEX-of-COUNT.txt`
     /// beside --lightmap's NAME.glb, the pixels beside --image's NAME.exr (--image-mode pixel,
     /// a fixed camera), joined by --from-shards (docs/guide/lightmaps.md, "Sharded bakes";
     /// docs/guide/images.md, "Sharded images"). Byte for byte the single run's.

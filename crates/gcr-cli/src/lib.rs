@@ -1,5 +1,5 @@
 //! The `gcr` command-line program as a library: [`run`] parses the arguments and dispatches to one
-//! function per subcommand ([`scenes`], [`solve`], [`reference`], [`merge`]). `main.rs` only calls it, and
+//! function per subcommand ([`scenes`], [`solve`], [`reference`](mod@reference), [`merge`]). `main.rs` only calls it, and
 //! tests can run the program in-process.
 
 pub mod args;

@@ -2,14 +2,14 @@
 //! beside this crate's `Cargo.toml`; the package's Python side is `python/gcr/`).
 //!
 //! It drives the library as the `gcr` program does, with one implementation of everything the
-//! program decides: scenes load and light through `scene_sampler` ([`scene`], [`lights`]:
+//! program decides: scenes load and light through `scene_sampler` (`scene`, `lights`:
 //! `scene_sampler::LightOptions`), solves take the program's settings and defaults and train
-//! the networks only when something reads them ([`solve`]: `gcr::SolveOptions`,
+//! the networks only when something reads them (`solve`: `gcr::SolveOptions`,
 //! `gcr::solve_for_outputs`), B and irradiance at points go through the probes' own snapping
-//! and gather ([`points`]), images and files through the output stage ([`images`]:
+//! and gather (`points`), images and files through the output stage (`images`:
 //! `gcr::output::render_linear`, `OutputPlan`, `write_outputs`). Long work runs with the GIL
-//! released and reports progress to an optional callback ([`runner`]); errors carry the
-//! program's messages ([`errors`]). [`regressor`] is the Rust side of the scikit-learn
+//! released and reports progress to an optional callback (`runner`); errors carry the
+//! program's messages (`errors`). `regressor` is the Rust side of the scikit-learn
 //! estimator `gcr.isgcs.IsgcsRegressor`.
 
 mod errors;

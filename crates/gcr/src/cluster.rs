@@ -279,7 +279,7 @@ impl ClusterTree {
     }
 
     /// `∫ exp(−a|x − c|²) dx` over the elements whose normal passes `mask` (see
-    /// [`Mask`]), with the support cut at radius `r`; `exact(e)` integrates element `e`.
+    /// `Mask`), with the support cut at radius `r`; `exact(e)` integrates element `e`.
     pub fn integral(
         &self,
         c: DVec3,

@@ -182,8 +182,8 @@ pub enum OutputFit {
     /// The dissertation: the delta rule (eq. 2.8) on area-uniform ray samples (fig. B.2), with
     /// resampling of critical regions (sec. 2.5).
     DeltaRule,
-    /// Shot rays ([`crate::shooting`]) and, at every FEM step, the output weights replaced by the
-    /// L2 projection of K·s onto the cells' Gaussians ([`crate::projection`]). Default: measured
+    /// Shot rays (`shooting.rs`) and, at every FEM step, the output weights replaced by the
+    /// L2 projection of K·s onto the cells' Gaussians (`projection.rs`). Default: measured
     /// far more accurate (docs/design/gcr-algorithm.md).
     #[default]
     Projection,
@@ -334,7 +334,7 @@ pub struct SolveConfig {
     /// maximum-principle guard); 1e-3 gave B ≈ 1e123 at 400.
     pub projection_tolerance: f64,
     /// Kernel cells whose sample support `n_o = Σ_i g_o(ξ_i)` over the shot samples is below this
-    /// get no output weight ([`crate::projection::kernel_support`]). The network grows tiny cells
+    /// get no output weight (`projection.rs`, `kernel_support`). The network grows tiny cells
     /// where K is singular (surfaces meeting at an edge) that hold a fraction of a sample on
     /// average: their moment is one sample's noise over a tiny Gram diagonal, and when that
     /// sample's sender lies in both halves of the cell (at the edge, x ≈ y) it feeds its own
@@ -346,12 +346,12 @@ pub struct SolveConfig {
     /// shot samples carry (`Metrics::energy_balance` reports the factor it corrected). Off: the
     /// plain Galerkin projection, whose bounce iteration can run away when ρ is close to 1.
     pub energy_correction: bool,
-    /// Cluster large surfaces for the FEM integrals ([`crate::cluster`]): from
+    /// Cluster large surfaces for the FEM integrals (`cluster.rs`; docs/design/hierarchical.md): from
     /// `min_elements` elements on, nodes of the cluster tree replace their elements wherever a
     /// Gaussian is too wide to resolve them, so that an integral costs the same on a million
     /// triangles as on a few thousand. Below it (every built-in scene) the integrals are exact.
     pub surface_clusters: SurfaceClusters,
-    /// Facing masks on the projected kernel's Gaussians ([`crate::kernel_cells::KernelCells::assign_facing`]):
+    /// Facing masks on the projected kernel's Gaussians (`KernelCells::assign_facing`):
     /// each half lives only on surfaces that face like the samples it was fitted to (within the
     /// breaking angle), so that light does not blur across the edges where surfaces meet. Off by
     /// default: measured (docs/design/gcr-algorithm.md) it cuts the kernel collection's error on
@@ -593,7 +593,7 @@ impl SolveConfig {
     }
 }
 
-/// When and how finely a large surface is clustered ([`crate::cluster`]).
+/// When and how finely a large surface is clustered (`cluster.rs`; docs/design/hierarchical.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfaceClusters {
     /// Surfaces with at least this many elements are clustered (`usize::MAX`: never).
@@ -625,7 +625,7 @@ pub enum BaseDomain {
     Shading,
 }
 
-/// Which sender integral multiplies each kernel cell ([`crate::fem`]).
+/// Which sender integral multiplies each kernel cell (`fem.rs`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Transfer {
     /// c_o = ∫_S exp(−|x − w_o^x|²/d_o²) dx, exact on the scene: docs/design/math.md §3.

@@ -48,7 +48,7 @@ impl Element {
 /// Small surfaces are integrated exactly, element by element. Surfaces with many elements
 /// (≥ [`SurfaceClusters::min_elements`]) get a [`ClusterTree`] whose nodes stand in for their
 /// elements where a Gaussian is too wide to tell them apart, so that the cost of an integral no
-/// longer grows with the polygon count ([`crate::cluster`]).
+/// longer grows with the polygon count (`cluster.rs`).
 #[derive(Clone, Debug)]
 pub struct SceneSurface {
     /// Elements of S.
@@ -120,7 +120,7 @@ impl SceneSurface {
     }
 
     /// [`SceneSurface::of`], clustered when it has at least `clusters.min_elements` elements
-    /// ([`crate::cluster`]).
+    /// (`cluster.rs`).
     pub fn of_clustered(domain: &Domain, clusters: SurfaceClusters) -> Self {
         let (elements, normals) = domain.surface_elements().into_iter().unzip();
         Self::with_clusters(elements, normals, 0.05 * domain.diagonal(), clusters)
@@ -641,7 +641,7 @@ fn half_integrals(
 /// B_refl(y) = Σ_o v_o c_o exp(−|y − w_o^y|²/d_o²): the final collection through the kernel
 /// network (fig. 4.13c), with `sender` from [`sender_integrals`], at a surface point y with unit
 /// normal `n` (only cells whose receiver half faces like `n` contribute; a zero `n` takes all).
-/// For many points, prepare the cells once: [`crate::cell_lanes::Collection`] (which this calls).
+/// For many points, prepare the cells once: `cell_lanes::Collection` (which this calls).
 #[cfg_attr(not(feature = "stages"), allow(dead_code))] // read through `gcr::stages`
 pub fn reflected_from_kernel(kernel: &KernelCells, sender: &[f64], y: DVec3, n: DVec3) -> Bands {
     crate::cell_lanes::Collection::new(kernel, sender).at(y, n)

@@ -538,7 +538,7 @@ impl KernelProjection {
         Self::from_gram(&gram, tol, rejection, excluded)
     }
 
-    /// Factors a Gram matrix computed by [`kernel_gram_excluding`] with the same `tol` and
+    /// Factors a Gram matrix computed by `kernel_gram_excluding` with the same `tol` and
     /// `excluded`: a projection redone at another `rejection` need not recompute it.
     pub fn from_gram(gram: &DMatrix<f64>, tol: f64, rejection: f64, excluded: &[bool]) -> Self {
         let ortho = integrals::Orthonormal::new(gram, rejection);

@@ -11,7 +11,7 @@
 use glam::DVec3;
 use std::collections::HashMap;
 
-/// Limits for [`retriangulate`].
+/// Limits for `retriangulate`.
 #[derive(Clone, Copy, Debug)]
 pub struct RetriangulateLimits {
     /// Maximum number of 1 → 4 splits of one scene face (depth 8 ⇒ up to 65 536 pieces).

@@ -10,6 +10,6 @@ pub struct Sample {
     pub ray: Ray,
     /// Emitting strength s at the sender (docs/design/math.md §4).
     pub s: Bands,
-    /// `1/p_x(x)` of a shot ray ([`crate::shooting`]); 0 for area-uniform samples.
+    /// `1/p_x(x)` of a shot ray (`shooting.rs`); 0 for area-uniform samples.
     pub inv_px: f64,
 }

@@ -619,8 +619,8 @@ fn seg(a: (f64, f64), b: (f64, f64), rho: f64, e: f64, obj: u32, surf: u32) -> S
     )
 }
 
-/// Fig. 4.1a: a vertical wall that emits (x = 0, y ∈ [0,1], facing +x, E = 1, ρ = 0.5) and a floor with moderate
-/// emission (y = 0, x ∈ [0,1], facing +y, E = 0.2, ρ = 0.5), meeting in a corner. Segment order: wall from the
+/// Fig. 4.1a: a vertical wall that emits (x = 0, y ∈ \[0,1\], facing +x, E = 1, ρ = 0.5) and a floor with moderate
+/// emission (y = 0, x ∈ \[0,1\], facing +y, E = 0.2, ρ = 0.5), meeting in a corner. Segment order: wall from the
 /// top down, then floor from the corner outward, so `s = 0` is the top of the wall and `s = 1` the far end of the
 /// floor (the dissertation runs the other way: its parameter is `1 − s`).
 pub fn flatland_corner() -> FlatlandScene {
@@ -643,7 +643,7 @@ pub fn flatland_corner() -> FlatlandScene {
 }
 
 /// Fig. 4.6a: a ceiling light (y = 1, x ∈ [0.3, 0.7], facing down, E = 1, ρ = 0), a two-sided blocking edge
-/// (y = 0.5, x ∈ [0.35, 0.65], ρ = 0.5, two back-to-back segments) and a floor (y = 0, x ∈ [0,1], facing up,
+/// (y = 0.5, x ∈ [0.35, 0.65], ρ = 0.5, two back-to-back segments) and a floor (y = 0, x ∈ \[0,1\], facing up,
 /// ρ = 0.5). Segment order: light (right to left), blocker underside, blocker top, floor (left to right).
 pub fn flatland_blocker() -> FlatlandScene {
     let segs = vec![

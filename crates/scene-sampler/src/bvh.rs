@@ -186,7 +186,7 @@ impl SceneBvh {
     /// same amount. obvhs's own CWBVH node test clamped the entry distance to an absolute `1e-4`
     /// (`cwbvh::node::EPSILON`), which silently dropped every hit closer than 10⁻⁴ world units to the ray
     /// origin — a ray leaving a concave corner escaped through the adjoining wall. Our traversal
-    /// ([`wide`]) has no such clamp; the backoff stays so that every f32 ray, hence every hit
+    /// (`bvh/wide.rs`) has no such clamp; the backoff stays so that every f32 ray, hence every hit
     /// distance, is the one it was (the primitive test's `tmin` still excludes hits behind the
     /// true origin).
     pub fn backoff(&self) -> f64 {
@@ -363,7 +363,7 @@ impl SceneBvh {
         !self.bvh.any(ray, |_, _| true)
     }
 
-    /// The origin of the BVH's f32 frame (the centre of the scene's bounds): a bare [`Ray`] for the BVH
+    /// The origin of the BVH's f32 frame (the centre of the scene's bounds): a bare `Ray` for the BVH
     /// has its origin at `p − centre` for a scene point `p`.
     pub fn centre(&self) -> DVec3 {
         self.centre

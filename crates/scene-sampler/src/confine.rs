@@ -10,7 +10,7 @@
 //! a regular file (not `/dev/zero`, a FIFO or a directory: checked before opening) of at most
 //! [`LoadOptions::max_file_bytes`] (checked from its size, and again while reading).
 //!
-//! Resolution follows symbolic links one component at a time ([`Folder::locate`]), so a path whose
+//! Resolution follows symbolic links one component at a time (`Folder::locate`), so a path whose
 //! last components do not exist is still placed inside or outside the folder by the components that
 //! do. What is not covered: a folder changed by someone else while it is being read (a file swapped
 //! for a link between the check and the read).

@@ -258,7 +258,7 @@ pub enum SceneError {
     #[error("{0}")]
     WrongDimension(String),
     /// Light options that do not fit the scene or each other (lights for a Flatland scene, sky
-    /// portals without a sky: [`crate::lights::LightOptions::light`]).
+    /// portals without a sky: [`crate::LightOptions::light`]).
     #[error("{0}")]
     LightOptions(String),
 }

@@ -60,7 +60,7 @@ fn guarded<T>(source: &str, parse: impl FnOnce() -> gltf::Result<T>) -> Result<T
 /// Every triangle primitive of every mesh instance in the default scene (or the first) is loaded with its
 /// node's world transform applied (windings flipped under mirroring transforms). `baseColorFactor.rgb` → ρ,
 /// `emissiveFactor × KHR_materials_emissive_strength` → emitted radiance, E = π·that (ρ ≥ 1, such as the
-/// default material's white, is clamped to [`RHO_MAX`] with a warning naming the material);
+/// default material's white, is clamped to [`RHO_MAX`](crate::RHO_MAX) with a warning naming the material);
 /// `baseColorTexture` (on its TEXCOORD set, with its sampler's wrap modes; sRGB) multiplies it per point
 /// ([`Scene::rho_at`]). Triangle strips and fans are loaded as triangles; points and lines are skipped with a warning
 /// naming their mesh, and a file with nothing else is an error saying so. The first node with a

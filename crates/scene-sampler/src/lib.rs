@@ -5,7 +5,7 @@
 //!
 //! * **Scenes** — [`Scene`] (3-D triangles) and [`FlatlandScene`] (2-D segments), each face with reflectance ρ
 //!   and emitted radiosity E per colour band ([`Spectrum`]), validated on load ([`SceneError`]). Loaders:
-//!   [`load`] (OBJ + MTL, glTF/GLB, Flatland JSON), built-ins by name: [`builtin`], [`BUILTIN_NAMES`].
+//!   [`load`](fn@load) (OBJ + MTL, glTF/GLB, Flatland JSON), built-ins by name: [`builtin`](fn@builtin), [`BUILTIN_NAMES`].
 //!   A scene file reads nothing outside its own folder, regular files only, within bounds on file size
 //!   and decoded texture memory ([`LoadOptions`], [`load_with`], [`confine`]).
 //! * **Sampling** — area-uniform parameterizations [`SurfaceSampler`] (`[0,1]² →` surface) and [`FlatSampler`]
@@ -100,7 +100,7 @@ pub use warp::{
     uniform_cone_pdf,
 };
 
-/// A scene of either dimension, as returned by [`load`] and [`builtin`].
+/// A scene of either dimension, as returned by [`load`](fn@load) and [`builtin`](fn@builtin).
 // one value per loaded scene, moved a few times: boxing the larger variant would buy nothing
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]

@@ -1,6 +1,6 @@
-//! Scene files: the loader chosen by extension — OBJ + MTL (tobj, [`crate::obj`]'s loader), glTF
-//! 2.0 / .glb (gltf, [`crate::gltf`]'s), Flatland JSON (here) — and the writers for OBJ/MTL, glTF
-//! and Flatland ([`crate::write`]'s), re-exported here.
+//! Scene files: the loader chosen by extension — OBJ + MTL (tobj, `obj.rs`), glTF
+//! 2.0 / .glb (gltf, `gltf.rs`), Flatland JSON (here) — and the writers for OBJ/MTL, glTF
+//! and Flatland (`write.rs`), re-exported here.
 //!
 //! Units (FORMATS.md): OBJ `Ke` and glTF `emissiveFactor × emissive_strength` are emitted **radiance** L_e, as a
 //! path tracer reads them; the scene stores emitted radiosity (exitance) `E = π·L_e`, and every solver reports

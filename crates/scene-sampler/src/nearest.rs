@@ -6,7 +6,7 @@
 //! O(log faces + faces near the probe): a node is opened only when its box is within the best
 //! distance found so far (the tolerance at first).
 //!
-//! The tree is a plain median split on the longest axis of the faces' centroids, ≤ [`LEAF`] faces a
+//! The tree is a plain median split on the longest axis of the faces' centroids, ≤ `LEAF` faces a
 //! leaf, boxes over the faces' exact f64 vertices: the distance from a point to a box bounds the
 //! distance to every face inside it, so the answer is the brute-force answer, ties included (the
 //! lowest face index wins among equally near faces, as in a scan in index order).

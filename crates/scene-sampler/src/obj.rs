@@ -134,7 +134,7 @@ fn scan_obj(text: &str) -> Vec<Statement> {
 ///
 /// Polygons are triangulated as fans (tobj). Coordinates are read in f64, so a scene far from the origin
 /// keeps its shape. `Kd` → ρ, `Ke` → emitted radiance (E = π·Ke); a colour with one number is grey (MTL
-/// format); ρ ≥ 1 is clamped to [`RHO_MAX`] with a warning naming the material. Faces without a material get
+/// format); ρ ≥ 1 is clamped to [`RHO_MAX`](crate::RHO_MAX) with a warning naming the material. Faces without a material get
 /// ρ = 0.5 grey, E = 0 (reported in `warnings`); a `usemtl` naming a material that is not defined, or an
 /// `mtllib` that cannot be read, is an error naming the line. Each OBJ object/group becomes an object; each
 /// input polygon one surface. Windings are kept as written (front side = counter-clockwise); faces whose `vn`

@@ -183,8 +183,8 @@ impl Face {
 
 /// A validated 3-D radiosity scene.
 ///
-/// Construct it with [`Scene::new`] (which validates), a loader ([`crate::load`]) or a built-in
-/// ([`crate::builtin`]). The face list is immutable afterwards so that samplers and BVHs built from it stay valid.
+/// Construct it with [`Scene::new`] (which validates), a loader ([`crate::load`](fn@crate::load)) or a built-in
+/// ([`crate::builtin`](fn@crate::builtin)). The face list is immutable afterwards so that samplers and BVHs built from it stay valid.
 #[derive(Clone, Debug)]
 pub struct Scene {
     /// Name (file stem or built-in name).

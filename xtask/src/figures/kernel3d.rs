@@ -3,7 +3,7 @@
 //! without blockers" and "with blockers"; the dissertation reports GCR's error at about half HR's).
 //!
 //! The light flow `L(x,y) = K(x,y)·B(x)` (docs/design/math.md §4, K = ρ(y)·G(x,y)·V(x,y)) is compared at N random
-//! pairs (x, y) drawn area-uniformly over the scene's faces ((s,t,u,v) ∈ [0,1]⁴, fig. B.2):
+//! pairs (x, y) drawn area-uniformly over the scene's faces ((s,t,u,v) ∈ \[0,1\]⁴, fig. B.2):
 //! * **exact**: the traced kernel times B(x) from the pointwise path tracer (`paths` per point; its own
 //!   noise is part of the reference, reported);
 //! * **GCR**: the kernel network Ψ(x,y) ([`gcr::stages::KernelCells::evaluate`]) after a default solve with

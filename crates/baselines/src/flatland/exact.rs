@@ -266,7 +266,7 @@ impl ExactSolver {
     ///
     /// # Errors
     /// A non-positive or non-finite element length or tolerance, `gauss_points` outside `1..=64`, more than
-    /// [`MAX_ELEMENTS`] elements, or no convergence within `max_iterations` sweeps.
+    /// `MAX_ELEMENTS` elements, or no convergence within `max_iterations` sweeps.
     pub fn new(scene: &FlatlandScene, opts: &ExactOptions) -> Result<Self, BaselineError> {
         check_range(
             "element_length",

@@ -114,7 +114,7 @@ impl Blocks {
 
 /// The points (indices into `points`, ascending) of the shard `config` asks for
 /// ([`PathSettings::shard`]; every point without one), as the paths gather forms its blocks
-/// ([`Blocks`]): radiosity at surface points `(point, normal, face)`, or irradiance
+/// (`Blocks`): radiosity at surface points `(point, normal, face)`, or irradiance
 /// (`irradiance`: the faces are ignored, every point is a white receiver). Errors when the shard
 /// has no block: fewer blocks than shards.
 pub fn shard_points(

@@ -104,7 +104,7 @@ fn estimated(
 }
 
 /// Irradiance E(y, n) = ∫ L cos θ dω at any points `(point, unit normal)` — on a surface or in the
-/// air, as Radiance's `rtrace -I` — by the paths gather ([`PathGather::estimate_irradiance`]),
+/// air, as Radiance's `rtrace -I` — by the paths gather (`PathGather::estimate_irradiance`),
 /// to the configured target error when there is one. The values are in
 /// [`Gathered::radiosity`]: the radiosity a white (ρ = 1), non-emitting receiver there would have.
 /// Seeded like [`radiosity_at_points`] (from the point's coordinates, salted: an irradiance probe

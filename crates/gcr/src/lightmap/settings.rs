@@ -79,7 +79,7 @@ pub fn bake_bytes(pages: u32, width: u32, height: u32, denoise: bool) -> u64 {
 }
 
 impl LightmapSettings {
-    /// Checks the settings: a density finite and positive, a page of 16 to [`MAX_PAGE_SIZE`]
+    /// Checks the settings: a density finite and positive, a page of 16 to `MAX_PAGE_SIZE`
     /// texels, padding below a quarter of the page.
     pub fn validate(&self) -> Result<(), LightmapError> {
         let bad = |m: String| Err(LightmapError::Settings(m));
@@ -123,7 +123,7 @@ pub enum LightmapError {
     /// Lightmaps need a 3-D scene.
     #[error("lightmaps need a 3-D scene")]
     NotThreeD,
-    /// The atlas needs more texels than a bake may hold ([`MAX_TEXELS`]).
+    /// The atlas needs more texels than a bake may hold (`MAX_TEXELS`).
     #[error(
         "lightmap atlas: {pages} page(s) of {width} × {height} texels are {texels} texels, more \
          than {max} (about {gib:.1} GiB to bake): lower the texel density"

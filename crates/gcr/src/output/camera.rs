@@ -44,7 +44,7 @@ pub enum CameraError {
     /// The field of view is not in (0, 180) degrees.
     #[error("field of view {0}° is outside (0, 180) degrees")]
     Fov(f64),
-    /// A resolution of 0 or above [`MAX_RESOLUTION`].
+    /// A resolution of 0 or above `MAX_RESOLUTION`.
     #[error("image resolution {width}x{height}: each side must be 1 to {MAX_RESOLUTION} pixels")]
     Resolution {
         /// Width.
@@ -143,7 +143,7 @@ pub enum CameraChoice {
         /// Vertical field of view in degrees, if given.
         fov: Option<f64>,
     },
-    /// Placed from the scene's geometry and the solved radiosity ([`super::autocam`]): from
+    /// Placed from the scene's geometry and the solved radiosity (`output/autocam.rs`): from
     /// inside closed scenes, framing open ones tightly. `fov`: the vertical field of view to use
     /// (default 40° outside, 60° inside).
     Automatic {
@@ -190,7 +190,7 @@ pub enum ImageMode {
     /// Rasterize the output mesh with B at its vertices, interpolated (fast; the bake's accuracy).
     #[default]
     Mesh,
-    /// B by the output gather at each pixel sub-sample's visible point ([`super::pixel`]): the
+    /// B by the output gather at each pixel sub-sample's visible point (`output/pixel.rs`): the
     /// gather's accuracy everywhere, one gather per sub-sample.
     Pixel,
 }

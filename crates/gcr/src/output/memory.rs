@@ -4,12 +4,12 @@
 //!
 //! The estimate is per pixel and per view (views are rendered one after the other):
 //!
-//! - **mesh images** ([`super::raster`]): `ss² = 4` sub-samples of B (3 × f64), depth (f64) and
+//! - **mesh images** (`output/raster.rs`): `ss² = 4` sub-samples of B (3 × f64), depth (f64) and
 //!   what was seen (1 byte): 132 bytes; their reduction to pixels (B, depth: 32 bytes); the
 //!   8-bit pixels and depth kept for overlays (11 bytes), or the f32 radiance of an EXR (12):
 //!   176 bytes; [`MESH_BYTES_PER_PIXEL`] = 192 leaves room for the allocator. Measured: 171–173
 //!   bytes a pixel (peak RSS, Cornell box, 1024² − 512² and 640² − 256², PNG and EXR).
-//! - **pixel images** of the default paths gather ([`super::pixel`]): the footprint gather keeps
+//! - **pixel images** of the default paths gather (`output/pixel.rs`): the footprint gather keeps
 //!   per pixel its centre's hit, the running sums of its rounds and its sample points:
 //!   [`PIXEL_BYTES_PER_PIXEL`] = 800, over the 736 bytes a pixel measured the same way (Cornell
 //!   box, `--quality draft`, 1024² − 512²). With a gather that reads the networks, every

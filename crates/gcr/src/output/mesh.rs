@@ -15,7 +15,7 @@ use glam::DVec3;
 
 /// The output mesh's starting resolution when no network was trained (the paths gather reads
 /// none): the edge of this many equilateral triangles covering the scene. Coarse on purpose:
-/// [`crate::refine`] then splits where B varies (shadows), which on cornell-box's floor resolves
+/// The refinement (`refine.rs`) then splits where B varies (shadows), which on cornell-box's floor resolves
 /// the short block's shadow better, and sooner, than starting from the networks' resolution
 /// (docs/guide/bakes.md). Faces already smaller than the edge are kept as they are.
 pub const UNIFORM_MESH_TRIANGLES: f64 = 150.0;
@@ -97,7 +97,7 @@ pub fn vertex_gather_point(face: &scene_sampler::Face, p: DVec3) -> DVec3 {
 /// Re-triangulates the scene to the shading network's resolution (sec. 4.3.1) and gathers B at
 /// every vertex ([`radiosity_at_points`], at [`vertex_gather_point`]); with the paths gather the
 /// mesh is then refined where B varies faster than linear interpolation follows
-/// ([`crate::refine`]: shadow edges). Returns the mesh and what the gather measured.
+/// (`refine.rs`: shadow edges). Returns the mesh and what the gather measured.
 pub fn output_mesh(
     domain: &Domain,
     trained: &Trained,

@@ -1,6 +1,6 @@
 //! Writers for a solved scene: PNG, JPEG and OpenEXR images, binary glTF, PLY, and the tone
 //! mapping they share; [`write`] is the output stage of a solve (all files at once, checked
-//! before the solve); [`camera`] the image settings and [`autocam`] the automatic camera;
+//! before the solve); `camera.rs` the image settings and `autocam.rs` the automatic camera;
 //! [`render_linear`] an image as numbers and [`place_probes`] / [`gather_probes`] the probes at a
 //! caller's points, as the files get them.
 

@@ -27,7 +27,7 @@ pub struct OutputPaths {
     /// `ImageSettings::camera` (3-D) or of the whole scene (Flatland, PNG).
     pub image: Option<PathBuf>,
     /// Flatland only: PNG of the light flow over the kernel domain
-    /// ([`super::flatland::light_flow_image`]).
+    /// (`output/flatland.rs`, `light_flow_image`).
     pub kernel_image: Option<PathBuf>,
     /// 3-D only: binary glTF (.glb) of the output mesh with vertex colours.
     pub mesh: Option<PathBuf>,

@@ -121,7 +121,7 @@ impl EnvMap {
     }
 
     /// Reads an equirectangular map from a Radiance `.hdr` (RGBE) or OpenEXR `.exr` file (linear
-    /// radiance; an EXR's alpha is ignored), a regular file of at most [`MAX_TEXELS`] texels —
+    /// radiance; an EXR's alpha is ignored), a regular file of at most `MAX_TEXELS` texels —
     /// then [`EnvMap::new`].
     ///
     /// # Errors

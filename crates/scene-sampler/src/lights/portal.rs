@@ -137,7 +137,7 @@ impl Portals {
     }
 
     /// A direction of the mixture of [`Portals::mix_pdf`] from `u ∈ [0, 1)²`: through a portal
-    /// when u[0] falls in the portals' share (remapped within it), else by `own` with u[0]
+    /// when u\[0\] falls in the portals' share (remapped within it), else by `own` with u\[0\]
     /// remapped to [0, 1).
     pub fn mix_sample(
         &self,
@@ -174,8 +174,8 @@ impl Portals {
     }
 
     /// A unit direction from `p` toward a point drawn on the portals from `u ∈ [0, 1)²` (the
-    /// portal by u[0], which is then remapped within the portal's share to place the point with
-    /// u[1]); `None` when no portal has weight from `p`.
+    /// portal by u\[0\], which is then remapped within the portal's share to place the point with
+    /// u\[1\]); `None` when no portal has weight from `p`.
     pub fn sample(&self, p: DVec3, u: [f64; 2]) -> Option<DVec3> {
         let (w, total) = self.weights(p);
         if total <= 0.0 || total.is_nan() {

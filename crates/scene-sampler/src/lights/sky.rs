@@ -188,7 +188,7 @@ impl Sky {
         }
     }
 
-    /// The sky seen through `portals` (module docs of [`super::portal`]): most shadow rays go
+    /// The sky seen through `portals` (module docs of `lights/portal.rs`): most shadow rays go
     /// through them.
     pub fn with_portals(self, portals: Portals) -> Self {
         Self { portals, ..self }

@@ -201,10 +201,10 @@ pub(crate) struct GroupGuide {
 
 /// Path vertices a group records per round for the spatial guides, at most: all groups' records
 /// are held until the round ends (16 bytes each), so the groups share [`RECORDS_PER_ROUND`].
-/// 32 768: the door gap's work plane (125 groups) met 2 % in 0.80× the time it took with 8 192
-/// (`farm-bench -n 3`, 15.8 s against 19.8 s; 17 744 rays per point against 21 840): the guides
-/// of a round learn from the records of the rounds before it, and the early rounds are where
-/// they are poor. The merge of the records is a pass over a dense array ([`CELL_COUNT`]); with a
+/// 32 768: the door gap's work plane (125 groups) met 2 % in 0.91× the time it took with 8 192
+/// on the mean of seeds 1–3 (15.8 / 17.5 / 19.4 s against 19.8 / 20.0 / 18.5 s): the guides of
+/// a round learn from the records of the rounds before it, and the early rounds are where they
+/// are poor. The merge of the records is a pass over a dense array ([`CELL_COUNT`]); with a
 /// hash map it cost more than the extra records gained.
 const RECORDS_PER_GROUP: usize = 32_768;
 /// Path vertices all groups record per round, at most (128 MB), but at least 256 per group.

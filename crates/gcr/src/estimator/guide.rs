@@ -224,6 +224,18 @@ pub(crate) struct Record {
     hit: u16,
 }
 
+impl Record {
+    /// The cell of the bounce's vertex.
+    fn cell(&self) -> u32 {
+        self.key_bin & 0xffff
+    }
+
+    /// The bin of the bounce's square point.
+    fn bin(&self) -> usize {
+        (self.key_bin >> 16) as usize
+    }
+}
+
 /// Cells per axis of the grid: [`CELLS`] per diagonal of the scene's frame cover at most
 /// `CELLS + 1` along any axis.
 const AXIS: usize = CELLS as usize + 1;
@@ -270,7 +282,7 @@ pub(crate) struct SpatialGuides {
     frame: (DVec3, f64),
     cap: usize,
     /// Per cell of the grid ([`CELL_COUNT`], empty while nothing was learned): its guide's index
-    /// in `guides` ([`NONE`]: none) and its mean light (negative: no ray came from it).
+    /// in `guides` ([`NONE`]: none) and its mean light (negative: the cell learned nothing).
     cells: Vec<(u32, f32)>,
     guides: Vec<Guide>,
 }
@@ -284,12 +296,12 @@ impl SpatialGuides {
     /// The cell of a path vertex (p, n), if earlier rounds learned there.
     pub(crate) fn at(&self, p: DVec3, n: DVec3) -> Option<Cell<'_>> {
         let &(guide, light) = self.cells.get(cell_index(self.frame, p, n) as usize)?;
-        if guide == NONE && light < 0.0 {
+        if light < 0.0 {
             return None;
         }
         Some(Cell {
             guide: self.guides.get(guide as usize),
-            light: f64::from(light.max(0.0)),
+            light: f64::from(light),
         })
     }
 
@@ -367,10 +379,10 @@ impl SpatialLearner {
     /// do not depend on the thread count).
     pub(crate) fn learn(&mut self, records: &[Record]) {
         for r in records {
-            let cell = self.cell(r.key_bin & 0xffff);
+            let cell = self.cell(r.cell());
             cell.count += 1.0;
             if r.value > 0.0 && r.value.is_finite() {
-                cell.bins[(r.key_bin >> 16) as usize] += f64::from(r.value);
+                cell.bins[r.bin()] += f64::from(r.value);
             }
             let light = &mut self.cell(u32::from(r.hit)).light;
             light.1 += 1.0;

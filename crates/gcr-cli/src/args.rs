@@ -124,8 +124,8 @@ pub struct SolveArgs {
     pub share_paths: u32,
     /// `--gather paths` to a target error: draw the cosine rays of the points and of their paths'
     /// bounces from guides learned from earlier rounds (a defensive mixture with the cosine
-    /// density: unbiased). auto: when the pilot round predicts hard light (at least 16 384 rays per
-    /// point to the target); docs/design/estimator.md, "Guiding".
+    /// density: unbiased). auto: when the pilot round finds hard light (at least 8 192 rays per
+    /// point to the target, each varying by more than 0.7 of the mean); docs/design/estimator.md, "Guiding".
     #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value = "auto", value_parser = ["auto", "on", "off"])]
     pub guiding: String,
     /// Train the shading network and build its base even when the gather does not read it

@@ -95,17 +95,35 @@ pub enum Guiding {
     Off,
     /// From the first round on.
     On,
-    /// When the pilot round predicts at least [`GUIDING_FROM`] rays per point to the target
-    /// (hard indirect light: guides need rounds to learn, and cost time per ray); otherwise
-    /// exactly `Off`.
+    /// When the pilot round finds hard light ([`Guiding::pays`]: at least [`GUIDING_FROM`] rays
+    /// per point predicted to the target, at a relative variance per ray of at least
+    /// [`GUIDING_VARIANCE`]); otherwise exactly `Off`.
     #[default]
     Auto,
 }
 
 /// Rays per point to the target, predicted by the pilot round, from which `Guiding::Auto`
-/// guides: the door-gap room (65 536) gained 1.6× in rays per second guided, while scenes that
-/// need 512–4 096 rays per point took 1.5–4.9× as long (docs/design/estimator.md, "Guiding").
-pub const GUIDING_FROM: usize = 16_384;
+/// guides: guides learn over rounds, and a guided ray costs about twice an unguided one. The
+/// uplight room's work plane, predicted 3 775 rays to 2 %, took 1.32× as long guided, predicted
+/// 15 098 to 1 %, 0.75×; under the sun patch room's ceiling, predicted 15 574 to 2 %, 0.52×
+/// (docs/design/estimator.md, "Guiding").
+pub const GUIDING_FROM: usize = 8_192;
+
+/// The relative variance of one ray's estimate (the pilot's squared relative error × its rays,
+/// Σσ²/ΣB² per ray) from which `Guiding::Auto` guides: below it cosine sampling already finds
+/// the light (a relative deviation per ray under 0.7) and guides, at twice the cost of a ray,
+/// cannot win the factor of two back. The Cornell box (0.026 per ray) to 0.12 % took 1.95× as
+/// long guided although it needs 8 192 rays; the many-rooms work planes (0.15) to 1 % 1.71×;
+/// the uplight room (1.5), the sun patch room's ceiling (6.2) and the door gap gain.
+pub const GUIDING_VARIANCE: f64 = 0.5;
+
+impl Guiding {
+    /// Whether `Auto` guides after a pilot round of `rays` rays per point whose error's upper
+    /// bound is `bound` and that predicts `needed` rays per point to the target.
+    pub fn pays(rays: usize, bound: f64, needed: usize) -> bool {
+        needed >= GUIDING_FROM && rays as f64 * bound * bound >= GUIDING_VARIANCE
+    }
+}
 
 impl std::str::FromStr for Guiding {
     type Err = ConfigError;

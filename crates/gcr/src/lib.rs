@@ -58,9 +58,9 @@ mod spatial;
 mod weld;
 
 pub use config::{
-    BaseDomain, Breaking, ConfigError, GUIDING_FROM, GatherMode, GatherSamples, Guiding,
-    NetworkTarget, OutputFit, PILOT_RAYS, PathSettings, Quality, Shard, SolveConfig, StrengthFrom,
-    SurfaceClusters, Transfer,
+    BaseDomain, Breaking, ConfigError, GUIDING_FROM, GUIDING_VARIANCE, GatherMode, GatherSamples,
+    Guiding, NetworkTarget, OutputFit, PILOT_RAYS, PathSettings, Quality, Shard, SolveConfig,
+    StrengthFrom, SurfaceClusters, Transfer,
 };
 pub use domain::{Domain, Ray};
 pub use element::{BANDS, Bands};

@@ -142,7 +142,7 @@ pub struct Metrics {
     /// (with a target error, the rounds' sum); 0 for the base and kernel gathers.
     pub gather_rays: usize,
     /// Whether the paths gather guided its rays (`--guiding`: `auto`, the default, guides when
-    /// the pilot round predicts at least `GUIDING_FROM` rays per point to the target).
+    /// the pilot round finds hard light, `Guiding::pays`).
     pub guided: bool,
     /// Energy balance of the final projection: the reflected power of the projected kernel,
     /// ∫_S B_refl, over the power the shot samples carry (their Monte-Carlo estimate of the same

@@ -89,16 +89,42 @@ fn guided_and_unguided_agree_in_the_cornell_box() {
     }
 }
 
-/// `Guiding::Auto` on a scene the pilot round finds easy (the Cornell box to 2 %, far below
-/// `GUIDING_FROM` rays per point) is exactly `Off`: the same bits.
+/// `Guiding::Auto` on a scene the pilot round finds easy is exactly `Off`: the same bits. The
+/// Cornell box to 2 % (far below `GUIDING_FROM` rays per point), and to 0.1 %, where the pilot
+/// predicts more than `GUIDING_FROM` rays but each ray varies little (below `GUIDING_VARIANCE`:
+/// guided it took twice as long).
 #[test]
 fn automatic_guiding_leaves_an_easy_scene_alone() {
     let scene = builtin("cornell-box").unwrap().into_3d().unwrap();
-    let (a, b) = (
-        gather(&scene, 200, 0.02, (Guiding::Auto, 1)),
-        gather(&scene, 200, 0.02, (Guiding::Off, 1)),
-    );
-    assert!(a.iter().zip(&b).all(|(p, q)| p.radiosity == q.radiosity));
+    for target in [0.02, 0.001] {
+        let (a, b) = (
+            gather(&scene, 200, target, (Guiding::Auto, 1)),
+            gather(&scene, 200, target, (Guiding::Off, 1)),
+        );
+        assert!(a.iter().all(|p| !p.guided));
+        assert!(a.iter().zip(&b).all(|(p, q)| p.radiosity == q.radiosity));
+    }
+}
+
+/// The decision's two conditions ([`Guiding::pays`]): enough rays predicted and enough variance
+/// per ray, each alone not enough.
+#[test]
+fn guiding_pays_for_many_rays_of_hard_light_only() {
+    // the pilot's 64 rays: a relative error of 0.3 (6 per ray), 0.02 (0.026 per ray)
+    assert!(Guiding::pays(64, 0.3, gcr::GUIDING_FROM));
+    assert!(!Guiding::pays(64, 0.3, gcr::GUIDING_FROM - 1));
+    assert!(!Guiding::pays(64, 0.02, 20 * gcr::GUIDING_FROM));
+    let v = gcr::GUIDING_VARIANCE;
+    assert!(Guiding::pays(
+        64,
+        (v / 64.0).sqrt() * 1.01,
+        gcr::GUIDING_FROM
+    ));
+    assert!(!Guiding::pays(
+        64,
+        (v / 64.0).sqrt() * 0.99,
+        gcr::GUIDING_FROM
+    ));
 }
 
 /// Guided rounds give the same bits on one thread or three: the guides are learned from every

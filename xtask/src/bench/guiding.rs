@@ -152,9 +152,18 @@ fn agreement(a: &[Gathered], b: &[Gathered]) -> f64 {
 /// Runs this group and writes `benchmarks-guiding.md` into `ctx.out`.
 pub fn run_group(ctx: &Ctx) -> Result<()> {
     let targets: &[f64] = if ctx.quick { &[0.05] } else { &[0.02, 0.01] };
+    // `GUIDING_MODE=on`: the guided column forced on (what `GUIDING_FROM` is chosen by) instead
+    // of the default `auto`; `GUIDING_PEERS=off`: no peer rows
+    let forced = std::env::var("GUIDING_MODE").is_ok_and(|m| m == "on");
+    let (mode, label) = if forced {
+        (Guiding::On, "on")
+    } else {
+        (Guiding::Auto, "auto")
+    };
+    let peers = std::env::var("GUIDING_PEERS").map_or(true, |p| p != "off");
     let mut skipped: Vec<String> = Vec::new();
-    let mut md = String::from(
-        "| scene, points | target | unguided: s, rays/point, est. error | guided (auto): s, rays/point, est. error | time guided / unguided | Σd²/Σσ² |\n|---|---:|---|---|---:|---:|\n",
+    let mut md = format!(
+        "| scene, points | target | unguided: s, rays/point, est. error | guided ({label}): s, rays/point, est. error | time guided / unguided | Σd²/Σσ² |\n|---|---:|---|---|---:|---:|\n"
     );
     // `GUIDING_CASES=door,sun`: only the cases whose names contain one of these
     let only = std::env::var("GUIDING_CASES").ok();
@@ -164,7 +173,7 @@ pub fn run_group(ctx: &Ctx) -> Result<()> {
     for case in cases(ctx.quick)?.into_iter().filter(|c| wanted(c.name)) {
         for &target in targets {
             let (off, t_off) = run(&case.scene, &case.points, target, Guiding::Off)?;
-            let (auto, t_auto) = run(&case.scene, &case.points, target, Guiding::Auto)?;
+            let (auto, t_auto) = run(&case.scene, &case.points, target, mode)?;
             let describe = |g: &[Gathered], t: f64| {
                 let rays = g.iter().map(|x| x.rays).max().unwrap_or(0);
                 let e = gcr::relative_std_error(g).unwrap_or(0.0);
@@ -183,7 +192,7 @@ pub fn run_group(ctx: &Ctx) -> Result<()> {
             )?;
             println!("guiding: {} at {:.0} % done", case.name, 100.0 * target);
         }
-        if let Some(emitter) = &case.mitsuba {
+        if let Some(emitter) = case.mitsuba.as_ref().filter(|_| peers) {
             for peer in [
                 Peer::Mitsuba,
                 Peer::Cycles { guided: false },
@@ -202,7 +211,7 @@ pub fn run_group(ctx: &Ctx) -> Result<()> {
          {threads} rayon threads, one run each. Irradiance (`--probe-quantity irradiance`) at \
          grids of points by the default paths gather to each target: unguided (`--guiding off`) \
          and with the program's default `--guiding auto`, which guides when the pilot round \
-         predicts at least 16 384 rays per point to the target and is otherwise exactly \
+         finds hard light (at least 8 192 rays per point predicted to the target at a relative variance of at least 0.5 per ray, `Guiding::pays`) and is otherwise exactly \
          unguided (same bits, same time up to noise). The scenes: `scenes/door-gap.obj`, \
          `scenes/sun-patch-room.obj`, `scenes/uplight-room.obj` with their lighting files, \
          `scenes/many-rooms.obj` (its lamps are emitting faces; `xtask/py/make_light_scenes.py`), \
@@ -217,7 +226,8 @@ pub fn run_group(ctx: &Ctx) -> Result<()> {
          `xtask/py/cycles_irradiance.py`, run under `CYCLES_PYTHON`); their own relative error \
          at that time, and the time they would take to 2 % and 1 % if the error falls as \
          1/√spp (extrapolated, not run). `GUIDING_CASES=door,sun` runs only the cases whose \
-         names contain one of the words. \
+         names contain one of the words; `GUIDING_MODE=on` forces the guided column on \
+         (`--guiding on`), `GUIDING_PEERS=off` leaves the peers out. \
          Design and what was tried: docs/design/estimator.md, \"Guiding\".\n\n{md}{note}",
         quick = if ctx.quick { " --quick" } else { "" },
         threads = rayon::current_num_threads(),

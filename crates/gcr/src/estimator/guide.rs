@@ -425,7 +425,7 @@ impl SpatialLearner {
 }
 
 impl GroupGuide {
-    /// Ends a round: the next one is guided by everything learned so far.
+    /// Starts a round: it is guided by everything the earlier rounds learned.
     pub(crate) fn next_round(&mut self) {
         self.guide = self.learner.guide();
     }

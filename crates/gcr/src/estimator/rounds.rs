@@ -593,8 +593,33 @@ mod tests {
         assert!(chi2_lower(1) < 0.0158);
     }
 
-    /// A round that meets the target part-way stops there: synthetic points whose estimate has
-    /// relative variance 1 per ray (each replicate's value 1 ± √(2/rays), the sign a hash) to
+    /// A synthetic estimate of B = 1 at point `i` over `rays` rays of relative variance 1 per
+    /// ray: each replicate's value 1 ± √(2/rays), the sign a hash of `i`, `key` and the replicate.
+    fn synthetic(i: usize, key: usize, rays: usize) -> PointEstimate {
+        let mut share = [[0.0; BANDS]; REPLICATES];
+        for (r, s) in share.iter_mut().enumerate() {
+            // SplitMix64's finalizer
+            let mut z = ((i as u64) << 32) ^ ((key as u64) << 4) ^ r as u64;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            let sign = if (z ^ (z >> 31)) % 2 == 0 { 1.0 } else { -1.0 };
+            *s = [(1.0 + sign * (2.0 / rays as f64).sqrt()) / REPLICATES as f64; BANDS];
+        }
+        PointEstimate {
+            share,
+            replicates: REPLICATES,
+            rays,
+            reflects: true,
+            ..PointEstimate::default()
+        }
+    }
+
+    const PILOT: GatherSamples = GatherSamples {
+        direct: 64,
+        indirect: 64,
+    };
+
+    /// A round that meets the target part-way stops there: 1 000 [`synthetic`] points to
     /// 1.45 %. The doubling rounds go 64, 256, 1 024, 4 096 rays per point (bound ≈ 1.64 % there)
     /// and then a round to 8 192 in two parts of [`PART`] per replicate: the first part ends at
     /// 6 144 rays (bound ≈ 1.34 %) and the rounds stop; the parts continue the sequence where the
@@ -603,44 +628,18 @@ mod tests {
     fn a_round_stops_at_the_part_that_meets_the_target() {
         let n = 1000;
         let calls = std::sync::Mutex::new(Vec::new());
-        let sign = |i: usize, first: usize, r: usize| {
-            // SplitMix64's finalizer
-            let mut z = ((i as u64) << 32) ^ ((first as u64) << 4) ^ r as u64;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            if (z ^ (z >> 31)) % 2 == 0 { 1.0 } else { -1.0 }
-        };
         let estimate = |g: &[usize], first: usize, samples: GatherSamples, part: Option<usize>| {
             assert!(part.is_none(), "unguided rounds");
             calls.lock().unwrap().push((first, samples.indirect));
             let rays = samples.indirect;
-            (g.iter())
-                .map(|&i| {
-                    let mut share = [[0.0; BANDS]; REPLICATES];
-                    for (r, s) in share.iter_mut().enumerate() {
-                        let value = 1.0 + sign(i, first, r) * (2.0 / rays as f64).sqrt();
-                        *s = [value / REPLICATES as f64; BANDS];
-                    }
-                    PointEstimate {
-                        share,
-                        replicates: REPLICATES,
-                        rays,
-                        reflects: true,
-                        ..PointEstimate::default()
-                    }
-                })
-                .collect()
-        };
-        let pilot = GatherSamples {
-            direct: 64,
-            indirect: 64,
+            g.iter().map(|&i| synthetic(i, first, rays)).collect()
         };
         let bound = |g: &[Gathered], dof: usize| error_bound(g, dof);
         let g = rounds_to_target(
             n,
             &singletons(n),
             estimate,
-            (pilot, None),
+            (PILOT, None),
             (0.0145, &bound),
             (1 << 20, Guiding::Off),
         );
@@ -652,5 +651,45 @@ mod tests {
             starts,
             [(0, 64), (32, 192), (128, 768), (512, 3072), (2048, 2048)]
         );
+    }
+
+    /// Guided rounds in parts: every part of a round names the round by the same `first` and
+    /// continues the round's own sequence (offsets 0, [`PART`], 2·[`PART`], … per replicate), at
+    /// least one round of [`synthetic`] points to 0.4 % runs in parts, and a point's rays are the
+    /// sum of the parts run.
+    #[test]
+    fn guided_rounds_continue_their_own_sequence_in_parts() {
+        let n = 1000;
+        let calls = std::sync::Mutex::new(Vec::new());
+        let estimate = |g: &[usize], first: usize, samples: GatherSamples, part: Option<usize>| {
+            let part = part.expect("guided rounds");
+            calls.lock().unwrap().push((first, part, samples.indirect));
+            let key = first * (1 << 20) + part;
+            g.iter()
+                .map(|&i| synthetic(i, key, samples.indirect))
+                .collect()
+        };
+        let bound = |g: &[Gathered], dof: usize| error_bound(g, dof);
+        let g = rounds_to_target(
+            n,
+            &singletons(n),
+            estimate,
+            (PILOT, None),
+            (0.004, &bound),
+            (1 << 20, Guiding::On),
+        );
+        assert!(error_bound(&g, n).unwrap() <= 0.004);
+        let mut calls: Vec<(usize, usize, usize)> = calls.into_inner().unwrap();
+        calls.dedup();
+        let mut parted = false;
+        for round in calls.chunk_by(|a, b| a.0 == b.0) {
+            for (k, &(_, offset, rays)) in round.iter().enumerate() {
+                assert_eq!(offset, k * PART, "{calls:?}");
+                assert!(round.len() == 1 || rays == PART * REPLICATES, "{calls:?}");
+            }
+            parted |= round.len() > 1;
+        }
+        assert!(parted, "{calls:?}");
+        assert_eq!(g[0].rays, calls.iter().map(|c| c.2).sum::<usize>());
     }
 }

@@ -125,7 +125,7 @@ pub struct SolveArgs {
     /// `--gather paths` to a target error: draw the cosine rays of the points and of their paths'
     /// bounces from guides learned from earlier rounds (a defensive mixture with the cosine
     /// density: unbiased). auto: when the pilot round finds hard light (at least 8 192 rays per
-    /// point to the target, each varying by more than 0.7 of the mean); docs/design/estimator.md, "Guiding".
+    /// point to the target, each varying by more than 1.7 times the mean); docs/design/estimator.md, "Guiding".
     #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value = "auto", value_parser = ["auto", "on", "off"])]
     pub guiding: String,
     /// Train the shading network and build its base even when the gather does not read it

@@ -103,19 +103,21 @@ pub enum Guiding {
 }
 
 /// Rays per point to the target, predicted by the pilot round, from which `Guiding::Auto`
-/// guides: guides learn over rounds, and a guided ray costs about twice an unguided one. The
-/// uplight room's work plane, predicted 3 775 rays to 2 %, took 1.32× as long guided, predicted
-/// 15 098 to 1 %, 0.75×; under the sun patch room's ceiling, predicted 15 574 to 2 %, 0.52×
-/// (docs/design/estimator.md, "Guiding").
+/// guides: guides learn over rounds, and a guided ray costs up to twice an unguided one. Under
+/// the sun patch room's ceiling, predicted 15 574 rays to 2 %, guiding took 0.82× the time
+/// (docs/design/estimator.md, "Guiding"); scenes predicted below a few thousand rays lost
+/// 1.3–1.8× (uplight room to 2 %: 3 775 predicted, 1.32×).
 pub const GUIDING_FROM: usize = 8_192;
 
 /// The relative variance of one ray's estimate (the pilot's squared relative error × its rays,
-/// Σσ²/ΣB² per ray) from which `Guiding::Auto` guides: below it cosine sampling already finds
-/// the light (a relative deviation per ray under 0.7) and guides, at twice the cost of a ray,
-/// cannot win the factor of two back. The Cornell box (0.026 per ray) to 0.12 % took 1.95× as
-/// long guided although it needs 8 192 rays; the many-rooms work planes (0.15) to 1 % 1.71×;
-/// the uplight room (1.5), the sun patch room's ceiling (6.2) and the door gap gain.
-pub const GUIDING_VARIANCE: f64 = 0.5;
+/// Σσ²/ΣB² per ray) from which `Guiding::Auto` guides: below it cosine sampling finds the light
+/// well enough that guides, at up to twice the cost of a ray and with rounds spent learning,
+/// do not win it back against unguided rounds that stop at the part that meets the target
+/// (`estimator::rounds`; guided rounds run whole). The Cornell box (0.026 per ray) to 0.12 %
+/// took 1.95× as long guided although it needs 8 192 rays; the many-rooms work planes (0.15) to
+/// 1 % 1.71×; the uplight room (1.5) to 1 % 1.45× (3.4 s against 2.3 s); the sun patch room's
+/// ceiling (6.2) gains, 0.82× to 2 % and 0.85× to 1 %, and the door gap, far above, 0.48× to 2 %.
+pub const GUIDING_VARIANCE: f64 = 3.0;
 
 impl Guiding {
     /// Whether `Auto` guides after a pilot round of `rays` rays per point whose error's upper

@@ -211,7 +211,7 @@ pub fn run_group(ctx: &Ctx) -> Result<()> {
          {threads} rayon threads, one run each. Irradiance (`--probe-quantity irradiance`) at \
          grids of points by the default paths gather to each target: unguided (`--guiding off`) \
          and with the program's default `--guiding auto`, which guides when the pilot round \
-         finds hard light (at least 8 192 rays per point predicted to the target at a relative variance of at least 0.5 per ray, `Guiding::pays`) and is otherwise exactly \
+         finds hard light (at least 8 192 rays per point predicted to the target at a relative variance of at least 3 per ray, `Guiding::pays`) and is otherwise exactly \
          unguided (same bits, same time up to noise). The scenes: `scenes/door-gap.obj`, \
          `scenes/sun-patch-room.obj`, `scenes/uplight-room.obj` with their lighting files, \
          `scenes/many-rooms.obj` (its lamps are emitting faces; `xtask/py/make_light_scenes.py`), \

@@ -425,7 +425,7 @@ impl SpatialLearner {
 }
 
 impl GroupGuide {
-    /// Starts a round: it is guided by everything the earlier rounds learned.
+    /// Ends a round: the next one is guided by everything learned so far.
     pub(crate) fn next_round(&mut self) {
         self.guide = self.learner.guide();
     }

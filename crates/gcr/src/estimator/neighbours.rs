@@ -268,18 +268,17 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
     /// path shared by all members. One estimate per member, in order; a group of one is the lone
     /// gather ([`PathGather::estimate`], [`PathGather::estimate_irradiance`]).
     ///
-    /// `guiding`: the group's guide across rounds, the round's spatial guides
-    /// ([`super::guide`]) and where this part of the round starts in the round's own sequence
-    /// (per replicate; `first` then names the round): this round's cosine rays are drawn from the
-    /// group's guide (a group of one too), its paths' bounces from their cells' guides, and every
-    /// ray is learned from for the next round; `None` unguided.
+    /// `guiding`: the group's guide across rounds and the round's spatial guides
+    /// ([`super::guide`]): this round's cosine rays are drawn from the group's guide (a group of
+    /// one too), its paths' bounces from their cells' guides, and every ray is learned from for
+    /// the next round; `None` unguided.
     pub(crate) fn estimate_group(
         &self,
         members: &[(DVec3, DVec3, u32)],
         material: &[(Bands, Bands)],
         seeds: &[u64],
         (first, samples): (usize, GatherSamples),
-        guiding: Option<(&mut GroupGuide, &SpatialGuides, usize)>,
+        guiding: Option<(&mut GroupGuide, &SpatialGuides)>,
     ) -> Vec<PointEstimate> {
         let alone = |k: usize| {
             let (p, n, face) = members[k];
@@ -299,21 +298,19 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
         // ⟨Guided rounds: each round its own scrambling, from index 0. A round's guide was
         // learned from the earlier rounds' points, and later points of one scrambled sequence
         // fill the gaps the earlier ones left: not independent of the guide (measured: +1 % in
-        // the furnace). Independent scramblings make each round unbiased given its guide; a
-        // round's later parts continue its sequence with the same guides.⟩
+        // the furnace). Independent scramblings make each round unbiased given its guide.⟩
         let mut first = first;
         let round_seeds: Vec<u64>;
-        let seeds = if let Some((_, _, offset)) = guiding {
+        let seeds = if guiding.is_some() {
             let round = (first as u64 + 1).wrapping_mul(0xA076_1D64_78BD_642F);
             round_seeds = seeds.iter().map(|s| s ^ round).collect();
-            (_, first_c) = cosine_share(members.len(), n_c, offset, replicates);
-            first = offset;
+            (first, first_c) = (0, 0);
             &round_seeds[..]
         } else {
             seeds
         };
         let (guide, learner, spatial) = match guiding {
-            Some((g, spatial, _)) => (
+            Some((g, spatial)) => (
                 g.guide.as_ref(),
                 Some(&mut g.learner),
                 Some((spatial, &mut g.records)),

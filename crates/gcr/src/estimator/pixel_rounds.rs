@@ -91,7 +91,7 @@ pub(crate) fn allocated_rounds(
         return rounds_to_target(
             n,
             &singletons(n),
-            |g: &[usize], first, samples: GatherSamples, _part| {
+            |g: &[usize], first, samples: GatherSamples, _guided| {
                 vec![estimate(g[0], first, samples.direct)]
             },
             (samples, Some(pilot_estimates)),

@@ -104,7 +104,7 @@ pub enum Guiding {
 
 /// Rays per point to the target, predicted by the pilot round, from which `Guiding::Auto`
 /// guides: guides learn over rounds, and a guided ray costs up to twice an unguided one. Under
-/// the sun patch room's ceiling, predicted 15 574 rays to 2 %, guiding took 0.82× the time
+/// the sun patch room's ceiling, predicted 15 574 rays to 2 %, guiding took 0.80× the time
 /// (docs/design/estimator.md, "Guiding"); scenes predicted below a few thousand rays lost
 /// 1.3–1.8× (uplight room to 2 %: 3 775 predicted, 1.32×).
 pub const GUIDING_FROM: usize = 8_192;
@@ -116,7 +116,7 @@ pub const GUIDING_FROM: usize = 8_192;
 /// (`estimator::rounds`; guided rounds run whole). The Cornell box (0.026 per ray) to 0.12 %
 /// took 1.95× as long guided although it needs 8 192 rays; the many-rooms work planes (0.15) to
 /// 1 % 1.71×; the uplight room (1.5) to 1 % 1.45× (3.4 s against 2.3 s); the sun patch room's
-/// ceiling (6.2) gains, 0.82× to 2 % and 0.85× to 1 %, and the door gap, far above, 0.48× to 2 %.
+/// ceiling (6.2) gains, 0.80× to 2 % and 0.83× to 1 %, and the door gap, far above, 0.47× to 2 %.
 pub const GUIDING_VARIANCE: f64 = 3.0;
 
 impl Guiding {

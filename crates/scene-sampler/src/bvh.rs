@@ -373,6 +373,12 @@ impl SceneBvh {
     pub fn primitive_count(&self) -> usize {
         self.bvh.primitive_count()
     }
+
+    /// The instructions the traversal tests eight child boxes with on this CPU: `"AVX"` (one
+    /// 256-bit register per bound) or `"SSE"` (two halves); the same hits either way.
+    pub fn node_test(&self) -> &'static str {
+        self.bvh.node_test()
+    }
 }
 
 /// The closest hit of a Flatland ray.

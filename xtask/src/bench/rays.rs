@@ -261,7 +261,11 @@ pub fn run(ctx: &Ctx) -> Result<()> {
                 println!("rays {name} {} {threads}: {row}", set.name);
             }
         }
-        writeln!(builds, "- {name}: our BVH built in {build:.2} s.")?;
+        writeln!(
+            builds,
+            "- {name}: our BVH built in {build:.2} s; its node test: {}.",
+            bvh.node_test()
+        )?;
     }
     std::fs::remove_dir_all(&dir).ok();
     md.push('\n');

@@ -387,10 +387,10 @@ fn next_weight(so_far: Option<f64>, next: &[PointEstimate]) -> Option<(f64, f64)
 /// ([`guided_rays_needed`]: the rounds are combined by their variances, [`next_weight`], so the
 /// pilot's and the first guides' worse rays count less than their number), else by the error so
 /// far — a quarter to twice those so far, a power of two per replicate below 1 024 and a
-/// multiple of 1 024 above (unions of balanced nets), at most the ray cap. Twice, not three
-/// times: a guided round runs whole and its guides improved since the round it is sized by, so a
-/// long step overshoots — the door gap's work plane to 2 % (2 000 points, seeds 1/2/3) took
-/// 16.6 / 18.4 / 20.2 s with three times (17 744 / 19 792 / 21 840 rays per point) and 16.8 /
+/// multiple of [`GUIDED_STEP`] above (unions of balanced nets), at most the ray cap. Twice, not
+/// three times: a guided round runs whole and its guides improved since the round it is sized
+/// by, so a long step overshoots — the door gap's work plane to 2 % (2 000 points, seeds 1/2/3)
+/// took 16.6 / 18.4 / 20.2 s with three times (17 744 / 19 792 / 21 840 rays per point) and 16.8 /
 /// 17.1 / 16.7 s with twice (17 744 each; 0.92× on the mean, each within 20 % of its estimated
 /// error against a 0.74 % reference); to 1 % the bench's work plane 41.7 s against 55.7 s
 /// (`cargo xtask bench --only guiding`); under the sun patch room's ceiling the same bits.
@@ -400,10 +400,20 @@ fn guided_round(missing: usize, rays: usize, max_rays: usize) -> usize {
     let per_round = if missing < 1024 {
         missing.next_power_of_two()
     } else {
-        missing.next_multiple_of(1024)
+        missing.next_multiple_of(GUIDED_STEP)
     };
     (per_round * REPLICATES).min(max_rays.saturating_sub(rays).max(REPLICATES))
 }
+
+/// The step of a guided round's points per replicate above 1 024 ([`guided_round`]): any multiple
+/// of 256 Sobol points from index 0 is a union of balanced nets of at least 256 points. It was
+/// 1 024, and the last round, rounded up to it, overshot: under the sun patch room's ceiling to
+/// 2 % (2 000 points, seeds 1/2/3, against a 0.37 % reference) 5 456 rays per point and 3.9 s for
+/// errors of 1.43 / 1.45 / 1.52 % (estimated 1.44 / 1.25 / 1.50 %); with 256 4 432 rays, 3.2 s,
+/// 1.66 / 1.71 / 1.53 % (estimated 1.68 / 1.64 / 1.67 %). The door gap to 2 %: 15.0 s against
+/// 14.8 s (17 744 against 17 232 rays); to 1 % under the ceiling (four seeds) 8.7 s against
+/// 8.5 s on the mean.
+const GUIDED_STEP: usize = 256;
 
 /// The rays a guided round needs so that the rounds combined by their variances meet `target`
 /// (an error's upper bound: the error itself at most target/`scale`): the rounds so far have
@@ -645,6 +655,20 @@ mod tests {
             starts,
             [(0, 64), (32, 192), (128, 768), (512, 3072), (2048, 2048)]
         );
+    }
+
+    /// A guided round: a quarter to twice the rays so far per replicate, a power of two below
+    /// 1 024 and a multiple of [`GUIDED_STEP`] above, at most the cap.
+    #[test]
+    fn guided_rounds_take_unions_of_balanced_nets() {
+        // 336 rays so far (168 per replicate): 100 missing, 50 per replicate → 64
+        assert_eq!(guided_round(100, 336, 1 << 20), 128);
+        // 1 360 so far (680): 3 115 missing → 1 558, at most 1 361 → 1 536 per replicate
+        assert_eq!(guided_round(3115, 1360, 1 << 20), 3072);
+        // 5 456 so far (2 728): 4 100 missing → 2 050 → 2 304 per replicate
+        assert_eq!(guided_round(4100, 5456, 1 << 20), 4608);
+        // the cap
+        assert_eq!(guided_round(1 << 20, 5456, 8192), 8192 - 5456);
     }
 
     /// Guided rounds run whole: each round of [`synthetic`] points to 0.4 % is one call (its own

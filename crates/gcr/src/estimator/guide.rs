@@ -155,21 +155,13 @@ fn invert(cdf: &[f64], u: f64) -> (usize, f64) {
     (i, f)
 }
 
-/// What a group has learned so far: per bin, Σ luminance(L)/q of the rays that fell in it, and
-/// how many rays (those that brought nothing too).
-#[derive(Clone, Debug)]
+/// What a group has learned so far: per bin, Σ luminance(L)/q of the rays that fell in it (empty
+/// until a ray brought light: a group that is never guided holds no bins), and how many rays
+/// (those that brought nothing too).
+#[derive(Clone, Debug, Default)]
 pub(crate) struct Learner {
     sums: Vec<f64>,
     rays: f64,
-}
-
-impl Default for Learner {
-    fn default() -> Self {
-        Self {
-            sums: vec![0.0; RES * RES],
-            rays: 0.0,
-        }
-    }
 }
 
 impl Learner {
@@ -177,22 +169,30 @@ impl Learner {
     pub(crate) fn add(&mut self, u: [f64; 2], q: f64, value: f64) {
         self.rays += 1.0;
         if value > 0.0 && value.is_finite() && q > 0.0 {
+            if self.sums.is_empty() {
+                self.sums = vec![0.0; RES * RES];
+            }
             self.sums[bin(u[0]) * RES + bin(u[1])] += value / q;
         }
     }
 
     /// The guide for the next round (`None` while nothing was found).
     pub(crate) fn guide(&self) -> Option<Guide> {
+        if self.sums.is_empty() {
+            return None;
+        }
         Guide::from_sums(&self.sums, self.rays)
     }
 }
 
 /// A group's guiding state across its rounds: the guide of the current round and what the
-/// rounds so far have learned.
+/// rounds so far have learned. About 80 bytes until the group learns (every group of a
+/// `--guiding auto` run has one before the pilot decides); [`GUIDED_GROUP_BYTES`] at most after.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct GroupGuide {
-    /// This round's guide (`None`: cosine rays, as in a pilot round).
-    pub(crate) guide: Option<Guide>,
+    /// This round's guide (`None`: cosine rays, as in a pilot round), boxed: 1.2 KB that only a
+    /// guided group needs.
+    pub(crate) guide: Option<Box<Guide>>,
     /// Every earlier round's rays.
     pub(crate) learner: Learner,
     /// This round's path vertices for the spatial guides (at most [`SpatialGuides::cap`]).
@@ -207,8 +207,31 @@ pub(crate) struct GroupGuide {
 /// are poor. The merge of the records is a pass over a dense array ([`CELL_COUNT`]); with a
 /// hash map it cost more than the extra records gained.
 const RECORDS_PER_GROUP: usize = 32_768;
-/// Path vertices all groups record per round, at most (128 MB), but at least 256 per group.
+/// Path vertices all groups record per round, at most (128 MB): a group records at most its
+/// share of them (at least one), so that 50 000 lone probes do not hold 256 each (205 MB, as they
+/// did).
 const RECORDS_PER_ROUND: usize = 1 << 23;
+
+/// Bytes one record takes.
+const RECORD_BYTES: usize = std::mem::size_of::<Record>();
+
+/// Bytes a guided group's [`GroupGuide`] takes at most besides its records: its boxed guide
+/// (1 160), its learner's bins (512) and the struct, with room for the allocator.
+const GUIDED_GROUP_BYTES: usize = 1_900;
+
+/// Bytes the spatial guides take at most besides the records: per cell of the grid its learned
+/// sums and its guide ([`CELL_COUNT`] × (536 + 1 160)), and the dense index of the cells.
+const SPATIAL_BYTES: usize = CELL_COUNT * (536 + 1_160 + 16);
+
+/// Bytes guiding adds at most to a gather of `groups` groups: their guides
+/// ([`GUIDED_GROUP_BYTES`]), the records of a round ([`RECORDS_PER_ROUND`]) and the spatial
+/// guides. 50 000 lone probes on the door gap: 231 MB measured over the unguided run's peak,
+/// 279 MB by this.
+pub(crate) fn guiding_bytes(groups: usize) -> u64 {
+    (groups as u64)
+        .saturating_mul(GUIDED_GROUP_BYTES as u64)
+        .saturating_add((RECORDS_PER_ROUND * RECORD_BYTES + SPATIAL_BYTES) as u64)
+}
 /// Spatial cells per diagonal of the scene (16; 32 left too few rays per cell).
 const CELLS: f64 = 16.0;
 
@@ -293,6 +316,18 @@ impl SpatialGuides {
         self.cap
     }
 
+    /// Keeps `record` in a group's `records` while they hold fewer than [`SpatialGuides::cap`]:
+    /// room for the cap at the first (growing by doubling, 50 000 lone probes' 167 records each
+    /// took room for 256).
+    pub(crate) fn keep(&self, records: &mut Vec<Record>, record: Record) {
+        if records.len() < self.cap {
+            if records.capacity() == 0 {
+                records.reserve_exact(self.cap);
+            }
+            records.push(record);
+        }
+    }
+
     /// The cell of a path vertex (p, n), if earlier rounds learned there.
     pub(crate) fn at(&self, p: DVec3, n: DVec3) -> Option<Cell<'_>> {
         let &(guide, light) = self.cells.get(cell_index(self.frame, p, n) as usize)?;
@@ -352,7 +387,7 @@ impl SpatialLearner {
     pub(crate) fn new(frame: (DVec3, f64), groups: usize) -> Self {
         Self {
             frame,
-            cap: (RECORDS_PER_ROUND / groups.max(1)).clamp(256, RECORDS_PER_GROUP),
+            cap: (RECORDS_PER_ROUND / groups.max(1)).clamp(1, RECORDS_PER_GROUP),
             slots: Vec::new(),
             sums: Vec::new(),
         }
@@ -427,7 +462,7 @@ impl SpatialLearner {
 impl GroupGuide {
     /// Ends a round: the next one is guided by everything learned so far.
     pub(crate) fn next_round(&mut self) {
-        self.guide = self.learner.guide();
+        self.guide = self.learner.guide().map(Box::new);
     }
 }
 

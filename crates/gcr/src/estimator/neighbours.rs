@@ -311,7 +311,7 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
         };
         let (guide, learner, spatial) = match guiding {
             Some((g, spatial)) => (
-                g.guide.as_ref(),
+                g.guide.as_deref(),
                 Some(&mut g.learner),
                 Some((spatial, &mut g.records)),
             ),

@@ -166,7 +166,10 @@ fn record_bounces(
                 l += (out[k] - after[k]) / b[k];
             }
         }
-        records.push(guides.record((v.p, v.n), u, q_g, l / BANDS as f64, (h.p, h.n)));
+        guides.keep(
+            records,
+            guides.record((v.p, v.n), u, q_g, l / BANDS as f64, (h.p, h.n)),
+        );
     }
 }
 
@@ -663,7 +666,10 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
                 && records.len() < g.cap()
             {
                 let l = (0..BANDS).map(|k| d[k] * qq + beyond[k]).sum::<f64>();
-                records.push(g.record((x.p, x.n), v, q_g, l / BANDS as f64, (h.p, h.n)));
+                g.keep(
+                    records,
+                    g.record((x.p, x.n), v, q_g, l / BANDS as f64, (h.p, h.n)),
+                );
             }
         }
         out

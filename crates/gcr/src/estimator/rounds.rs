@@ -3,7 +3,7 @@
 //! groups of neighbouring points that share paths; the error estimate and its χ² bound.
 
 use super::blocks::Blocks;
-use super::guide::{GroupGuide, SpatialGuides, SpatialLearner};
+use super::guide::{GroupGuide, SpatialGuides, SpatialLearner, guiding_bytes};
 use super::paths::{PathGather, PointEstimate, REPLICATES};
 use crate::config::{GatherSamples, Guiding, SolveConfig};
 use crate::domain::Domain;
@@ -94,6 +94,12 @@ pub(super) fn grouped_rounds(
     out
 }
 
+/// Whether the guides of `groups` groups ([`guiding_bytes`]) fit in `available` bytes (none: not
+/// known, they do).
+fn guides_fit(groups: usize, available: Option<u64>) -> bool {
+    available.is_none_or(|a| guiding_bytes(groups) <= a)
+}
+
 /// A block's points, its groups (indices into the points) and the points' seeds.
 type Block<'a> = (&'a [(DVec3, DVec3, u32)], &'a [Vec<usize>], &'a [u64]);
 
@@ -107,8 +113,16 @@ fn block_rounds(
     target: (f64, &ErrorBound<'_>),
     config: &SolveConfig,
 ) -> Vec<Gathered> {
-    // ⟨Guiding: each group's guide, learned from its earlier rounds (estimator/guide.rs)⟩
-    let guides: Vec<Mutex<GroupGuide>> = if config.paths.guiding != Guiding::Off {
+    // ⟨Guiding: each group's guide, learned from its earlier rounds (estimator/guide.rs);
+    // `auto` only where the guides fit in the memory left (`--guiding on` was checked before the
+    // solve, `OutputPlan::check`)⟩
+    let guiding = match config.paths.guiding {
+        Guiding::Auto if !guides_fit(groups.len(), crate::output::memory::available_memory()) => {
+            Guiding::Off
+        }
+        g => g,
+    };
+    let guides: Vec<Mutex<GroupGuide>> = if guiding != Guiding::Off {
         groups.iter().map(|_| Mutex::default()).collect()
     } else {
         Vec::new()
@@ -158,7 +172,7 @@ fn block_rounds(
         },
         (config.gather_samples, None),
         target,
-        (config.paths.max_rays, config.paths.guiding),
+        (config.paths.max_rays, guiding),
     )
 }
 
@@ -654,6 +668,18 @@ mod tests {
         assert_eq!(
             starts,
             [(0, 64), (32, 192), (128, 768), (512, 3072), (2048, 2048)]
+        );
+    }
+
+    /// `--guiding auto` guides only where its guides fit: 50 000 groups need about 280 MB.
+    #[test]
+    fn automatic_guiding_needs_the_memory_of_its_guides() {
+        assert!(guides_fit(50_000, None));
+        assert!(guides_fit(50_000, Some(300 << 20)));
+        assert!(!guides_fit(50_000, Some(200 << 20)));
+        assert!(
+            !guides_fit(10, Some(100 << 20)),
+            "the records' and cells' 185 MB"
         );
     }
 

@@ -18,7 +18,11 @@
 //! - **probes** (and any points the paths gather runs to a target): per point its placement, its
 //!   group, its seeds, its estimates and the rounds' state: [`PROBE_BYTES`] = 1 152, over the
 //!   861–994 bytes a probe measured (Cornell box, 5 000 → 25 000 and 20 000 → 100 000 probes,
-//!   radiosity and irradiance, peak RSS from the metrics).
+//!   radiosity and irradiance, peak RSS from the metrics); 1 220 for 50 000 lone probes
+//!   (`--share-paths 1`) on the door gap, unguided or `--guiding auto` left unguided (2 980
+//!   before a group's guide took memory only once guided). With `--guiding on`, the guides
+//!   of as many groups as probes, a round's records and the spatial guides on top
+//!   (`estimator::guide::guiding_bytes`; `auto` guides only where they fit, in the rounds).
 //!
 //! The machine's memory is Linux's `MemAvailable`, lowered to a cgroup v2 limit when one is set
 //! (containers, CI runners); elsewhere nothing is checked.
@@ -62,13 +66,16 @@ pub const PROBE_BYTES: u64 = 1152;
 #[derive(Debug, thiserror::Error)]
 #[error(
     "{probes} probes: about {} at the gather's peak, more than the {} available: split them \
-     over machines (--block-points and --shard, docs/guide/probes.md) or give fewer",
+     over machines (--block-points and --shard, docs/guide/probes.md) or give fewer{}",
     gib(*needed),
-    gib(*available)
+    gib(*available),
+    if *guided { ", or leave guiding to --guiding auto (it guides only where the guides fit)" } else { "" }
 )]
 pub struct TooManyProbes {
     /// The probes.
     pub probes: usize,
+    /// Whether their guides (`--guiding on`) are counted.
+    pub guided: bool,
     /// Bytes they would take.
     pub needed: u64,
     /// Bytes available.
@@ -78,12 +85,17 @@ pub struct TooManyProbes {
 /// Refuses `probes` probes that would take more than `available` bytes (none: no check).
 pub(crate) fn check_probe_memory(
     probes: usize,
+    guided: bool,
     available: Option<u64>,
 ) -> Result<(), TooManyProbes> {
-    let needed = (probes as u64).saturating_mul(PROBE_BYTES);
+    let mut needed = (probes as u64).saturating_mul(PROBE_BYTES);
+    if guided && probes > 0 {
+        needed = needed.saturating_add(crate::estimator::guide::guiding_bytes(probes));
+    }
     match available {
         Some(available) if needed > available => Err(TooManyProbes {
             probes,
+            guided,
             needed,
             available,
         }),
@@ -202,15 +214,21 @@ mod tests {
 
     #[test]
     fn probes_beyond_memory_are_refused() {
-        assert!(check_probe_memory(1_000_000, Some(2 << 30)).is_ok());
-        let err = check_probe_memory(10_000_000, Some(2 << 30)).unwrap_err();
+        assert!(check_probe_memory(1_000_000, false, Some(2 << 30)).is_ok());
+        let err = check_probe_memory(10_000_000, false, Some(2 << 30)).unwrap_err();
         assert_eq!(err.needed, 11_520_000_000);
         let message = err.to_string();
         assert!(
             message.contains("10000000 probes: about 10.7 GiB") && message.contains("--shard"),
             "{message}"
         );
-        assert!(check_probe_memory(10_000_000, None).is_ok());
+        assert!(!message.contains("--guiding"), "{message}");
+        assert!(check_probe_memory(10_000_000, false, None).is_ok());
+        // guided: their guides count too
+        assert!(check_probe_memory(500_000, false, Some(1 << 30)).is_ok());
+        let err = check_probe_memory(500_000, true, Some(1 << 30)).unwrap_err();
+        assert!(err.needed > 1 << 30, "{}", err.needed);
+        assert!(err.to_string().contains("--guiding auto"), "{err}");
     }
 
     #[test]

@@ -8,7 +8,7 @@ use super::encode::{Format, format_of};
 use super::probes::{ProbeSettings, read_probes};
 use super::shards::{Kind, Merged, merge, merged_estimates};
 use super::staged::check_target;
-use crate::config::{GatherMode, SolveConfig};
+use crate::config::{GatherMode, Guiding, SolveConfig};
 use crate::domain::Domain;
 use crate::estimator::GatherError;
 use crate::gather::Gathered;
@@ -280,7 +280,8 @@ impl OutputPlan {
             let footprints = config.gather == GatherMode::Paths && !config.reads_networks();
             super::memory::check_image_memory(&self.images, footprints, available)?;
         }
-        super::memory::check_probe_memory(self.probes.len(), available)?;
+        let guided = config.gather == GatherMode::Paths && config.paths.guiding == Guiding::On;
+        super::memory::check_probe_memory(self.probes.len(), guided, available)?;
         Ok(())
     }
 

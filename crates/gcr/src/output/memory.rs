@@ -18,9 +18,10 @@
 //! - **probes** (and any points the paths gather runs to a target): per point its placement, its
 //!   group, its seeds, its estimates and the rounds' state: [`PROBE_BYTES`] = 1 152, over the
 //!   861–994 bytes a probe measured (Cornell box, 5 000 → 25 000 and 20 000 → 100 000 probes,
-//!   radiosity and irradiance, peak RSS from the metrics); 1 220 for 50 000 lone probes
-//!   (`--share-paths 1`) on the door gap, unguided or `--guiding auto` left unguided (2 980
-//!   before a group's guide took memory only once guided). With `--guiding on`, the guides
+//!   radiosity and irradiance, peak RSS from the metrics); about 1 040 for 50 000 lone probes
+//!   (`--share-paths 1`) on the door gap, unguided or `--guiding auto` left unguided (61 MB at
+//!   the peak less a 2 000-probe run's 9 MB; 2 800 before a group's guide took memory only
+//!   once guided). With `--guiding on`, the guides
 //!   of as many groups as probes, a round's records and the spatial guides on top
 //!   (`estimator::guide::guiding_bytes`; `auto` guides only where they fit, in the rounds).
 //!

@@ -115,9 +115,9 @@ fn block_rounds(
 ) -> Vec<Gathered> {
     // ⟨Guiding: each group's guide, learned from its earlier rounds (estimator/guide.rs);
     // `auto` only where the guides fit in the memory left (`--guiding on` was checked before the
-    // solve, `OutputPlan::check`)⟩
+    // solve, `OutputPlan::check_config`)⟩
     let guiding = match config.paths.guiding {
-        Guiding::Auto if !guides_fit(groups.len(), crate::output::memory::available_memory()) => {
+        Guiding::Auto if !guides_fit(groups.len(), crate::metrics::available_memory()) => {
             Guiding::Off
         }
         g => g,

@@ -29,6 +29,7 @@
 //! (containers, CI runners); elsewhere nothing is checked.
 
 use super::camera::{ImageMode, ImageSettings};
+pub use crate::metrics::available_memory;
 
 /// An image that would take more memory than is available.
 #[derive(Debug, thiserror::Error)]
@@ -114,26 +115,6 @@ pub fn image_bytes(settings: &ImageSettings, footprints: bool) -> u64 {
         ImageMode::Pixel => PIXEL_BYTES_PER_PIXEL * u64::from(settings.pixel_samples.max(1)),
     };
     pixels.saturating_mul(per_pixel)
-}
-
-/// The memory this process may still take: `MemAvailable`, at most what a cgroup v2 limit
-/// leaves; `None` where neither can be read.
-pub fn available_memory() -> Option<u64> {
-    let meminfo = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let kib = |key: &str| -> Option<u64> {
-        let line = meminfo.lines().find(|l| l.starts_with(key))?;
-        line.split_whitespace().nth(1)?.parse::<u64>().ok()
-    };
-    let available = kib("MemAvailable:")?.saturating_mul(1024);
-    let read = |p: &str| -> Option<u64> { std::fs::read_to_string(p).ok()?.trim().parse().ok() };
-    let cgroup = match (
-        read("/sys/fs/cgroup/memory.max"),
-        read("/sys/fs/cgroup/memory.current"),
-    ) {
-        (Some(max), Some(current)) => Some(max.saturating_sub(current)),
-        _ => None,
-    };
-    Some(cgroup.map_or(available, |c| c.min(available)))
 }
 
 /// Refuses an image of `settings` that would take more than `available` bytes (none: no check),

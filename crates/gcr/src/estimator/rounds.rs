@@ -637,17 +637,14 @@ mod tests {
         indirect: 64,
     };
 
-    /// A round that meets the target part-way stops there: 1 000 [`synthetic`] points to
-    /// 1.45 %. The doubling rounds go 64, 256, 1 024, 4 096 rays per point (bound ≈ 1.64 % there)
-    /// and then a round to 8 192 in two parts of [`PART`] per replicate: the first part ends at
-    /// 6 144 rays (bound ≈ 1.34 %) and the rounds stop; the parts continue the sequence where the
-    /// rays so far end (Sobol index 2 048, then 3 072 per replicate). Without parts: 8 192.
-    #[test]
-    fn a_round_stops_at_the_part_that_meets_the_target() {
+    /// The rounds of 1 000 [`synthetic`] points (64-ray pilot) to `target` with `guiding` (every
+    /// round guided for `On`, none for `Off`): their values and each call's (first Sobol index,
+    /// rays), in order, repeats of a round's groups removed.
+    fn synthetic_rounds(target: f64, guiding: Guiding) -> (Vec<Gathered>, Vec<(usize, usize)>) {
         let n = 1000;
         let calls = std::sync::Mutex::new(Vec::new());
         let estimate = |g: &[usize], first: usize, samples: GatherSamples, guided: bool| {
-            assert!(!guided, "unguided rounds");
+            assert_eq!(guided, guiding == Guiding::On);
             calls.lock().unwrap().push((first, samples.indirect));
             let rays = samples.indirect;
             g.iter().map(|&i| synthetic(i, first, rays)).collect()
@@ -658,13 +655,24 @@ mod tests {
             &singletons(n),
             estimate,
             (PILOT, None),
-            (0.0145, &bound),
-            (1 << 20, Guiding::Off),
+            (target, &bound),
+            (1 << 20, guiding),
         );
+        let mut calls: Vec<(usize, usize)> = calls.into_inner().unwrap();
+        calls.dedup();
+        (g, calls)
+    }
+
+    /// A round that meets the target part-way stops there: 1 000 [`synthetic`] points to
+    /// 1.45 %. The doubling rounds go 64, 256, 1 024, 4 096 rays per point (bound ≈ 1.64 % there)
+    /// and then a round to 8 192 in two parts of [`PART`] per replicate: the first part ends at
+    /// 6 144 rays (bound ≈ 1.34 %) and the rounds stop; the parts continue the sequence where the
+    /// rays so far end (Sobol index 2 048, then 3 072 per replicate). Without parts: 8 192.
+    #[test]
+    fn a_round_stops_at_the_part_that_meets_the_target() {
+        let (g, starts) = synthetic_rounds(0.0145, Guiding::Off);
         assert_eq!(g[0].rays, 6144);
-        assert!(error_bound(&g, n).unwrap() <= 0.0145);
-        let mut starts: Vec<(usize, usize)> = calls.into_inner().unwrap();
-        starts.dedup();
+        assert!(error_bound(&g, g.len()).unwrap() <= 0.0145);
         assert_eq!(
             starts,
             [(0, 64), (32, 192), (128, 768), (512, 3072), (2048, 2048)]
@@ -703,27 +711,8 @@ mod tests {
     /// a low estimate: 2.64 % measured against 1.83 % estimated; [`PARTS_FROM`].)
     #[test]
     fn guided_rounds_run_whole() {
-        let n = 1000;
-        let calls = std::sync::Mutex::new(Vec::new());
-        let estimate = |g: &[usize], first: usize, samples: GatherSamples, guided: bool| {
-            assert!(guided, "guided rounds");
-            calls.lock().unwrap().push((first, samples.indirect));
-            g.iter()
-                .map(|&i| synthetic(i, first, samples.indirect))
-                .collect()
-        };
-        let bound = |g: &[Gathered], dof: usize| error_bound(g, dof);
-        let g = rounds_to_target(
-            n,
-            &singletons(n),
-            estimate,
-            (PILOT, None),
-            (0.004, &bound),
-            (1 << 20, Guiding::On),
-        );
-        assert!(error_bound(&g, n).unwrap() <= 0.004);
-        let mut calls: Vec<(usize, usize)> = calls.into_inner().unwrap();
-        calls.dedup();
+        let (g, calls) = synthetic_rounds(0.004, Guiding::On);
+        assert!(error_bound(&g, g.len()).unwrap() <= 0.004);
         let firsts: std::collections::BTreeSet<usize> = calls.iter().map(|c| c.0).collect();
         assert_eq!(firsts.len(), calls.len(), "{calls:?}");
         assert!(

@@ -34,8 +34,10 @@
 //! traversals have a second copy compiled for AVX ([`Slab::test_avx`]: one 256-bit register per
 //! bound), chosen when the BVH is built by asking the CPU — the project's only `unsafe`: the two
 //! calls into that copy. The same bits either way (the test below runs both); on the `rays` bench
-//! the 10⁶-triangle incoherent rays went from 0.66–0.71× Embree's rays per second to 0.72–0.82× (three runs),
-//! as fast as the whole program compiled with `-C target-cpu=native` (0.73–0.77 in one run).
+//! the 10⁶-triangle incoherent rays went from 0.66–0.71× Embree's rays per second to 0.72–0.82×
+//! (three runs), as fast as the whole program compiled with `-C target-cpu=native` (0.73–0.77 in
+//! one run). Choosing the stack through a closure (`with_stack`, one function for both queries)
+//! lost 15–20 % of that: the traversal then stopped being inlined into the AVX copy.
 
 use crate::sample::prefetch;
 use glam::Vec3A;

@@ -46,11 +46,15 @@ impl RefineLimits {
 }
 
 /// Refines `tri` (module docs), `values[v]` being B at vertex `v`; `gather(points)` returns B at
-/// new vertices `(position, source face)`. Returns the refined triangulation and values.
+/// new vertices `(position, source face)`. `finest(p)`: no edge of a triangle whose centroid is
+/// `p` is split when its longest edge is at most this (nor below [`RefineLimits::min_edge`]); an
+/// image alone needs no edge shorter than a pixel or two where it is seen
+/// (`output::mesh::MeshExtent`). Returns the refined triangulation and values.
 pub fn refine<E>(
     mut tri: Triangulation,
     mut values: Vec<Gathered>,
     limits: RefineLimits,
+    finest: impl Fn(DVec3) -> f64,
     mut gather: impl FnMut(&[(DVec3, u32)]) -> Result<Vec<Gathered>, E>,
 ) -> Result<(Triangulation, Vec<Gathered>), E> {
     let budget = (tri.positions.len() as f64 * limits.max_growth) as usize;
@@ -74,7 +78,8 @@ pub fn refine<E>(
                     .max(p[1].distance(p[2]))
                     .max(p[2].distance(p[0]));
                 let spread = (hi - lo) / mean.max(floor);
-                (spread > limits.spread && longest > limits.min_edge).then_some((spread, t))
+                let finest = limits.min_edge.max(finest((p[0] + p[1] + p[2]) / 3.0));
+                (spread > limits.spread && longest > finest).then_some((spread, t))
             })
             .collect();
         if marked.is_empty() {
@@ -192,9 +197,13 @@ mod tests {
             max_growth: 100.0,
             min_edge: 0.0,
         };
-        let (tri, values) = refine(square.clone(), values, limits, |pts| {
-            Ok::<_, ()>(pts.iter().map(|(p, _)| g(b(*p))).collect())
-        })
+        let (tri, values) = refine(
+            square.clone(),
+            values,
+            limits,
+            |_| 0.0,
+            |pts| Ok::<_, ()>(pts.iter().map(|(p, _)| g(b(*p))).collect()),
+        )
         .unwrap();
         assert_eq!(tri.positions.len(), values.len());
         assert!(tri.triangles.len() > 20, "{}", tri.triangles.len());
@@ -239,8 +248,14 @@ mod tests {
         );
         // a uniform square is left alone
         let uniform: Vec<Gathered> = square.positions.iter().map(|_| g(1.0)).collect();
-        let (same, _) =
-            refine(square.clone(), uniform, limits, |_| Ok::<_, ()>(Vec::new())).unwrap();
+        let (same, _) = refine(
+            square.clone(),
+            uniform,
+            limits,
+            |_| 0.0,
+            |_| Ok::<_, ()>(Vec::new()),
+        )
+        .unwrap();
         assert_eq!(same.triangles, square.triangles);
     }
 }

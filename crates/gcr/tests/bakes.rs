@@ -188,12 +188,8 @@ fn bake(scene: &Scene) -> (Vec<u8>, Vec<Vertex>, Exposure) {
                 .position(|t| t.contains(&(v as u32)))
                 .unwrap();
             let f = mesh.face_of_triangle[t];
-            let face = &scene.faces[f as usize];
-            (
-                gcr::vertex_gather_point(face, mesh.positions[v]),
-                face.normal,
-                f,
-            )
+            let at = gcr::vertex_gather_point(scene, &bvh, f, mesh.positions[v]);
+            (at, scene.faces[f as usize].normal, f)
         })
         .collect();
     let again =
@@ -629,4 +625,56 @@ fn validate(files: &[PathBuf]) {
             );
         }
     }
+}
+
+/// A floor whose corner lies under a closed box standing on it: the corner vertex would gather
+/// the box's dark inside (a dark wedge across the floor in the image); it gathers just past the
+/// box's wall on the way to its face's centre instead, on the floor, and a free corner stays put.
+#[test]
+fn a_vertex_under_a_solid_gathers_where_its_face_comes_out() {
+    let dir = temp_dir("buried-corner");
+    // floor [0, 2]² at y = 0 facing up; a box [-0.1, 0.4] × [0, 0.5] × [-0.1, 0.4] over its
+    // corner at the origin (faces outward); a lamp above
+    let obj = "\
+mtllib m.mtl
+v 0 0 0\nv 2 0 0\nv 2 0 2\nv 0 0 2
+v -0.1 0 -0.1\nv 0.4 0 -0.1\nv 0.4 0 0.4\nv -0.1 0 0.4
+v -0.1 0.5 -0.1\nv 0.4 0.5 -0.1\nv 0.4 0.5 0.4\nv -0.1 0.5 0.4
+v 0.8 1.5 0.8\nv 1.2 1.5 0.8\nv 1.2 1.5 1.2\nv 0.8 1.5 1.2
+o floor\nusemtl white\nf 1 4 3\nf 1 3 2
+o box\nusemtl white
+f 5 6 7\nf 5 7 8
+f 9 12 11\nf 9 11 10
+f 5 9 10\nf 5 10 6
+f 6 10 11\nf 6 11 7
+f 7 11 12\nf 7 12 8
+f 8 12 9\nf 8 9 5
+o lamp\nusemtl lamp\nf 13 14 15\nf 13 15 16
+";
+    std::fs::write(dir.join("s.obj"), obj).unwrap();
+    std::fs::write(
+        dir.join("m.mtl"),
+        "newmtl white\nKd 0.7 0.7 0.7\nnewmtl lamp\nKd 0 0 0\nKe 5 5 5\n",
+    )
+    .unwrap();
+    let scene = scene_sampler::load_obj(dir.join("s.obj")).unwrap();
+    let bvh = SceneBvh::new(&scene);
+    let floor = (0..scene.faces.len() as u32)
+        .find(|&f| {
+            let face = &scene.faces[f as usize];
+            face.normal.y > 0.9 && face.v.iter().all(|v| v.y == 0.0) && face.area > 1.0
+        })
+        .expect("a floor triangle");
+    let face = &scene.faces[floor as usize];
+    let corner = face.v.iter().copied().find(|v| *v == DVec3::ZERO).unwrap();
+    let moved = gcr::vertex_gather_point(&scene, &bvh, floor, corner);
+    assert!(moved.y.abs() < 1e-9, "off the floor: {moved}");
+    assert!(
+        moved.x > 0.4 || moved.z > 0.4,
+        "still under the box: {moved}"
+    );
+    assert!(moved.length() < 0.7, "moved farther than the box: {moved}");
+    let free = face.v.iter().copied().find(|v| v.x == 2.0).unwrap();
+    let stays = gcr::vertex_gather_point(&scene, &bvh, floor, free);
+    assert!(stays.distance(free) < 1e-3, "a free corner moved: {stays}");
 }

@@ -8,6 +8,7 @@ use gcr::output::{
     render_linear, write_outputs,
 };
 use gcr::{Domain, Quality, SolveConfig, SolveOptions};
+use glam::DVec3;
 use scene_sampler::{KernelSampler, SceneBvh};
 use std::path::Path;
 use std::time::Instant;
@@ -126,4 +127,63 @@ fn images_as_numbers_are_the_exr_files() {
         assert_eq!(linear.camera_source, "scene");
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A mesh-mode image alone gathers B only on the faces its camera sees (and refines them no finer
+/// than its pixels): the picture is the whole output mesh's, within the gathers' noise.
+#[test]
+fn an_image_alone_shows_what_the_whole_mesh_shows() {
+    let scene = scene_sampler::builtin("cornell-box")
+        .unwrap()
+        .into_3d()
+        .unwrap();
+    let bvh = SceneBvh::new(&scene);
+    let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
+    let options = SolveOptions::default();
+    let config = options.config();
+    let trained = gcr::solve_for_outputs(&domain, &options, &config, false, &mut |_| {}).unwrap();
+    // a camera low over the floor, toward the tall block: the ceiling, the light and the block
+    // fronts facing away are not seen
+    let camera = gcr::output::PinholeCamera {
+        eye: DVec3::new(0.5, 0.15, 0.05),
+        target: DVec3::new(0.35, 0.05, 0.7),
+        up: DVec3::Y,
+        fov_y_degrees: 50.0,
+    };
+    let settings = ImageSettings {
+        width: 48,
+        height: 32,
+        camera: gcr::output::CameraChoice::Given(camera),
+        ..ImageSettings::default()
+    };
+    let seen = render_linear(&domain, &trained, &config, &settings).unwrap();
+    let (whole, _) = gcr::output_mesh(
+        &domain,
+        &trained,
+        &config,
+        gcr::RetriangulateLimits::default(),
+    )
+    .unwrap();
+    let exposure = gcr::output::Exposure { scale: 1.0 };
+    let reference = gcr::output::render_image(&whole, Some(&scene), &camera, &exposure, 48, 32, 2);
+    let pi = std::f64::consts::PI;
+    let (mut diff, mut total) = (0.0, 0.0);
+    for (l, r) in seen
+        .radiance
+        .radiance
+        .iter()
+        .zip(reference.pixels.chunks(3))
+    {
+        let a = exposure.srgb8([0, 1, 2].map(|c| f64::from(l[c]) * pi));
+        for c in 0..3 {
+            diff += (f64::from(a[c]) - f64::from(r[c])).abs();
+            total += f64::from(r[c]);
+        }
+    }
+    assert!(total > 0.0);
+    assert!(
+        diff / total < 0.05,
+        "the view's mesh differs from the whole mesh by {:.1} % of the image",
+        100.0 * diff / total
+    );
 }

@@ -5,7 +5,8 @@
 //! `lit` the share of rays that hit the front of a surface some light reaches (display brightness
 //! above 0: the outside walls of a closed building under no sky are front faces, but black), and
 //! three qualities each divided by its best value over the candidates — the mean display
-//! brightness of what the rays hit (from the solved radiosity and the exposure), the mean hit
+//! brightness of what the rays hit (B from a quick gather at the faces the candidates see,
+//! `output/camera_choice.rs`, and an exposure), the mean hit
 //! distance (a view across the room rather than at a wall), and the number of distinct surfaces
 //! seen — score = lit² · (½ + ⅙ · (brightness + distance + surfaces)). Candidates:
 //!
@@ -45,63 +46,84 @@ pub struct AutoCamera {
     pub score: f64,
 }
 
-/// The automatic camera for `scene` (see the module documentation). `brightness[f]` is the
-/// display brightness in [0, 1] of face `f` (0 for unlit faces); `aspect` = width / height;
-/// `fov`: the vertical field of view to use (default 40° outside, 60° inside).
-pub fn automatic_camera(
-    scene: &Scene,
-    bvh: &SceneBvh,
-    brightness: &[f64],
+/// The automatic camera's candidate views (module docs), each with whether it is inside:
+/// [`Candidates::faces_seen`] names the faces whose brightness [`Candidates::best`] reads.
+pub struct Candidates {
+    views: Vec<(PinholeCamera, bool)>,
     aspect: f64,
-    fov: Option<f64>,
-) -> AutoCamera {
-    let (lo, hi) = scene.bounds;
-    let outside_fov = fov.unwrap_or(super::camera::DEFAULT_FOV);
-    let mut candidates: Vec<(PinholeCamera, bool)> = Vec::new();
-    for el in [15.0f64, 35.0] {
-        for k in 0..8 {
-            let d = direction(45.0 * k as f64, -el);
-            candidates.push((framing(lo, hi, d, DVec3::Y, outside_fov, aspect), false));
-        }
-    }
-    let inside_fov = fov.unwrap_or(INSIDE_FOV);
-    for p in open_spaces(scene, bvh) {
-        for tilt in [0.0, -20.0] {
+}
+
+impl Candidates {
+    /// The candidates for `scene` at `aspect` = width / height and `fov` (vertical, degrees;
+    /// default 40° outside, 60° inside).
+    pub fn new(scene: &Scene, bvh: &SceneBvh, aspect: f64, fov: Option<f64>) -> Self {
+        let (lo, hi) = scene.bounds;
+        let outside_fov = fov.unwrap_or(super::camera::DEFAULT_FOV);
+        let mut views: Vec<(PinholeCamera, bool)> = Vec::new();
+        for el in [15.0f64, 35.0] {
             for k in 0..8 {
-                let d = direction(45.0 * k as f64, tilt);
-                if let Some(cam) = backed_off(scene, bvh, p, d, inside_fov) {
-                    candidates.push((cam, true));
+                let d = direction(45.0 * k as f64, -el);
+                views.push((framing(lo, hi, d, DVec3::Y, outside_fov, aspect), false));
+            }
+        }
+        let inside_fov = fov.unwrap_or(INSIDE_FOV);
+        for p in open_spaces(scene, bvh) {
+            for tilt in [0.0, -20.0] {
+                for k in 0..8 {
+                    let d = direction(45.0 * k as f64, tilt);
+                    if let Some(cam) = backed_off(scene, bvh, p, d, inside_fov) {
+                        views.push((cam, true));
+                    }
                 }
             }
         }
+        Self { views, aspect }
     }
-    let stats: Vec<Probe> = candidates
-        .par_iter()
-        .map(|(c, _)| probe(scene, bvh, brightness, c, aspect))
-        .collect();
-    let best_of = |f: fn(&Probe) -> f64| stats.iter().map(f).fold(1e-300, f64::max);
-    let (b, d, n) = (
-        best_of(|p| p.brightness),
-        best_of(|p| p.distance),
-        best_of(|p| p.surfaces),
-    );
-    let scores: Vec<f64> = stats
-        .iter()
-        .map(|p| {
-            let quality = (p.brightness / b + p.distance / d + p.surfaces / n) / 6.0;
-            p.lit * p.lit * (0.5 + quality)
-        })
-        .collect();
-    let mut best = 0;
-    for (i, s) in scores.iter().enumerate() {
-        if *s > scores[best] {
-            best = i;
+
+    /// The faces whose front some candidate's probe image hits, ascending: the only faces whose
+    /// brightness [`Candidates::best`] reads.
+    pub fn faces_seen(&self, scene: &Scene, bvh: &SceneBvh) -> Vec<u32> {
+        let mut faces: Vec<u32> = (self.views.par_iter())
+            .flat_map_iter(|(c, _)| {
+                let mut seen = Vec::new();
+                probe_hits(scene, bvh, c, self.aspect, |face, _| seen.push(face));
+                seen
+            })
+            .collect();
+        faces.sort_unstable();
+        faces.dedup();
+        faces
+    }
+
+    /// The best-scoring candidate for the faces' `brightness` (module docs).
+    pub fn best(&self, scene: &Scene, bvh: &SceneBvh, brightness: &[f64]) -> AutoCamera {
+        let stats: Vec<Probe> = (self.views.par_iter())
+            .map(|(c, _)| probe(scene, bvh, brightness, c, self.aspect))
+            .collect();
+        let best_of = |f: fn(&Probe) -> f64| stats.iter().map(f).fold(1e-300, f64::max);
+        let (b, d, n) = (
+            best_of(|p| p.brightness),
+            best_of(|p| p.distance),
+            best_of(|p| p.surfaces),
+        );
+        let scores: Vec<f64> = stats
+            .iter()
+            .map(|p| {
+                let quality = (p.brightness / b + p.distance / d + p.surfaces / n) / 6.0;
+                p.lit * p.lit * (0.5 + quality)
+            })
+            .collect();
+        let mut best = 0;
+        for (i, s) in scores.iter().enumerate() {
+            if *s > scores[best] {
+                best = i;
+            }
         }
-    }
-    AutoCamera {
-        camera: candidates[best].0,
-        inside: candidates[best].1,
-        score: scores[best],
+        AutoCamera {
+            camera: self.views[best].0,
+            inside: self.views[best].1,
+            score: scores[best],
+        }
     }
 }
 
@@ -262,16 +284,15 @@ struct Probe {
     surfaces: f64,
 }
 
-/// Traces the probe image of a camera.
-fn probe(
+/// Traces the probe image of a camera: `front(face, distance)` for every ray that hits the front
+/// of a face.
+fn probe_hits(
     scene: &Scene,
     bvh: &SceneBvh,
-    brightness: &[f64],
     cam: &PinholeCamera,
     aspect: f64,
-) -> Probe {
-    let (mut front, mut lit, mut light, mut dist) = (0usize, 0usize, 0.0, 0.0);
-    let mut surfaces = std::collections::HashSet::new();
+    mut front: impl FnMut(u32, f64),
+) {
     for j in 0..PROBE {
         for i in 0..PROBE {
             let (sx, sy) = (
@@ -282,17 +303,31 @@ fn probe(
             let Some(hit) = bvh.closest_hit(cam.eye, d, f64::INFINITY, u32::MAX) else {
                 continue;
             };
-            let face = &scene.faces[hit.face as usize];
-            if face.normal.dot(d) < 0.0 {
-                front += 1;
-                let b = brightness.get(hit.face as usize).copied().unwrap_or(0.0);
-                lit += usize::from(b > 0.0);
-                light += b;
-                dist += hit.t;
-                surfaces.insert(face.surface);
+            if scene.faces[hit.face as usize].normal.dot(d) < 0.0 {
+                front(hit.face, hit.t);
             }
         }
     }
+}
+
+/// Scores the probe image of a camera.
+fn probe(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    brightness: &[f64],
+    cam: &PinholeCamera,
+    aspect: f64,
+) -> Probe {
+    let (mut front, mut lit, mut light, mut dist) = (0usize, 0usize, 0.0, 0.0);
+    let mut surfaces = std::collections::HashSet::new();
+    probe_hits(scene, bvh, cam, aspect, |face, t| {
+        front += 1;
+        let b = brightness.get(face as usize).copied().unwrap_or(0.0);
+        lit += usize::from(b > 0.0);
+        light += b;
+        dist += t;
+        surfaces.insert(scene.faces[face as usize].surface);
+    });
     let n = (PROBE * PROBE) as f64;
     Probe {
         lit: lit as f64 / n,

@@ -5,12 +5,10 @@
 
 use super::OutputError;
 use super::camera::{ImageMode, ImageSettings};
-use super::mesh::output_mesh;
+use super::camera_choice::camera_of;
+use super::mesh::{MeshExtent, output_mesh_of};
 use super::pixel::render_pixels;
-use super::plan::is_automatic;
-use super::raster::{PinholeCamera, RadianceImage, render_radiance};
-use super::tonemap::Exposure;
-use super::views::{IMAGE_SUPERSAMPLING, camera_of, exposure_of_mesh};
+use super::raster::{IMAGE_SUPERSAMPLING, PinholeCamera, RadianceImage, render_radiance};
 use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::estimator::GatherStats;
@@ -44,25 +42,20 @@ pub fn render_linear(
     let Some(scene) = domain.scene_3d() else {
         return Err(OutputError::ImageNeeds3d("an image as numbers"));
     };
-    // ⟨The output mesh, when the image or its camera needs it⟩
-    let needs_mesh =
-        settings.mode == ImageMode::Mesh || is_automatic(settings.camera, scene.camera_given);
-    let mesh = match needs_mesh {
-        true => Some(output_mesh(
+    // ⟨The camera, then the output mesh of what it sees (mesh mode)⟩
+    let choice = (settings.camera, "given");
+    let (camera, camera_source) = camera_of(domain, trained, config, choice, settings)?;
+    let seen_by = [(camera, settings.width, settings.height)];
+    let mesh = match settings.mode {
+        ImageMode::Mesh => Some(output_mesh_of(
             domain,
             trained,
             config,
             RetriangulateLimits::default(),
+            MeshExtent::SeenBy(&seen_by),
         )?),
-        false => None,
+        ImageMode::Pixel => None,
     };
-    let exposure = mesh.as_ref().map(|(m, _)| match settings.exposure {
-        Some(scale) => Exposure { scale },
-        None => exposure_of_mesh(m, scene),
-    });
-    let with_exposure = mesh.as_ref().map(|(m, _)| m).zip(exposure.as_ref());
-    let choice = (settings.camera, "given");
-    let (camera, camera_source) = camera_of(domain, scene, choice, with_exposure, settings);
     let (w, h) = (settings.width, settings.height);
     // ⟨Per pixel, or the mesh rasterized⟩
     let (radiance, stats) = match (settings.mode, mesh) {

@@ -1,17 +1,20 @@
 //! The output mesh: the scene re-triangulated at the shading network's resolution (or a uniform
 //! one), B gathered at every vertex, refined where B varies (sec. 4.3.1–4.3.2).
 
+use super::raster::{IMAGE_SUPERSAMPLING, PinholeCamera, faces_seen};
 use crate::config::GatherMode;
 use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::emitters::Emitters;
 use crate::estimator::{GatherError, GatherStats, radiosity_at_points};
+use crate::gather::Gathered;
 use crate::mesh::ShadedMesh;
 use crate::refine::{RefineLimits, refine};
 use crate::retriangulate::{RetriangulateLimits, retriangulate};
 use crate::solve::Trained;
 use crate::spatial::BoxGrid;
 use glam::DVec3;
+use scene_sampler::{Scene, SceneBvh};
 
 /// The output mesh's starting resolution when no network was trained (the paths gather reads
 /// none): the edge of this many equilateral triangles covering the scene. Coarse on purpose:
@@ -85,13 +88,79 @@ impl LocalEdge {
     }
 }
 
-/// Where [`output_mesh`] gathers B for a vertex at `p` of `face`: 10⁻⁴ of the way from `p` to the
-/// face's centroid. A vertex on an edge of its face where another face meets it (a block standing
-/// on the floor, the floor at a wall) gathers, exactly there, about half its B: the adjoining
-/// face, within the ray offsets of the point, blocks the rays that leave toward it (measured on
-/// cornell-box, docs/guide/bakes.md). The move is far below the mesh's resolution.
-pub fn vertex_gather_point(face: &scene_sampler::Face, p: DVec3) -> DVec3 {
-    p + 1e-4 * (face.centroid() - p)
+/// The faces whose front some image of `images` shows, the starting triangulation rasterized
+/// as the images will be ([`faces_seen`]).
+fn faces_seen_by(
+    tri: &crate::retriangulate::Triangulation,
+    scene: &Scene,
+    images: &[(PinholeCamera, u32, u32)],
+) -> Vec<bool> {
+    let flat = ShadedMesh {
+        positions: tri.positions.clone(),
+        triangles: tri.triangles.clone(),
+        face_of_triangle: tri.face_of_triangle.clone(),
+        radiosity: vec![[0.0; 3]; tri.positions.len()],
+    };
+    let mut seen = vec![false; scene.faces.len()];
+    for (camera, w, h) in images {
+        let size = (*w, *h, IMAGE_SUPERSAMPLING);
+        let one = faces_seen(&flat, Some(scene), camera, size, scene.faces.len());
+        for (s, o) in seen.iter_mut().zip(one) {
+            *s |= o;
+        }
+    }
+    seen
+}
+
+/// The side of the finest pixel any of `images` has at `p`: 2·d·tan(fov/2)/height at the
+/// distance d from its eye (the centre of the image's footprint; off-axis pixels are a little
+/// larger).
+fn finest_pixel(images: &[(PinholeCamera, u32, u32)], p: DVec3) -> f64 {
+    (images.iter())
+        .map(|(c, _, h)| {
+            let t = (0.5 * c.fov_y_degrees).to_radians().tan();
+            2.0 * c.eye.distance(p) * t / f64::from((*h).max(1))
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Where [`output_mesh`] gathers B for a vertex at `p` of face `f`: 10⁻⁴ of the way from `p` to
+/// the face's centroid. A vertex on an edge of its face where another face meets it (a block
+/// standing on the floor, the floor at a wall) gathers, exactly there, about half its B: the
+/// adjoining face, within the ray offsets of the point, blocks the rays that leave toward it
+/// (measured on cornell-box, docs/guide/bakes.md). The move is far below the mesh's resolution.
+///
+/// A vertex under a solid (a floor's corner under a wall standing on it, common in real models)
+/// would gather the solid's dark inside, and its triangles would show a dark wedge reaching into
+/// the open floor: a short ray along the face toward its centroid, lifted off the face, that
+/// meets the back of a face first (the point is inside a solid) moves the point to just past that
+/// face, where the visible part of the face begins — as lightmap texels are moved
+/// (`lightmap/texels.rs`).
+pub fn vertex_gather_point(scene: &Scene, bvh: &SceneBvh, f: u32, p: DVec3) -> DVec3 {
+    let face = &scene.faces[f as usize];
+    let q = p + 1e-4 * (face.centroid() - p);
+    let to_centre = face.centroid() - q;
+    let (reach, dir) = (to_centre.length(), to_centre.normalize_or_zero());
+    let lift = bvh.backoff();
+    let Some(hit) = bvh.closest_hit(q + face.normal * lift, dir, reach, f) else {
+        return q;
+    };
+    match scene.faces[hit.face as usize].normal.dot(dir) > 0.0 {
+        true => q + dir * (hit.t + 2.0 * lift).min(reach),
+        false => q,
+    }
+}
+
+/// Which faces the output mesh gathers B for.
+#[derive(Clone, Copy, Debug)]
+pub enum MeshExtent<'a> {
+    /// Every face: the mesh is an output of its own (glTF, PLY).
+    Whole,
+    /// Only what these images show, `(camera, width, height)` each: faces whose front no image
+    /// sees keep B = 0 and are not refined, and no edge is split below two pixels of the image
+    /// that sees it finest. For images alone: from a public 125 000-triangle model an automatic
+    /// view showed a fifth of it, and the whole mesh was 340 000 vertices refined to 1.6 million.
+    SeenBy(&'a [(PinholeCamera, u32, u32)]),
 }
 
 /// Re-triangulates the scene to the shading network's resolution (sec. 4.3.1) and gathers B at
@@ -103,6 +172,17 @@ pub fn output_mesh(
     trained: &Trained,
     config: &SolveConfig,
     limits: RetriangulateLimits,
+) -> Result<(ShadedMesh, GatherStats), GatherError> {
+    output_mesh_of(domain, trained, config, limits, MeshExtent::Whole)
+}
+
+/// [`output_mesh`] for the faces of `extent` only.
+pub(crate) fn output_mesh_of(
+    domain: &Domain,
+    trained: &Trained,
+    config: &SolveConfig,
+    limits: RetriangulateLimits,
+    extent: MeshExtent,
 ) -> Result<(ShadedMesh, GatherStats), GatherError> {
     let Domain::ThreeD(k) = domain else {
         return Ok((ShadedMesh::default(), GatherStats::default()));
@@ -121,25 +201,46 @@ pub fn output_mesh(
     let gather_at = |at: &[(DVec3, u32)]| {
         let points: Vec<(DVec3, DVec3, u32)> = (at.iter())
             .map(|&(p, f)| {
-                let face = &scene.faces[f as usize];
-                (vertex_gather_point(face, p), face.normal, f)
+                let at = vertex_gather_point(scene, k.bvh, f, p);
+                (at, scene.faces[f as usize].normal, f)
             })
             .collect();
         radiosity_at_points(domain, trained, &emitters, config, &points)
     };
-    let vertices: Vec<(DVec3, u32)> = tri.positions.iter().copied().zip(vertex_face).collect();
+    // ⟨The vertices to gather: all, or those of the faces an image sees⟩
+    let seen = match extent {
+        MeshExtent::Whole => None,
+        MeshExtent::SeenBy(images) => Some(faces_seen_by(&tri, scene, images)),
+    };
+    let keep: Vec<bool> = (vertex_face.iter())
+        .map(|&f| seen.as_ref().is_none_or(|s| s[f as usize]))
+        .collect();
+    let vertices: Vec<(DVec3, u32)> = (tri.positions.iter().copied().zip(vertex_face))
+        .zip(&keep)
+        .filter_map(|(v, &k)| k.then_some(v))
+        .collect();
     // ⟨Gather once where coplanar faces of one material share a vertex (crate::weld)⟩
     let welded = crate::weld::weld(&scene.faces, k.bvh, scene.diagonal(), &vertices);
     let at: Vec<(DVec3, u32)> = welded.gathered.iter().map(|&v| vertices[v]).collect();
     let phase = crate::progress::phase("mesh");
     let once = gather_at(&at)?;
     drop(phase);
-    let gathered = welded.representative.iter().map(|&r| once[r]).collect();
+    let mut kept = welded.representative.iter().map(|&r| once[r]);
+    let gathered = (keep.iter())
+        .map(|keep| match keep {
+            true => kept.next().expect("one value per kept vertex"),
+            false => Gathered::default(),
+        })
+        .collect();
     // ⟨Refine where B varies faster than linear interpolation follows (shadow edges)⟩
     let (tri, gathered) = if config.gather == GatherMode::Paths {
         let refine_limits = RefineLimits::for_diagonal(scene.diagonal());
+        let finest = |p: DVec3| match extent {
+            MeshExtent::Whole => 0.0,
+            MeshExtent::SeenBy(images) => 2.0 * finest_pixel(images, p),
+        };
         let _phase = crate::progress::phase("refinement");
-        refine(tri, gathered, refine_limits, gather_at)?
+        refine(tri, gathered, refine_limits, finest, gather_at)?
     } else {
         (tri, gathered)
     };

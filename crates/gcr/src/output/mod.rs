@@ -8,6 +8,7 @@ use std::path::PathBuf;
 
 mod autocam;
 mod camera;
+mod camera_choice;
 mod encode;
 mod flatland;
 mod glb;

@@ -89,15 +89,14 @@ impl OutputPlan {
         self.paths.kernel_image.is_some()
     }
 
-    /// Whether the outputs need the output mesh: glTF, PLY, images in mesh mode, and pixel
-    /// images from the automatic camera (placed from the mesh's brightness); a Flatland image.
+    /// Whether the outputs need the output mesh: glTF, PLY, images in mesh mode; a Flatland
+    /// image. (The automatic camera reads a quick gather of its own: `camera_choice.rs`.)
     pub(super) fn needs_mesh(&self) -> bool {
         let p = &self.paths;
         let images = p.image.is_some() || !self.images.views.is_empty();
-        let automatic = p.image.is_some() && is_automatic(self.images.camera, self.scene_camera);
         p.mesh.is_some()
             || p.ply.is_some()
-            || (images && (self.images.mode == ImageMode::Mesh || automatic || self.flatland))
+            || (images && (self.images.mode == ImageMode::Mesh || self.flatland))
     }
 
     /// Checks every output of `paths` for `domain` before anything is solved: the outputs fit

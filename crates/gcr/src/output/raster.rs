@@ -19,6 +19,9 @@ use crate::output::tonemap::Exposure;
 use glam::{DVec3, DVec4};
 use scene_sampler::Scene;
 
+/// Anti-aliasing of the 3-D camera image: sub-samples per pixel side.
+pub(super) const IMAGE_SUPERSAMPLING: u32 = 2;
+
 /// A pinhole camera.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PinholeCamera {
@@ -327,6 +330,25 @@ pub fn render_radiance(
     }
 }
 
+/// Which of `faces` scene faces show their front at some sub-sample of `mesh`'s image from
+/// `camera` (rasterized as [`render_radiance`] rasterizes it, cut-outs and all): the faces whose
+/// radiosity that image can show. A refinement of the mesh within its faces leaves this set as it
+/// is (up to ties along the faces' shared edges).
+pub(crate) fn faces_seen(
+    mesh: &ShadedMesh,
+    cutouts: Option<&Scene>,
+    camera: &PinholeCamera,
+    (width, height, ss): (u32, u32, u32),
+    faces: usize,
+) -> Vec<bool> {
+    let mut samples = Samples::rasterize(mesh, cutouts, camera, width, height, ss);
+    // ⟨Again, marking every front face within a hair of the nearest depth: coplanar faces that
+    // overlap win a sub-sample by rounding, which another triangulation of them changes⟩
+    samples.ties = Some(vec![false; faces]);
+    samples.draw(mesh, cutouts, camera);
+    samples.ties.unwrap_or_default()
+}
+
 /// What a sub-sample saw.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Seen {
@@ -344,7 +366,13 @@ struct Samples {
     colour: Vec<[f64; 3]>,
     depth: Vec<f64>,
     seen: Vec<Seen>,
+    /// Set: drawing marks the front faces whose depth at a sub-sample is within [`TIE`] of the
+    /// nearest drawn there, and changes nothing else ([`faces_seen`]).
+    ties: Option<Vec<bool>>,
 }
+
+/// Relative depth within which [`faces_seen`] counts a face as seen at a sub-sample.
+const TIE: f64 = 1e-4;
 
 impl Samples {
     fn rasterize(
@@ -364,7 +392,15 @@ impl Samples {
             colour: vec![[0.0f64; 3]; w * h],
             depth: vec![f64::INFINITY; w * h],
             seen: vec![Seen::Nothing; w * h],
+            ties: None,
         };
+        buf.draw(mesh, cutouts, camera);
+        buf
+    }
+
+    /// Draws `mesh`'s triangles into the buffers (depth-tested).
+    fn draw(&mut self, mesh: &ShadedMesh, cutouts: Option<&Scene>, camera: &PinholeCamera) {
+        let (w, h) = (self.width * self.ss, self.height * self.ss);
         let frame = Frame::new(camera);
         let aspect = w as f64 / h as f64;
         let near = 1e-4
@@ -389,6 +425,7 @@ impl Samples {
                 _ => None,
             };
             let hole = hole.as_ref().map(|h| h as &dyn Fn(DVec3) -> bool);
+            let face = face.unwrap_or(u32::MAX);
             // per vertex: its radiosity, then its world position (affine in camera space, so
             // clipped and interpolated as the radiosity is)
             let cam: Vec<(DVec3, [f64; 6])> = (0..3)
@@ -401,11 +438,11 @@ impl Samples {
                 // Fan-triangulate the clipped polygon (3 or 4 vertices).
                 for k in 1..poly.len() - 1 {
                     let tri = [poly[0], poly[k], poly[k + 1]];
-                    raster_triangle(tri, frame.f, aspect, (w, h), &mut buf, (seen, hole));
+                    let what = (seen, face, hole);
+                    raster_triangle(tri, frame.f, aspect, (w, h), self, what);
                 }
             }
         }
-        buf
     }
 
     /// Per output pixel: the mean of `map(B)` over its sub-samples, and the nearest depth.
@@ -477,7 +514,7 @@ fn raster_triangle(
     aspect: f64,
     (w, h): (usize, usize),
     buf: &mut Samples,
-    (seen, hole): (Seen, Option<&dyn Fn(DVec3) -> bool>),
+    (seen, face, hole): (Seen, u32, Option<&dyn Fn(DVec3) -> bool>),
 ) {
     // Screen coordinates (pixels) and 1/z for perspective-correct interpolation.
     let s: [DVec4; 3] = v.map(|(p, _)| {
@@ -527,6 +564,16 @@ fn raster_triangle(
             let inv_z = b[0] * s[0].w + b[1] * s[1].w + b[2] * s[2].w;
             let z = 1.0 / inv_z;
             let i = y * w + x;
+            if let Some(ties) = buf.ties.as_mut() {
+                let near = z <= buf.depth[i] * (1.0 + TIE);
+                if near && seen == Seen::Front && !hole.is_some_and(|in_hole| in_hole(at(&v, b, z)))
+                {
+                    if let Some(t) = ties.get_mut(face as usize) {
+                        *t = true;
+                    }
+                }
+                continue;
+            }
             if z < buf.depth[i] {
                 let mut c = [0.0; 6];
                 for k in 0..3 {
@@ -544,6 +591,17 @@ fn raster_triangle(
             }
         }
     }
+}
+
+/// The world position (attributes 3..6) at screen barycentrics `b` and depth `z` of a triangle
+/// whose vertices are `v` ([`raster_triangle`]'s perspective-correct weights).
+fn at(v: &[(DVec3, [f64; 6]); 3], b: [f64; 3], z: f64) -> DVec3 {
+    let mut p = DVec3::ZERO;
+    for k in 0..3 {
+        let wk = b[k] / v[k].0.z * z;
+        p += wk * DVec3::new(v[k].1[3], v[k].1[4], v[k].1[5]);
+    }
+    p
 }
 
 fn edge(a: DVec4, b: DVec4, x: f64, y: f64) -> f64 {
@@ -567,6 +625,49 @@ mod tests {
             face_of_triangle: vec![0, 0],
             radiosity: vec![colour; 4],
         }
+    }
+
+    #[test]
+    fn faces_seen_are_the_fronts_that_win_a_sub_sample_or_tie_with_it() {
+        // face 0 in front, face 1 a smaller square right behind it (hidden), face 2 coplanar
+        // with face 0 and overlapping it (a tie), face 3 facing away behind them all
+        let mut mesh = quad([0.0; 3]);
+        let square = |z: f64, s: f64, shift: f64| {
+            [(-s, -s), (s, -s), (s, s), (-s, s)].map(|(x, y)| DVec3::new(x + shift, y, z))
+        };
+        for (f, corners) in [
+            (1, square(-0.5, 0.5, 0.0)),
+            (2, square(0.0, 0.5, 0.3)),
+            (3, square(-1.0, 0.3, 0.0)),
+        ] {
+            let n = mesh.positions.len() as u32;
+            mesh.positions.extend(corners);
+            let winding = if f == 3 {
+                [[0, 2, 1], [0, 3, 2]]
+            } else {
+                [[0, 1, 2], [0, 2, 3]]
+            };
+            for t in winding {
+                mesh.triangles.push(t.map(|i| n + i));
+                mesh.face_of_triangle.push(f);
+                mesh.radiosity.resize(mesh.positions.len(), [0.0; 3]);
+            }
+        }
+        let cam = PinholeCamera {
+            eye: DVec3::new(0.0, 0.0, 4.0),
+            target: DVec3::ZERO,
+            up: DVec3::Y,
+            fov_y_degrees: 30.0,
+        };
+        let seen = faces_seen(&mesh, None, &cam, (32, 32, 2), 4);
+        assert_eq!(seen, [true, false, true, false]);
+        // from behind, only the back-facing square shows its front
+        let behind = PinholeCamera {
+            eye: DVec3::new(0.0, 0.0, -4.0),
+            ..cam
+        };
+        let seen = faces_seen(&mesh, None, &behind, (32, 32, 2), 4);
+        assert_eq!(seen, [false, false, false, true]);
     }
 
     #[test]

@@ -4,14 +4,15 @@
 
 use super::OutputError;
 use super::camera::{CameraChoice, ImageMode, ImageSettings};
+use super::camera_choice::image_cameras;
 use super::encode::{Format, format_of, write_jpeg, write_png};
-use super::mesh::output_mesh;
+use super::mesh::{MeshExtent, output_mesh_of};
 use super::pixel::render_pixel_shard;
 use super::plan::{OutputPaths, OutputPlan};
-use super::raster::{Coverage, PinholeCamera, render_image, render_radiance};
+use super::raster::{Coverage, IMAGE_SUPERSAMPLING, PinholeCamera, render_image, render_radiance};
 use super::stage::Stage;
 use super::staged::StagedFiles;
-use super::tonemap::{Exposure, luminance};
+use super::tonemap::Exposure;
 use crate::config::SolveConfig;
 use crate::domain::Domain;
 use crate::mesh::ShadedMesh;
@@ -21,9 +22,6 @@ use crate::solve::Trained;
 use scene_sampler::Scene;
 use std::path::Path;
 use std::time::Instant;
-
-/// Anti-aliasing of the 3-D camera image: sub-samples per pixel side.
-pub(super) const IMAGE_SUPERSAMPLING: u32 = 2;
 
 /// The 3-D outputs: the re-triangulated output mesh (when glTF, PLY, a mesh-mode image or the
 /// automatic camera asks for it), per-pixel images ([`super::pixel`]), one exposure for all of
@@ -42,24 +40,27 @@ pub(super) fn write_3d(
     let (paths, settings) = (plan.paths(), plan.images());
     let images = image_jobs(paths, settings);
     let pixel = settings.mode == ImageMode::Pixel;
-    // ⟨The output mesh, when an output needs it⟩
+    // ⟨Each image's camera (the automatic one from a quick gather where its candidates look)⟩
+    let tg = Instant::now();
+    let jobs = image_cameras(domain, trained, config, &images, settings)?;
+    stage.metrics.seconds.gather += tg.elapsed().as_secs_f64();
+    // ⟨The output mesh, when an output needs it: whole for a file of its own, else what the
+    // mesh-mode images see⟩
+    let seen_by: Vec<(PinholeCamera, u32, u32)> = (jobs.iter())
+        .map(|(_, (c, _))| (*c, settings.width, settings.height))
+        .collect();
+    let extent = match paths.mesh.is_some() || paths.ply.is_some() {
+        true => MeshExtent::Whole,
+        false => MeshExtent::SeenBy(&seen_by),
+    };
     let mesh = match plan.needs_mesh() {
-        true => Some(staged_mesh(domain, trained, config, stage)?),
+        true => Some(staged_mesh(domain, trained, config, extent, stage)?),
         false => None,
     };
-    // ⟨Each image's camera (the automatic one from the mesh's brightness, before any exposure
-    // is known: its own)⟩
     let mesh_exposure = mesh.as_ref().map(|m| match settings.exposure {
         Some(scale) => Exposure { scale },
         None => exposure_of_mesh(m, scene),
     });
-    let jobs = image_cameras(
-        domain,
-        scene,
-        &images,
-        mesh.as_ref().zip(mesh_exposure.as_ref()),
-        settings,
-    );
     // ⟨Per-pixel images: B gathered at every sub-sample's visible point (or merged)⟩
     let tg = Instant::now();
     let mut rendered = Vec::new();
@@ -129,10 +130,12 @@ fn staged_mesh(
     domain: &Domain,
     trained: &Trained,
     config: &SolveConfig,
+    extent: MeshExtent,
     stage: &mut Stage,
 ) -> Result<ShadedMesh, OutputError> {
     let tg = Instant::now();
-    let (mesh, stats) = output_mesh(domain, trained, config, RetriangulateLimits::default())?;
+    let limits = RetriangulateLimits::default();
+    let (mesh, stats) = output_mesh_of(domain, trained, config, limits, extent)?;
     stage.gathers.push(stats);
     stage.metrics.output_vertices = mesh.vertex_count();
     stage.metrics.output_triangles = mesh.triangle_count();
@@ -237,48 +240,6 @@ fn record_exposure(metrics: &mut Metrics, exposure: &Exposure, settings: &ImageS
     .into();
 }
 
-/// Each image's camera with its source name: the given one, the scene's, or the automatic one
-/// (from the mesh's brightness at its own exposure, before the outputs' exposure is known).
-fn image_cameras<'a>(
-    domain: &Domain,
-    scene: &Scene,
-    images: &[(&'a Path, CameraChoice, &'static str)],
-    mesh: Option<(&ShadedMesh, &Exposure)>,
-    settings: &ImageSettings,
-) -> Vec<(&'a Path, (PinholeCamera, &'static str))> {
-    (images.iter())
-        .map(|&(path, choice, source)| {
-            let camera = camera_of(domain, scene, (choice, source), mesh, settings);
-            (path, camera)
-        })
-        .collect()
-}
-
-/// One image's camera with its source name (`source` for a given camera): the given one, the
-/// scene's, or the automatic one (from `mesh` at its exposure: present whenever
-/// [`super::plan::is_automatic`]).
-pub(super) fn camera_of(
-    domain: &Domain,
-    scene: &Scene,
-    (choice, source): (CameraChoice, &'static str),
-    mesh: Option<(&ShadedMesh, &Exposure)>,
-    settings: &ImageSettings,
-) -> (PinholeCamera, &'static str) {
-    match choice {
-        CameraChoice::Given(c) => (c, source),
-        CameraChoice::Scene { fov } if scene.camera_given => {
-            let mut c = PinholeCamera::of_scene(scene);
-            c.fov_y_degrees = fov.unwrap_or(c.fov_y_degrees);
-            (c, "scene")
-        }
-        CameraChoice::Scene { fov } | CameraChoice::Automatic { fov } => {
-            let (mesh, exposure) =
-                mesh.expect("the automatic camera's outputs build the mesh (needs_mesh)");
-            automatic(domain, mesh, exposure, settings, fov)
-        }
-    }
-}
-
 /// Writes a per-pixel image: linear radiance for .exr, tone-mapped for PNG and JPEG.
 fn write_pixel_image(
     img: &super::pixel::PixelImage,
@@ -337,48 +298,6 @@ fn image_jobs<'a>(
         .iter()
         .map(|v| (v.path.as_path(), CameraChoice::Given(v.camera), "view"));
     main.into_iter().chain(views).collect()
-}
-
-/// The automatic camera ([`super::autocam`]) for the solved mesh, with its source name.
-fn automatic(
-    domain: &Domain,
-    mesh: &ShadedMesh,
-    exposure: &Exposure,
-    settings: &ImageSettings,
-    fov: Option<f64>,
-) -> (PinholeCamera, &'static str) {
-    let Domain::ThreeD(k) = domain else {
-        unreachable!("3-D outputs only for 3-D domains")
-    };
-    let brightness = face_brightness(mesh, exposure, k.scene.faces.len());
-    let aspect = f64::from(settings.width) / f64::from(settings.height);
-    let auto = super::autocam::automatic_camera(k.scene, k.bvh, &brightness, aspect, fov);
-    let source = if auto.inside {
-        "automatic-inside"
-    } else {
-        "automatic-outside"
-    };
-    (auto.camera, source)
-}
-
-/// Per scene face, the mean display luminance (in [0, 1]) of its output triangles.
-fn face_brightness(mesh: &ShadedMesh, exposure: &Exposure, faces: usize) -> Vec<f64> {
-    let mut sum = vec![(0.0, 0usize); faces];
-    for (t, &f) in mesh.triangles.iter().zip(&mesh.face_of_triangle) {
-        let mut b = [0.0; 3];
-        for &v in t {
-            for ch in 0..3 {
-                b[ch] += mesh.radiosity[v as usize][ch] / 3.0;
-            }
-        }
-        if let Some(s) = sum.get_mut(f as usize) {
-            s.0 += luminance(exposure.linear(b));
-            s.1 += 1;
-        }
-    }
-    sum.into_iter()
-        .map(|(s, n)| if n > 0 { s / n as f64 } else { 0.0 })
-        .collect()
 }
 
 /// Renders and stages one image; returns what its sub-samples saw.

@@ -234,7 +234,7 @@ pub(crate) fn output_mesh_of(
         .collect();
     // ⟨Refine where B varies faster than linear interpolation follows (shadow edges)⟩
     let (tri, gathered) = if config.gather == GatherMode::Paths {
-        let refine_limits = RefineLimits::for_diagonal(scene.diagonal());
+        let refine_limits = RefineLimits::for_scene(scene.diagonal(), local.uniform);
         let finest = |p: DVec3| match extent {
             MeshExtent::Whole => 0.0,
             MeshExtent::SeenBy(images) => 2.0 * finest_pixel(images, p),

@@ -13,6 +13,14 @@ use scene_sampler::{KernelSampler, SceneBvh};
 use std::path::Path;
 use std::time::Instant;
 
+/// The built-in Cornell box.
+fn cornell_box() -> scene_sampler::Scene {
+    scene_sampler::builtin("cornell-box")
+        .unwrap()
+        .into_3d()
+        .unwrap()
+}
+
 fn workspace(relative: &str) -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../..")
@@ -41,10 +49,7 @@ fn the_default_options_are_the_programs_preset() {
 
 #[test]
 fn points_are_placed_as_a_probe_files_lines() {
-    let scene = scene_sampler::builtin("cornell-box")
-        .unwrap()
-        .into_3d()
-        .unwrap();
+    let scene = cornell_box();
     let bvh = SceneBvh::new(&scene);
     let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
     let file = workspace("scenes/cornell-box.probes.txt");
@@ -77,10 +82,7 @@ fn points_are_placed_as_a_probe_files_lines() {
 /// The linear image of both modes equals the `.exr` file the output stage writes.
 #[test]
 fn images_as_numbers_are_the_exr_files() {
-    let scene = scene_sampler::builtin("cornell-box")
-        .unwrap()
-        .into_3d()
-        .unwrap();
+    let scene = cornell_box();
     let bvh = SceneBvh::new(&scene);
     let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
     let options = SolveOptions {
@@ -133,10 +135,7 @@ fn images_as_numbers_are_the_exr_files() {
 /// than its pixels): the picture is the whole output mesh's, within the gathers' noise.
 #[test]
 fn an_image_alone_shows_what_the_whole_mesh_shows() {
-    let scene = scene_sampler::builtin("cornell-box")
-        .unwrap()
-        .into_3d()
-        .unwrap();
+    let scene = cornell_box();
     let bvh = SceneBvh::new(&scene);
     let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
     let options = SolveOptions::default();

@@ -107,6 +107,34 @@ fn cases() -> Result<Vec<Case>> {
     ])
 }
 
+/// The public temple compound ([`super::public_models::temple_compound`]) under a sun of
+/// 80 000 lux at 35° (azimuth 200°) and a CIE overcast sky of 10 000 lux (black ground); `Ok(None)`
+/// with a note when the model cannot be fetched.
+fn temple(notes: &mut String) -> Result<Option<Case>> {
+    let obj = match super::public_models::temple_compound() {
+        Ok(obj) => obj,
+        Err(e) => {
+            writeln!(notes, "- temple compound: skipped ({e:#}).")?;
+            return Ok(None);
+        }
+    };
+    let mut scene = scene_sampler::load(&obj)?.into_3d()?;
+    let overcast = serde_json::json!({"model": "cie-overcast", "illuminance": 10_000.0,
+                                      "ground_reflectance": 0.0});
+    let lighting = serde_json::json!({"up": "y", "sky": overcast, "sun": {"azimuth": 200.0,
+        "elevation": 35.0, "illuminance": 80_000.0, "diameter": 0.0}});
+    scene.add_lights(serde_json::from_value::<Lighting>(lighting)?.lights()?);
+    let zenith = 9.0 * 10_000.0 / (7.0 * std::f64::consts::PI);
+    let sun = scene_sampler::lights::lighting::Up::Y.direction(200.0, 35.0);
+    Ok(Some(Case {
+        name: "temple compound (public, 124 580 triangles), sun 80 000 lux at 35° + CIE overcast 10 000 lux",
+        scene,
+        emitters: serde_json::json!([{"type": "directional", "direction": (-sun).to_array(),
+            "irradiance": 80_000.0}, {"type": "cie-overcast", "zenith": zenith}]),
+        peers: None,
+    }))
+}
+
 /// The grille room (`scenes/grille-lamp.gltf`): a 6 × 3 × 6 m room split by a double-sided
 /// grille cut out by an alpha mask (glTF `MASK`), lit by its `KHR_lights_punctual` point lamp
 /// (300 cd, colour (1, 0.9, 0.8)). Its spot is left out: Mitsuba's and Cycles' spot falloffs are
@@ -327,10 +355,11 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     };
     let mut table = String::new();
     let mut notes = String::new();
-    for case in cases()?
-        .into_iter()
-        .filter(|c| wanted("DAYLIT_CASES", c.name))
-    {
+    let mut all = cases()?;
+    if wanted("DAYLIT_CASES", "temple compound") {
+        all.extend(temple(&mut notes)?);
+    }
+    for case in all.into_iter().filter(|c| wanted("DAYLIT_CASES", c.name)) {
         let pts = points(&case.scene, n);
         let sub = &pts[..SUBSET.min(pts.len())];
         let (reference, how) = reference(case.name, &case.scene, sub, &ad)?;

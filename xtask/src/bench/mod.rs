@@ -13,6 +13,7 @@ mod irradiance;
 mod isgcs;
 mod isgcs_peers;
 mod lights;
+mod public_models;
 mod radiance;
 mod rays;
 mod scenes;

@@ -2,7 +2,7 @@
 //! the surfaces the pixels see, instead of rasterizing the output mesh. Pixel (i, j) of W × H
 //! covers [i, i + 1) × [j, j + 1) of the camera of [`super::raster`] (centre ((i + ½)/W,
 //! (j + ½)/H): Mitsuba's `perspective` framing); a pixel is the mean of L = B/π over it (a box
-//! filter; back faces and the background are black).
+//! filter; back faces are black, the background shows the scene's sky or environment map, if any).
 //!
 //! * **The paths gather with every ray corrected (the default)**: each pixel's footprint is
 //!   estimated as a whole ([`render_footprints`]): every ray has its own point in the pixel, where

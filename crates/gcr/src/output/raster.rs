@@ -217,18 +217,26 @@ pub struct Coverage {
     pub lit: f64,
     /// The back side of a surface (drawn black: the camera is inside a solid or behind a wall).
     pub back: f64,
-    /// No surface (background, black).
+    /// No surface (the background: the scene's sky or environment map, else black).
     pub nothing: f64,
 }
 
 impl Coverage {
     /// A warning when most of the image is black for want of a lit surface (the camera outside a
-    /// closed scene, inside a solid, or looking away from everything); `None` otherwise.
-    pub fn warning(&self, what: &str) -> Option<String> {
-        (self.lit < 0.5).then(|| {
+    /// closed scene, inside a solid, or looking away from everything); `None` otherwise. With
+    /// `sky` (the scene has a background light, [`scene_sampler::Light::is_background`]) the
+    /// pixels that show no surface show the sky: the warning asks that half of the others be
+    /// lit, and that they be at least a tenth of the image.
+    pub fn warning(&self, what: &str, sky: bool) -> Option<String> {
+        // under a sky, the pixels that show no surface show the sky: only the scene's share counts
+        let (shown, nothing) = match sky {
+            true => (1.0 - self.nothing, "the sky"),
+            false => (1.0, "nothing"),
+        };
+        (self.lit < 0.5 * shown || shown < 0.1).then(|| {
             format!(
                 "{what}: only {:.0} % of the pixels show a lit surface ({:.0} % the front of a \
-                 surface no light reaches, {:.0} % nothing, {:.0} % back faces, all drawn black): \
+                 surface no light reaches, {:.0} % {nothing}, {:.0} % back faces, drawn black): \
                  the camera looks away from the scene or from outside its walls; set \
                  --camera-eye and --camera-target (or --auto-camera)",
                 100.0 * self.lit,
@@ -268,10 +276,10 @@ pub(crate) fn render(
 }
 
 /// Renders `mesh` to an 8-bit sRGB image of `width × height` (row-major, top row first; each pixel
-/// averages `ss × ss` sub-samples, the background black), keeping the depth buffer (at the output
-/// resolution) for overlays.
-/// `cutouts`: the scene `mesh` was made from, whose faces' alpha cut-outs are holes (`None`: every
-/// face solid).
+/// averages `ss × ss` sub-samples), keeping the depth buffer (at the output resolution) for
+/// overlays. `cutouts`: the scene `mesh` was made from, whose faces' alpha cut-outs are holes and
+/// whose sky or environment map fills the background (`None`: every face solid, the background
+/// black).
 pub fn render_image(
     mesh: &ShadedMesh,
     cutouts: Option<&Scene>,
@@ -395,7 +403,37 @@ impl Samples {
             ties: None,
         };
         buf.draw(mesh, cutouts, camera);
+        if let Some(scene) = cutouts {
+            buf.show_background(scene, camera);
+        }
         buf
+    }
+
+    /// Gives the sub-samples that see no surface the light of the scene's background lights (a
+    /// sky, an environment map: [`scene_sampler::Light::is_background`]) in their direction, as
+    /// B = π·L, which is what a per-pixel image's escaping rays bring.
+    fn show_background(&mut self, scene: &Scene, camera: &PinholeCamera) {
+        let lights: Vec<_> = (scene.lights.iter())
+            .filter(|l| l.is_background())
+            .collect();
+        if lights.is_empty() {
+            return;
+        }
+        let (w, h) = (self.width * self.ss, self.height * self.ss);
+        let aspect = w as f64 / h as f64;
+        for (i, (seen, colour)) in self.seen.iter().zip(&mut self.colour).enumerate() {
+            if *seen == Seen::Nothing {
+                let (x, y) = ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
+                let d = camera.ray_direction(x / w as f64, y / h as f64, aspect);
+                let d = d.normalize();
+                for l in &lights {
+                    let e = l.escaped(d);
+                    for (c, v) in colour.iter_mut().zip(e) {
+                        *c += v;
+                    }
+                }
+            }
+        }
     }
 
     /// Draws `mesh`'s triangles into the buffers (depth-tested).
@@ -668,6 +706,40 @@ mod tests {
         };
         let seen = faces_seen(&mesh, None, &behind, (32, 32, 2), 4);
         assert_eq!(seen, [false, false, false, true]);
+    }
+
+    /// Under a uniform sky of horizontal illuminance E (radiance E/π, B = E), the image's empty
+    /// pixels show B = E, the quad its own B, and the coverage's warning counts the sky as sky.
+    #[test]
+    fn empty_pixels_show_the_sky() {
+        use scene_sampler::lights::{Sky, SkyModel};
+        let mut scene = scene_sampler::builtin("wall-floor")
+            .unwrap()
+            .into_3d()
+            .unwrap();
+        let sky = Sky::new(SkyModel::Uniform, DVec3::Y, [3.0; 3], [0.0; 3]).unwrap();
+        scene.add_lights([std::sync::Arc::new(sky) as std::sync::Arc<dyn scene_sampler::Light>]);
+        let mesh = quad([std::f64::consts::PI; 3]); // radiance 1
+        let cam = PinholeCamera {
+            eye: DVec3::new(0.0, 0.0, 4.0),
+            target: DVec3::ZERO,
+            up: DVec3::Y,
+            fov_y_degrees: 30.0,
+        };
+        let img = render_radiance(&mesh, Some(&scene), &cam, 32, 32, 2);
+        let at = |x: usize, y: usize| img.radiance[y * 32 + x];
+        assert!((at(16, 16)[0] - 1.0).abs() < 1e-6);
+        let sky_l = 3.0 / std::f64::consts::PI;
+        assert!(
+            (f64::from(at(0, 0)[0]) - sky_l).abs() < 1e-5,
+            "{:?}",
+            at(0, 0)
+        );
+        assert!(img.coverage.nothing > 0.0 && img.coverage.nothing < 0.2);
+        assert!(img.coverage.warning("image", true).is_none());
+        // without a sky the same corners are black
+        let bare = render_radiance(&mesh, None, &cam, 32, 32, 2);
+        assert_eq!(bare.radiance[0], [0.0; 3]);
     }
 
     #[test]

@@ -108,7 +108,8 @@ pub(super) fn write_3d(
             }
         };
         let what = format!("image `{}`", path.display());
-        metrics.warnings.extend(coverage.warning(&what));
+        let sky = scene.lights.iter().any(|l| l.is_background());
+        metrics.warnings.extend(coverage.warning(&what, sky));
         metrics
             .images
             .push(image_record(path, settings, camera, source, coverage));

@@ -224,6 +224,10 @@ impl Light for EnvMap {
         false
     }
 
+    fn is_background(&self) -> bool {
+        true
+    }
+
     fn power(&self, radius: f64) -> f64 {
         // the flux through a disc, both sides: ∫ L̄ |cos θ| dω over the sphere ≈ (total/π)/2, as
         // the sky's E_h + π·L_g

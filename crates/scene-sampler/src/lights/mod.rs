@@ -130,6 +130,13 @@ pub trait Light: Debug + Send + Sync + RefUnwindSafe {
     /// Whether the light is a delta (a point, or a direction): no cosine ray ever reaches it.
     fn is_delta(&self) -> bool;
 
+    /// Whether the light fills the background: rays that escape the scene see it over a solid
+    /// angle ([`Light::escaped`] not zero almost everywhere: a sky, an environment map), so an
+    /// image's empty pixels show it rather than nothing.
+    fn is_background(&self) -> bool {
+        false
+    }
+
     /// Where the light is and where it shines, for the light tree ([`LightTree`]): `None` for a
     /// light at infinity (the sun, a sky, an environment map), which is drawn by power alone.
     fn bounds(&self) -> Option<LightBounds> {

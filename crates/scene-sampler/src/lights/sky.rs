@@ -278,6 +278,10 @@ impl Light for Sky {
         false
     }
 
+    fn is_background(&self) -> bool {
+        true
+    }
+
     fn power(&self, radius: f64) -> f64 {
         // with portals, the flux that can come through them (at most E_h per unit area, each
         // side), not through the scene's whole bounding disc

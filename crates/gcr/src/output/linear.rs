@@ -1,7 +1,9 @@
 //! A 3-D image as numbers: the linear radiance L = B/π per pixel that an `.exr` image output
 //! holds, in memory (the Python package's `Solution.image`), made as [`super::write_outputs`]
-//! makes that file: the same camera choice, the same output mesh (mesh mode) or the same
-//! per-pixel gather (pixel mode).
+//! makes that file when no mesh output is asked for: the same camera choice, the same output mesh
+//! of what the camera sees (mesh mode) or the same per-pixel gather (pixel mode). (With a glTF or
+//! PLY output the file's image is drawn from the whole mesh instead: the same within the gathers'
+//! noise.)
 
 use super::OutputError;
 use super::camera::{ImageMode, ImageSettings};

@@ -650,6 +650,16 @@ fn edge(a: DVec4, b: DVec4, x: f64, y: f64) -> f64 {
 mod tests {
     use super::*;
 
+    /// Looking down −z at the origin from z = 4, 30° vertical field of view.
+    fn front_camera() -> PinholeCamera {
+        PinholeCamera {
+            eye: DVec3::new(0.0, 0.0, 4.0),
+            target: DVec3::ZERO,
+            up: DVec3::Y,
+            fov_y_degrees: 30.0,
+        }
+    }
+
     fn quad(colour: [f64; 3]) -> ShadedMesh {
         // A unit square in the z = 0 plane facing +z.
         ShadedMesh {
@@ -691,12 +701,7 @@ mod tests {
                 mesh.radiosity.resize(mesh.positions.len(), [0.0; 3]);
             }
         }
-        let cam = PinholeCamera {
-            eye: DVec3::new(0.0, 0.0, 4.0),
-            target: DVec3::ZERO,
-            up: DVec3::Y,
-            fov_y_degrees: 30.0,
-        };
+        let cam = front_camera();
         let seen = faces_seen(&mesh, None, &cam, (32, 32, 2), 4);
         assert_eq!(seen, [true, false, true, false]);
         // from behind, only the back-facing square shows its front
@@ -720,12 +725,7 @@ mod tests {
         let sky = Sky::new(SkyModel::Uniform, DVec3::Y, [3.0; 3], [0.0; 3]).unwrap();
         scene.add_lights([std::sync::Arc::new(sky) as std::sync::Arc<dyn scene_sampler::Light>]);
         let mesh = quad([std::f64::consts::PI; 3]); // radiance 1
-        let cam = PinholeCamera {
-            eye: DVec3::new(0.0, 0.0, 4.0),
-            target: DVec3::ZERO,
-            up: DVec3::Y,
-            fov_y_degrees: 30.0,
-        };
+        let cam = front_camera();
         let img = render_radiance(&mesh, Some(&scene), &cam, 32, 32, 2);
         let at = |x: usize, y: usize| img.radiance[y * 32 + x];
         assert!((at(16, 16)[0] - 1.0).abs() < 1e-6);
@@ -745,12 +745,7 @@ mod tests {
     #[test]
     fn a_facing_quad_fills_the_centre_and_leaves_the_corners_black() {
         let mesh = quad([std::f64::consts::PI; 3]); // radiance 1
-        let cam = PinholeCamera {
-            eye: DVec3::new(0.0, 0.0, 4.0),
-            target: DVec3::ZERO,
-            up: DVec3::Y,
-            fov_y_degrees: 30.0,
-        };
+        let cam = front_camera();
         let img = render(&mesh, &cam, &Exposure { scale: 1.0 }, 32, 32, 2);
         let px = |x: usize, y: usize| &img[(y * 32 + x) * 3..(y * 32 + x) * 3 + 3];
         assert_eq!(px(16, 16), &[255, 255, 255]);
@@ -782,12 +777,7 @@ mod tests {
     #[test]
     fn overlays_are_hidden_behind_surfaces_and_drawn_in_front_of_them() {
         let mesh = quad([0.0; 3]); // black square
-        let cam = PinholeCamera {
-            eye: DVec3::new(0.0, 0.0, 4.0),
-            target: DVec3::ZERO,
-            up: DVec3::Y,
-            fov_y_degrees: 30.0,
-        };
+        let cam = front_camera();
         let mut img = render_image(&mesh, None, &cam, &Exposure { scale: 1.0 }, 32, 32, 2);
         let centre = project(&cam, 32, 32, DVec3::ZERO).unwrap();
         assert!((centre.x - 16.0).abs() < 1e-9 && (centre.y - 16.0).abs() < 1e-9);

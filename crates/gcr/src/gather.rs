@@ -61,6 +61,16 @@ pub struct Gathered {
     pub guided: bool,
 }
 
+impl Gathered {
+    /// B as RGB for a domain of `bands` bands: a grey domain's one band in all three.
+    pub fn rgb(&self, bands: usize) -> [f64; 3] {
+        match bands {
+            1 => [self.radiosity[0]; 3],
+            _ => self.radiosity,
+        }
+    }
+}
+
 /// Gathers B at the surface point (y, n, face) of `domain`. `b_refl(x, n_x, face_x)` returns the
 /// networks' reflected radiosity at a hit. Deterministic for a given `seed`.
 pub fn gather(

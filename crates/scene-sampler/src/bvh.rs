@@ -193,6 +193,23 @@ impl SceneBvh {
         2e-4 + self.eps
     }
 
+    /// Whether a point `p` on face `face` (unit normal `normal`) lies inside or under a solid
+    /// along the unit direction `dir` (along the face): the distance to the first face that a ray
+    /// lifted off the face by [`SceneBvh::backoff`] meets within `reach`, when it meets the back
+    /// of that face (the point is on the solid's inner side); `None` when it meets a front or
+    /// nothing. Points of a face under a wall standing on it are moved out this way (lightmap
+    /// texels, output-mesh vertices), to just past the face met.
+    pub fn solid_exit(
+        &self,
+        scene: &Scene,
+        (p, normal, face): (DVec3, DVec3, u32),
+        dir: DVec3,
+        reach: f64,
+    ) -> Option<f64> {
+        let hit = self.closest_hit(p + normal * self.backoff(), dir, reach, face)?;
+        (scene.faces[hit.face as usize].normal.dot(dir) > 0.0).then_some(hit.t)
+    }
+
     /// The self-intersection offset (see the module docs).
     pub fn epsilon(&self) -> f64 {
         self.eps

@@ -110,16 +110,12 @@ pub fn texels(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas) -> (Vec<Texel>, usiz
 /// ray that meets one soonest to just past that face; `None` when no ray does.
 fn exit(scene: &Scene, bvh: &SceneBvh, t: &Texel, reach: f64) -> Option<DVec3> {
     let (tu, tv) = scene_sampler::orthonormal_basis(t.normal);
-    let lift = bvh.backoff();
-    let origin = t.point + t.normal * lift;
+    let at = (t.point, t.normal, t.face);
     [tu, -tu, tv, -tv]
         .iter()
-        .filter_map(|&dir| {
-            let hit = bvh.closest_hit(origin, dir, reach, t.face)?;
-            (scene.faces[hit.face as usize].normal.dot(dir) > 0.0).then_some((hit.t, dir))
-        })
+        .filter_map(|&dir| Some((bvh.solid_exit(scene, at, dir, reach)?, dir)))
         .min_by(|a, b| a.0.total_cmp(&b.0))
-        .map(|(d, dir)| t.point + dir * (d + 2.0 * lift))
+        .map(|(d, dir)| t.point + dir * (d + 2.0 * bvh.backoff()))
 }
 
 /// Calls `visit(texel index, (b1, b2), distance in texels)` for every texel of a `w × h` page

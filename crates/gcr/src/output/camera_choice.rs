@@ -120,11 +120,7 @@ fn quick_brightness(
     let phase = crate::progress::phase("camera");
     let b = radiosity_at_points(domain, trained, &Emitters::new(domain), &quick, &points)?;
     drop(phase);
-    let grey = domain.bands() == 1;
-    let rgb = |g: &crate::gather::Gathered| match grey {
-        true => [g.radiosity[0]; 3],
-        false => g.radiosity,
-    };
+    let rgb = |g: &crate::gather::Gathered| g.rgb(domain.bands());
     let exposure = match exposure {
         Some(scale) => Exposure { scale },
         None => Exposure::auto(

@@ -141,13 +141,9 @@ pub fn vertex_gather_point(scene: &Scene, bvh: &SceneBvh, f: u32, p: DVec3) -> D
     let q = p + 1e-4 * (face.centroid() - p);
     let to_centre = face.centroid() - q;
     let (reach, dir) = (to_centre.length(), to_centre.normalize_or_zero());
-    let lift = bvh.backoff();
-    let Some(hit) = bvh.closest_hit(q + face.normal * lift, dir, reach, f) else {
-        return q;
-    };
-    match scene.faces[hit.face as usize].normal.dot(dir) > 0.0 {
-        true => q + dir * (hit.t + 2.0 * lift).min(reach),
-        false => q,
+    match bvh.solid_exit(scene, (q, face.normal, f), dir, reach) {
+        Some(d) => q + dir * (d + 2.0 * bvh.backoff()).min(reach),
+        None => q,
     }
 }
 
@@ -255,21 +251,11 @@ pub(crate) fn output_mesh_of(
             net += area * g.from_networks.iter().sum::<f64>();
         }
     }
-    let grey = domain.bands() == 1;
     let mesh = ShadedMesh {
         positions: tri.positions,
         triangles: tri.triangles,
         face_of_triangle: tri.face_of_triangle,
-        radiosity: gathered
-            .iter()
-            .map(|g| {
-                if grey {
-                    [g.radiosity[0]; 3]
-                } else {
-                    g.radiosity
-                }
-            })
-            .collect(),
+        radiosity: gathered.iter().map(|g| g.rgb(domain.bands())).collect(),
     };
     let stats = GatherStats {
         network_share: if total > 0.0 { net / total } else { 0.0 },

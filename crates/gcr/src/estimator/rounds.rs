@@ -236,8 +236,9 @@ pub(crate) fn rounds_to_target(
         }
         // ⟨Next round: each replicate's Sobol points up to the next power of two that covers the
         // missing rays (variance ∝ 1/rays), at least twice and at most four times as many as so
-        // far. Owen-scrambled Sobol points are a balanced net only at powers of two: two-blockers'
-        // pixels at 296 rays (148 per replicate) had 13× the relative MSE of 512, cornell-box's
+        // far. Owen-scrambled Sobol points are a balanced net only at powers of two (and in
+        // aligned blocks of them, the parts below): two-blockers' pixels at 296 rays (148 per
+        // replicate, not a union of aligned blocks) had 13× the relative MSE of 512, cornell-box's
         // and wall-floor's the same or 1.5× per ray (docs/guide/images.md). The cap keeps a long
         // extrapolation from overshooting (the points converge faster than 1/√rays at first)⟩
         let needed = (rays as f64 * (bound / target).powi(2)).ceil() as usize;
@@ -249,15 +250,18 @@ pub(crate) fn rounds_to_target(
         let error = fresh.then(|| relative_std_error(&gathered)).flatten();
         let guided = fresh.then_some((last, error, chi2_scale(dof)));
         let more = round_rays((rays, needed, max_rays), (target, guided));
-        reporter.round(bound, rays + more, needed.min(max_rays));
         // ⟨The round: guided whole (each its own scrambling from index 0), combined with the
         // earlier ones by their variances; unguided in parts ([`parts`]), each merged by counts,
-        // stopping at the part that meets the target. Each replicate has used
-        // ⌈rays / REPLICATES⌉ Sobol points of its sequence so far⟩
+        // stopping at the part that meets the target (the progress expects the part that covers
+        // the rays predicted). Each replicate has used ⌈rays / REPLICATES⌉ Sobol points of its
+        // sequence so far⟩
         let start = rays.div_ceil(REPLICATES);
         let mut done = 0;
         let parted = (!fresh && dof >= PARTS_FROM).then_some(start);
-        for (offset, part) in parts(parted, more) {
+        let plan = parts(parted, more);
+        let expect = |needed: usize| part_end(&plan, rays, needed);
+        reporter.round(bound, expect(needed), needed.min(max_rays));
+        for &(offset, part) in &plan {
             let samples = GatherSamples {
                 direct: part,
                 indirect: part,
@@ -269,8 +273,15 @@ pub(crate) fn rounds_to_target(
                 .flatten();
             last = weight.map(|(_, v)| (v, more));
             combine(&mut estimates, &next, weight.map(|(v, _)| v));
-            if done < more && bound_at(&estimates, fresh).2.is_some_and(|b| b <= target) {
-                break;
+            if done < more {
+                match bound_at(&estimates, fresh).2 {
+                    Some(b) if b <= target => break,
+                    Some(b) => {
+                        let needed = ((rays + done) as f64 * (b / target).powi(2)).ceil() as usize;
+                        reporter.round(b, expect(needed), needed.min(max_rays));
+                    }
+                    None => {}
+                }
             }
         }
         rays += done;
@@ -331,8 +342,11 @@ fn bound_of_estimates(
     (gathered, dof, bound)
 }
 
-/// Rays per replicate of a part of a round ([`parts`]).
+/// The most rays per replicate of a part of a round ([`parts`]).
 const PART: usize = 1024;
+
+/// The fewest rays per replicate of a part of a round ([`parts`]).
+const MIN_PART: usize = 16;
 
 /// Groups with a standard error from which an unguided round stops part-way ([`parts`]): the
 /// bound is then checked after every part, and with few groups its estimate is noisy enough that
@@ -347,21 +361,43 @@ const PART: usize = 1024;
 const PARTS_FROM: usize = 64;
 
 /// An unguided round of `rays` rays from Sobol index `start` (per replicate; `None`: run whole)
-/// in parts, each an offset from `start` (per replicate) and its rays: a round of at least twice
-/// [`PART`] rays per replicate from a multiple of it is run [`PART`] at a time, and the rounds
-/// stop at the first part that meets the target — a prefix of a multiple of [`PART`] points of
-/// the sequence, so still a union of balanced nets. Whole, the last of the rounds, which double,
-/// overshot: under the sun patch room's ceiling it reached 1.25 % where 2 % was asked (16 384
-/// rays per point, 8.5 s; in parts 10 240, 5.5 s).
+/// in parts, each an offset from `start` (per replicate) and its rays. A part is a quarter of the
+/// points so far per replicate (at least [`MIN_PART`], at most [`PART`], a power of two that
+/// divides `start`), so that every part is an aligned block of the sequence — a balanced net —
+/// and the rounds stop at the first part that meets the target. Whole, the last of the rounds,
+/// which double, overshot: under the sun patch room's ceiling it reached 1.25 % where 2 % was
+/// asked (16 384 rays per point, 8.5 s; in parts of 1 024, 10 240, 5.5 s); the temple compound's
+/// 340 671 output-mesh vertices stood at 2.06 % after 256 rays and took a round to 512 (a quarter
+/// more rays meet 2 %).
 fn parts(start: Option<usize>, rays: usize) -> Vec<(usize, usize)> {
     let per = rays / REPLICATES;
-    let aligned = start.is_some_and(|s| s % PART == 0);
-    if !aligned || rays % REPLICATES != 0 || per % PART != 0 || per < 2 * PART {
+    let Some(start) = start.filter(|s| *s > 0) else {
+        return vec![(0, rays)];
+    };
+    // the largest power of two at most a quarter of `start` that divides it, at most PART
+    let quarter = (start / 4).max(1);
+    let part = (1 << quarter.ilog2())
+        .min(start & start.wrapping_neg())
+        .min(PART);
+    if part < MIN_PART || rays % REPLICATES != 0 || per % part != 0 || per < 2 * part {
         return vec![(0, rays)];
     }
-    (0..per / PART)
-        .map(|k| (k * PART, PART * REPLICATES))
+    (0..per / part)
+        .map(|k| (k * part, part * REPLICATES))
         .collect()
+}
+
+/// Where a round in parts `plan` ([`parts`]) after `rays` rays is expected to stop: the end of
+/// its first part that reaches `needed` rays, else its end.
+fn part_end(plan: &[(usize, usize)], rays: usize, needed: usize) -> usize {
+    let mut end = rays;
+    for &(_, part) in plan {
+        end += part;
+        if end >= needed {
+            break;
+        }
+    }
+    end
 }
 
 /// Merges a round's estimates `next` into `estimates`: with weight `weight` on the round, or by
@@ -664,18 +700,46 @@ mod tests {
     }
 
     /// A round that meets the target part-way stops there: 1 000 [`synthetic`] points to
-    /// 1.45 %. The doubling rounds go 64, 256, 1 024, 4 096 rays per point (bound ≈ 1.64 % there)
-    /// and then a round to 8 192 in two parts of [`PART`] per replicate: the first part ends at
-    /// 6 144 rays (bound ≈ 1.34 %) and the rounds stop; the parts continue the sequence where the
-    /// rays so far end (Sobol index 2 048, then 3 072 per replicate). Without parts: 8 192.
+    /// 1.45 %. The rounds go 64, 256, 1 024, 4 096 rays per point (bound ≈ 1.64 % there), the
+    /// rounds from 256 on in parts of a quarter of the points so far per replicate (32, then 128,
+    /// then 512), and the round to 8 192 stops after its first part, at 5 120 rays (bound ≈
+    /// 1.44 %; whole, 8 192; in parts of [`PART`], 6 144). Every part is an aligned block of the
+    /// sequence (its first Sobol index a multiple of its points) and every round continues the
+    /// sequence where the rays so far end.
     #[test]
     fn a_round_stops_at_the_part_that_meets_the_target() {
         let (g, starts) = synthetic_rounds(0.0145, Guiding::Off);
-        assert_eq!(g[0].rays, 6144);
+        assert_eq!(g[0].rays, 5120);
         assert!(error_bound(&g, g.len()).unwrap() <= 0.0145);
+        assert_eq!(starts[..3], [(0, 64), (32, 192), (128, 64)]);
+        assert_eq!(starts.last(), Some(&(2048, 1024)));
+        for w in starts.windows(2) {
+            assert_eq!(w[1].0, w[0].0 + w[0].1 / REPLICATES, "{starts:?}");
+        }
+        for &(first, rays) in &starts[2..] {
+            assert_eq!(first % (rays / REPLICATES), 0, "{starts:?}");
+        }
+        // the parts' sizes: a quarter of the points so far per replicate
+        assert_eq!(starts[2..].iter().filter(|c| c.1 == 64).count(), 12);
+        assert_eq!(starts.iter().filter(|c| c.1 == 256).count(), 12);
+    }
+
+    /// Parts ([`parts`]): a quarter of the points so far per replicate, a power of two dividing
+    /// them, from [`MIN_PART`] to [`PART`]; whole below, or when not asked for.
+    #[test]
+    fn parts_are_aligned_blocks_of_a_quarter_of_the_points_so_far() {
+        assert_eq!(parts(None, 512), [(0, 512)]);
+        assert_eq!(parts(Some(32), 192), [(0, 192)], "a part of 8 is too small");
         assert_eq!(
-            starts,
-            [(0, 64), (32, 192), (128, 768), (512, 3072), (2048, 2048)]
+            parts(Some(128), 256),
+            [(0, 64), (32, 64), (64, 64), (96, 64)]
+        );
+        // 160 so far per replicate (a part-way stop): parts of 32
+        assert_eq!(parts(Some(160), 192).len(), 3);
+        assert!(
+            parts(Some(1 << 14), 1 << 15)
+                .iter()
+                .all(|p| p.1 == PART * REPLICATES)
         );
     }
 

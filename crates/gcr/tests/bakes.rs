@@ -678,3 +678,78 @@ o lamp\nusemtl lamp\nf 13 14 15\nf 13 15 16
     let stays = gcr::vertex_gather_point(&scene, &bvh, floor, free);
     assert!(stays.distance(free) < 1e-3, "a free corner moved: {stays}");
 }
+
+/// A ground triangle (0, 0)–(10, 0)–(0, 10) in x, z whose three corners and centroid lie under
+/// two closed boxes standing on it (x, z in [−1, 11] × [−1, 4] and [−1, 2] × [4, 11]) while the
+/// strip x > 2, z > 4 shows: the way from a corner to the centroid never comes out, so each
+/// corner gathers at the nearest point of the triangle that is under no box (a temple's ground
+/// triangle of three buried corners showed a dark wedge); a point that is not buried stays.
+#[test]
+fn a_triangle_buried_but_for_a_strip_gathers_on_the_strip() {
+    let dir = temp_dir("buried-triangle");
+    let boxed = |(x0, x1): (f64, f64), (z0, z1): (f64, f64), at: usize| {
+        let mut s = String::new();
+        for y in [0.0, 1.0] {
+            for (x, z) in [(x0, z0), (x1, z0), (x1, z1), (x0, z1)] {
+                s += &format!("v {x} {y} {z}\n");
+            }
+        }
+        let i = |k: usize| at + k;
+        // faces outward: bottom, top, four sides
+        for f in [
+            [1, 2, 3, 4],
+            [5, 8, 7, 6],
+            [1, 5, 6, 2],
+            [2, 6, 7, 3],
+            [3, 7, 8, 4],
+            [4, 8, 5, 1],
+        ] {
+            s += &format!(
+                "f {} {} {}\nf {} {} {}\n",
+                i(f[0]),
+                i(f[1]),
+                i(f[2]),
+                i(f[0]),
+                i(f[2]),
+                i(f[3])
+            );
+        }
+        s
+    };
+    let obj = format!(
+        "mtllib m.mtl\nusemtl white\nv 0 0 0\nv 10 0 0\nv 0 0 10\no ground\nf 1 3 2\n\
+         o a\n{}o b\n{}",
+        boxed((-1.0, 11.0), (-1.0, 4.0), 3),
+        boxed((-1.0, 2.0), (4.0, 11.0), 11)
+    );
+    std::fs::write(dir.join("s.obj"), obj).unwrap();
+    std::fs::write(dir.join("m.mtl"), "newmtl white\nKd 0.7 0.7 0.7\n").unwrap();
+    let scene = scene_sampler::load_obj(dir.join("s.obj")).unwrap();
+    let bvh = SceneBvh::new(&scene);
+    let ground = (0..scene.faces.len() as u32)
+        .find(|&f| scene.faces[f as usize].area > 40.0)
+        .expect("the ground triangle");
+    let face = &scene.faces[ground as usize];
+    assert!(face.normal.y > 0.99, "the ground faces up");
+    for corner in face.v {
+        let at = gcr::vertex_gather_point(&scene, &bvh, ground, corner);
+        assert!(at.y.abs() < 1e-9, "off the ground: {at}");
+        assert!(
+            at.x > 2.0 && at.z > 4.0 && at.x + at.z < 10.0,
+            "{corner} gathers at {at}"
+        );
+        // (0, 10) comes out of box b on the way to the centroid (at x = 2); the others, whose way
+        // stays under box a, at the strip's nearest point, within a grid cell (10/16 a side)
+        let nearest = match (corner.x, corner.z) {
+            (0.0, 0.0) => DVec3::new(2.0, 0.0, 4.0),
+            (10.0, 0.0) => DVec3::new(6.0, 0.0, 4.0),
+            _ => continue,
+        };
+        assert!(
+            at.distance(nearest) < 1.0,
+            "{corner} gathers at {at}, far from {nearest}"
+        );
+    }
+    let open = DVec3::new(3.0, 0.0, 5.0);
+    assert!(gcr::vertex_gather_point(&scene, &bvh, ground, open).distance(open) < 1e-2);
+}

@@ -135,16 +135,49 @@ fn finest_pixel(images: &[(PinholeCamera, u32, u32)], p: DVec3) -> f64 {
 /// the open floor: a short ray along the face toward its centroid, lifted off the face, that
 /// meets the back of a face first (the point is inside a solid) moves the point to just past that
 /// face, where the visible part of the face begins — as lightmap texels are moved
-/// (`lightmap/texels.rs`).
+/// (`lightmap/texels.rs`). When the way to the centroid does not come out (the centroid is under
+/// a solid too: a large ground triangle whose corners and middle lie under a platform while a
+/// strip of it shows), a point under a solid (along its normal the back of a face comes first)
+/// gathers at the nearest of 136 points spread over its face that is not: a triangle of three
+/// buried corners showed a dark wedge in a public temple's image.
 pub fn vertex_gather_point(scene: &Scene, bvh: &SceneBvh, f: u32, p: DVec3) -> DVec3 {
     let face = &scene.faces[f as usize];
     let q = p + 1e-4 * (face.centroid() - p);
     let to_centre = face.centroid() - q;
     let (reach, dir) = (to_centre.length(), to_centre.normalize_or_zero());
-    match bvh.solid_exit(scene, (q, face.normal, f), dir, reach) {
-        Some(d) => q + dir * (d + 2.0 * bvh.backoff()).min(reach),
-        None => q,
+    if let Some(d) = bvh.solid_exit(scene, (q, face.normal, f), dir, reach) {
+        return q + dir * (d + 2.0 * bvh.backoff()).min(reach);
     }
+    let under = |x: DVec3| {
+        (bvh.solid_exit(scene, (x, face.normal, f), face.normal, f64::INFINITY)).is_some()
+    };
+    if !under(q) {
+        return q;
+    }
+    nearest_open_point(face, q, under).unwrap_or(q)
+}
+
+/// Parts per side of the grid [`vertex_gather_point`] searches a buried vertex's face with.
+const OPEN_POINT_GRID: u32 = 16;
+
+/// The point nearest `p` for which `under` is false among the centres of the upright
+/// sub-triangles of `face` with each side cut in [`OPEN_POINT_GRID`] parts (136 points).
+fn nearest_open_point(
+    face: &scene_sampler::Face,
+    p: DVec3,
+    under: impl Fn(DVec3) -> bool,
+) -> Option<DVec3> {
+    let n = f64::from(OPEN_POINT_GRID);
+    let [a, b, c] = face.v;
+    let mut points: Vec<DVec3> = (0..OPEN_POINT_GRID)
+        .flat_map(|i| (0..OPEN_POINT_GRID - i).map(move |j| (f64::from(i), f64::from(j))))
+        .map(|(i, j)| {
+            let (u, v) = ((i + 1.0 / 3.0) / n, (j + 1.0 / 3.0) / n);
+            a + (b - a) * u + (c - a) * v
+        })
+        .collect();
+    points.sort_by(|x, y| x.distance_squared(p).total_cmp(&y.distance_squared(p)));
+    points.into_iter().find(|&x| !under(x))
 }
 
 /// Which faces the output mesh gathers B for.

@@ -226,6 +226,7 @@ fn one(name: &str, p: &Plan) -> Result<std::result::Result<(Vec<Curve>, String),
                     target_error: Some(target),
                     ..PathSettings::default()
                 },
+                seed: std::env::var("IMAGE_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(SolveConfig::default().seed),
                 ..SolveConfig::default()
             };
             let trained = Trained::without_networks(&domain, &config);
@@ -243,12 +244,22 @@ fn one(name: &str, p: &Plan) -> Result<std::result::Result<(Vec<Curve>, String),
                 img.stats.rays,
                 100.0 * img.stats.relative_std_error.unwrap_or(0.0)
             );
+            if let Ok(d) = std::env::var("IMAGE_DUMP") {
+                let text: String = values
+                    .iter()
+                    .map(|v| format!("{:e} {:e} {:e}\n", v[0], v[1], v[2]))
+                    .collect();
+                std::fs::write(format!("{d}/gcr-{}.txt", img.stats.rays), text)?;
+            }
             c.record(&label, img.stats.rays, seconds, rel_mse(&values, &r));
         }
         curves.push(c);
     }
     let mut note = format!("reference: Mitsuba 3 at {} spp ({REF_SAMPLER})", p.ref_spp);
     for sampler in SAMPLERS {
+        if std::env::var("IMAGE_GCR_ONLY").is_ok() {
+            break;
+        }
         let mut spp = p.spp.to_vec();
         if sampler == REF_SAMPLER {
             spp.extend_from_slice(p.spp_unbiased);

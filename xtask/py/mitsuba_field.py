@@ -9,7 +9,8 @@ POINTS: one point per line, `x y z nx ny nz` (the surface normal, front side).
 OUT:    for each SPP, OUT.<spp> gets one line `B_r B_g B_b` per point, and the script prints one line
         `spp=<spp> load=<s> render=<s>` per render to stdout.
 
-One `batch` sensor of `radiancemeter`s, one per point, each 10⁻³ of the scene diagonal along the normal (Mitsuba skips hits closer than ~10⁻⁴ to a ray origin) and looking back at
+One `batch` sensor of `radiancemeter`s, one per point, each `meter_distance` along the normal (10⁻⁵ of the
+diagonal, at least 2·10⁻⁴: Mitsuba skips hits closer than 10⁻⁴ to a ray origin; mitsuba_scene.py) and looking back at
 the surface (direction -n): it measures the radiance L leaving the point toward +n; for a Lambertian surface
 the exitance is B = pi*L. Integrator `path` (unbounded depth, Russian roulette from depth 5), sampler
 `ldsampler` by default (low-discrepancy; falls back to `multijitter`; `--sampler`: see mitsuba_scene.py), variant `scalar_rgb`, one render call per SPP.
@@ -27,7 +28,7 @@ except ImportError as e:  # the bench skips Mitsuba with a note
 import numpy as np
 
 mi.set_variant("scalar_rgb")
-from mitsuba_scene import load_batch, read_textures, scene_dict, split_sampler  # noqa: E402
+from mitsuba_scene import load_batch, meter_distance, read_textures, scene_dict, split_sampler  # noqa: E402
 
 
 def main():
@@ -38,7 +39,7 @@ def main():
     tri = np.loadtxt(faces_path, ndmin=2)
     pts = np.loadtxt(points_path, ndmin=2)
     lo, hi = tri[:, :9].reshape(-1, 3).min(0), tri[:, :9].reshape(-1, 3).max(0)
-    offset = 1e-3 * float(np.linalg.norm(hi - lo))
+    offset = meter_distance(float(np.linalg.norm(hi - lo)))
     scene = scene_dict(tri, read_textures(faces_path))
     n = len(pts)
     t_scene = time.perf_counter() - t0

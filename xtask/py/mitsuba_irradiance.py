@@ -9,12 +9,12 @@ POINTS: one point per line, `x y z nx ny nz`: in the air, n the unit normal of t
 OUT:    for each SPP, OUT.<spp> gets one line `E_r E_g E_b se_r se_g se_b` per point (se: standard error),
         and the script prints `spp=<spp> scene=<s> load=<s> render=<s>` per SPP to stdout.
 
-Each point gets a white (ρ = 1) diffuse square of half-size 10⁻⁴ of the scene's diagonal, facing n, and a
-`radiancemeter` 10⁻³ of the diagonal above it looking down at it (Mitsuba skips hits closer than ~10⁻⁴ to a
-ray origin): the square's exitance is πL = ρ·E = E, estimated by Mitsuba's own path tracer at the square
+Each point gets a white (ρ = 1) diffuse square facing n and a `radiancemeter` above it looking down at it,
+`meter_distance` away (10⁻⁵ of the diagonal, at least 2·10⁻⁴: Mitsuba skips hits closer than 10⁻⁴ to a ray
+origin; mitsuba_scene.py), the square's half-size half that: the square's exitance is πL = ρ·E = E, estimated by Mitsuba's own path tracer at the square
 (next-event estimation and BSDF sampling, unbounded depth, `ldsampler` by default; `--sampler`: see
 mitsuba_scene.py). The squares block and reflect a
-negligible 10⁻⁸ of the diagonal² each. The scene is loaded once per SPP and rendered with two seeds: E is their mean, the
+negligible 10⁻¹⁰ of the diagonal² each (or 4·10⁻⁸ square units). The scene is loaded once per SPP and rendered with two seeds: E is their mean, the
 standard error half their difference. Exit code 3 when mitsuba or numpy is not importable.
 
 `--emitters JSON`: a file with a list of Mitsuba emitter dicts added to the scene (`point`,
@@ -34,7 +34,9 @@ except ImportError as e:  # the bench skips Mitsuba with a note
     sys.exit(3)
 
 mi.set_variant("scalar_rgb")
-from mitsuba_scene import load_batch, read_textures, scene_dict, split_sampler  # noqa: E402
+from mitsuba_scene import (  # noqa: E402
+    emitter_dict, load_batch, meter_distance, read_textures, scene_dict, split_emitters, split_sampler,
+)
 
 
 def frame(n):
@@ -43,34 +45,6 @@ def frame(n):
     t = np.cross(n, a)
     t /= np.linalg.norm(t)
     return t, np.cross(n, t)
-
-
-def split_emitters(argv):
-    """(the emitter dicts of `--emitters FILE`, or [], and the other arguments)."""
-    if "--emitters" in argv:
-        i = argv.index("--emitters")
-        import json
-
-        with open(argv[i + 1]) as f:
-            emitters = json.load(f)
-        return emitters, argv[:i] + argv[i + 2 :]
-    return [], argv
-
-
-def overcast_envmap(zenith):
-    """The CIE overcast sky about +Y as a lat-long bitmap (rows: zenith angle from the top)."""
-    h, w = 256, 512
-    theta = (np.arange(h) + 0.5) / h * np.pi
-    c = np.cos(theta)
-    radiance = np.where(c > 0, zenith * (1 + 2 * c) / 3, 0.0)
-    img = np.repeat(radiance[:, None], w, axis=1)
-    return mi.Bitmap(np.repeat(img[:, :, None], 3, axis=2).astype(np.float32))
-
-
-def emitter_dict(e):
-    if e.get("type") == "cie-overcast":
-        return {"type": "envmap", "bitmap": overcast_envmap(float(e["zenith"]))}
-    return e
 
 
 def main():
@@ -83,7 +57,8 @@ def main():
     pts = np.loadtxt(points_path, ndmin=2)
     lo, hi = tri[:, :9].reshape(-1, 3).min(0), tri[:, :9].reshape(-1, 3).max(0)
     diag = float(np.linalg.norm(hi - lo))
-    half, above = 1e-4 * diag, 1e-3 * diag
+    above = meter_distance(diag)
+    half = 0.5 * above
     squares = []
     for p in pts:
         n = p[3:] / np.linalg.norm(p[3:])

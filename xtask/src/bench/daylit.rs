@@ -111,12 +111,27 @@ fn cases() -> Result<Vec<Case>> {
 /// 80 000 lux at 35° (azimuth 200°) and a CIE overcast sky of 10 000 lux (black ground); `Ok(None)`
 /// with a note when the model cannot be fetched.
 fn temple(notes: &mut String) -> Result<Option<Case>> {
-    let obj = match super::public_models::temple_compound() {
-        Ok(obj) => obj,
-        Err(e) => {
-            writeln!(notes, "- temple compound: skipped ({e:#}).")?;
+    let (scene, emitters) = match temple_lit()? {
+        Ok(lit) => lit,
+        Err(why) => {
+            writeln!(notes, "- temple compound: skipped ({why}).")?;
             return Ok(None);
         }
+    };
+    Ok(Some(Case {
+        name: "temple compound (public, 124 580 triangles), sun 80 000 lux at 35° + CIE overcast 10 000 lux",
+        scene,
+        emitters,
+        peers: None,
+    }))
+}
+
+/// The temple compound with its sun and sky ([`temple`]), and the same lights as Mitsuba 3
+/// emitters (`xtask/py/mitsuba_scene.py`); `Ok(Err(why))` when the model cannot be fetched.
+pub(super) fn temple_lit() -> Result<std::result::Result<(Scene, serde_json::Value), String>> {
+    let obj = match super::public_models::temple_compound() {
+        Ok(obj) => obj,
+        Err(e) => return Ok(Err(format!("{e:#}"))),
     };
     let mut scene = scene_sampler::load(&obj)?.into_3d()?;
     let overcast = serde_json::json!({"model": "cie-overcast", "illuminance": 10_000.0,
@@ -126,13 +141,9 @@ fn temple(notes: &mut String) -> Result<Option<Case>> {
     scene.add_lights(serde_json::from_value::<Lighting>(lighting)?.lights()?);
     let zenith = 9.0 * 10_000.0 / (7.0 * std::f64::consts::PI);
     let sun = scene_sampler::lights::lighting::Up::Y.direction(200.0, 35.0);
-    Ok(Some(Case {
-        name: "temple compound (public, 124 580 triangles), sun 80 000 lux at 35° + CIE overcast 10 000 lux",
-        scene,
-        emitters: serde_json::json!([{"type": "directional", "direction": (-sun).to_array(),
-            "irradiance": 80_000.0}, {"type": "cie-overcast", "zenith": zenith}]),
-        peers: None,
-    }))
+    let emitters = serde_json::json!([{"type": "directional", "direction": (-sun).to_array(),
+        "irradiance": 80_000.0}, {"type": "cie-overcast", "zenith": zenith}]);
+    Ok(Ok((scene, emitters)))
 }
 
 /// The grille room (`scenes/grille-lamp.gltf`): a 6 × 3 × 6 m room split by a double-sided

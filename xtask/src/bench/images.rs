@@ -16,7 +16,9 @@
 //!   The reference's own error is estimated from the 1024-spp render's (noise falls as 1/spp in MSE).
 //!
 //! Skipped with a note when `mitsuba` is not importable (the reference needs it).
-//! `IMAGE_SCENES=cornell-box` restricts the scenes; `IMAGE_SEED=N` sets GCR's seed (a single run's
+//! `IMAGE_SCENES=cornell-box` restricts the scenes (`temple`: the public temple compound under the
+//! daylit bench's sun and CIE overcast sky, not run by default); `IMAGE_TARGETS=0.1,0.05` sets GCR's
+//! targets; `IMAGE_SEED=N` sets GCR's seed (a single run's
 //! error on an emitter's outline is heavy-tailed: checker-room at 64 rays read 2.04e-4 with the
 //! default seed, 3.0–4.0e-5 with seeds 2–5); `IMAGE_GCR_ONLY=1` runs GCR against the cached
 //! reference without Mitsuba's runs. The 3-D built-ins (the generated ones at 10 000
@@ -52,7 +54,7 @@ const SAMPLERS: [&str; 2] = ["ldsampler", "multijitter"];
 struct Plan {
     scenes: Vec<String>,
     size: (u32, u32),
-    targets: &'static [f64],
+    targets: Vec<f64>,
     spp: &'static [usize],
     /// More sample counts for the unbiased sampler only (`ldsampler` would round 2304 = 48² up to
     /// 4096, a square power of two): the longest GCR runs stay within Mitsuba's.
@@ -66,11 +68,14 @@ fn plan(quick: bool) -> Plan {
             .map(|x| x.trim().to_string())
             .collect::<Vec<_>>()
     });
+    let targets: Option<Vec<f64>> = std::env::var("IMAGE_TARGETS")
+        .ok()
+        .map(|s| s.split(',').filter_map(|x| x.trim().parse().ok()).collect());
     if quick {
         Plan {
             scenes: scenes.unwrap_or_else(|| vec!["wall-floor".into()]),
             size: (32, 32),
-            targets: &[0.05],
+            targets: targets.unwrap_or_else(|| vec![0.05]),
             spp: &[16],
             spp_unbiased: &[],
             ref_spp: 256,
@@ -92,7 +97,7 @@ fn plan(quick: bool) -> Plan {
                 .to_vec()
             }),
             size: (96, 96),
-            targets: &[0.1, 0.05, 0.02, 0.01],
+            targets: targets.unwrap_or_else(|| vec![0.1, 0.05, 0.02, 0.01]),
             spp: &[4, 16, 64, 256, 1024],
             spp_unbiased: &[2304],
             ref_spp: REF_SPP,
@@ -129,7 +134,7 @@ fn mitsuba(
     camera: &PinholeCamera,
     (w, h): (u32, u32),
     (spp, sampler): (&[usize], &str),
-    tag: &str,
+    (tag, emitters): (&str, Option<&Path>),
 ) -> Result<std::result::Result<Vec<Render>, String>> {
     let dir = std::env::temp_dir().join(format!("gcr-images-{}-{tag}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
@@ -143,7 +148,12 @@ fn mitsuba(
             e.x, e.y, e.z, t.x, t.y, t.z, u.x, u.y, u.z, camera.fov_y_degrees
         ),
     )?;
-    let stdout = match run_mitsuba("mitsuba_image.py", sampler, &[&ff, &cf, &of], spp)? {
+    let flag = Path::new("--emitters");
+    let files: Vec<&Path> = match emitters {
+        Some(e) => vec![flag, e, &ff, &cf, &of],
+        None => vec![&ff, &cf, &of],
+    };
+    let stdout = match run_mitsuba("mitsuba_image.py", sampler, &files, spp)? {
         Ok(o) => o,
         Err(why) => return Ok(Err(why)),
     };
@@ -162,7 +172,7 @@ fn mitsuba(
 /// The cached Mitsuba reference of one scene and size (rendered when missing).
 fn reference(
     name: &str,
-    scene: &Scene,
+    (scene, emitters): (&Scene, Option<&Path>),
     camera: &PinholeCamera,
     size: (u32, u32),
     spp: usize,
@@ -184,7 +194,7 @@ fn reference(
         camera,
         size,
         (&[spp], REF_SAMPLER),
-        &format!("{name}-ref"),
+        (&format!("{name}-ref"), emitters),
     )? {
         Ok(r) => r,
         Err(why) => return Ok(Err(why)),
@@ -202,12 +212,32 @@ fn reference(
     Ok(Ok(values))
 }
 
+/// The scene `name` (a built-in, a file, or `temple`: the public temple compound under the daylit
+/// bench's sun and sky, `super::daylit::temple_lit`) and, for lights besides emitting faces, a
+/// file of them as Mitsuba emitters; `Ok(Err(why))` when the scene cannot be had.
+fn lit_scene(name: &str) -> Result<std::result::Result<(Scene, Option<PathBuf>), String>> {
+    if name != "temple" {
+        return Ok(Ok((scene_sampler::load_or_builtin(name)?.into_3d()?, None)));
+    }
+    let (scene, emitters) = match super::daylit::temple_lit()? {
+        Ok(lit) => lit,
+        Err(why) => return Ok(Err(why)),
+    };
+    let path = std::env::temp_dir().join(format!("gcr-images-{}-lights.json", std::process::id()));
+    std::fs::write(&path, serde_json::to_string(&emitters)?)?;
+    Ok(Ok((scene, Some(path))))
+}
+
 /// Every solver on one scene: the curves, and a note.
 fn one(name: &str, p: &Plan) -> Result<std::result::Result<(Vec<Curve>, String), String>> {
-    let scene = scene_sampler::load_or_builtin(name)?.into_3d()?;
+    let (scene, emitters) = match lit_scene(name)? {
+        Ok(lit) => lit,
+        Err(why) => return Ok(Err(why)),
+    };
+    let emitters = emitters.as_deref();
     let camera = PinholeCamera::of_scene(&scene);
     let name = &slug(name);
-    let r = match reference(name, &scene, &camera, p.size, p.ref_spp)? {
+    let r = match reference(name, (&scene, emitters), &camera, p.size, p.ref_spp)? {
         Ok(r) => r,
         Err(why) => return Ok(Err(why)),
     };
@@ -215,7 +245,7 @@ fn one(name: &str, p: &Plan) -> Result<std::result::Result<(Vec<Curve>, String),
     let mut curves = Vec::new();
     {
         let mut c = Curve::new("gcr pixel");
-        for &target in p.targets {
+        for &target in &p.targets {
             let t = Instant::now();
             let bvh = SceneBvh::new(&scene);
             let domain = Domain::ThreeD(KernelSampler::new(&scene, &bvh));
@@ -268,7 +298,7 @@ fn one(name: &str, p: &Plan) -> Result<std::result::Result<(Vec<Curve>, String),
             &camera,
             p.size,
             (&spp, sampler),
-            &format!("{name}-{sampler}"),
+            (&format!("{name}-{sampler}"), emitters),
         )? {
             Ok(runs) => {
                 let mut c = Curve::new(&format!("mitsuba 3 ({sampler})"));

@@ -19,8 +19,8 @@ standard error half their difference. Exit code 3 when mitsuba or numpy is not i
 
 `--emitters JSON`: a file with a list of Mitsuba emitter dicts added to the scene (`point`,
 `directional`, `constant`, …), and one of ours: `{"type": "cie-overcast", "zenith": L_z}`, the CIE
-overcast sky L(θ) = L_z (1 + 2 cos θ)/3 above the horizon about +Y (black below) as an `envmap` of
-512 × 256 texels (Mitsuba's envmap has +Y up, the zenith at the image's top row).
+overcast sky L(θ) = L_z (1 + 2 cos θ)/3 above the horizon about +Y (black below) as an `envmap`
+(mitsuba_scene.py; Mitsuba's envmap has +Y up, the zenith at the image's top row).
 """
 import sys
 import time

@@ -28,6 +28,8 @@ pub struct RefineLimits {
     pub max_growth: f64,
     /// No edge shorter than this (scene units) is split.
     pub min_edge: f64,
+    /// The most new vertices one level may gather (what the memory holds; `usize::MAX`: no limit).
+    pub max_level_points: usize,
 }
 
 impl RefineLimits {
@@ -46,6 +48,7 @@ impl RefineLimits {
             spread: 0.2,
             max_growth: 6.0,
             min_edge: (1e-3 * diagonal).max(uniform / f64::from(1u32 << levels)),
+            max_level_points: usize::MAX,
         }
     }
 }
@@ -91,8 +94,8 @@ pub fn refine<E>(
             break;
         }
         marked.sort_by(|a, b| b.0.total_cmp(&a.0));
-        // each red split adds at most 3 vertices
-        let room = budget.saturating_sub(tri.positions.len()) / 3;
+        // each red split adds at most 3 vertices (its neighbours' closure a few more)
+        let room = (budget.saturating_sub(tri.positions.len())).min(limits.max_level_points) / 3;
         marked.truncate(room);
         if marked.is_empty() {
             break;
@@ -187,6 +190,35 @@ mod tests {
     /// refinement concentrates vertices along the edge x = 0.5, keeps the mesh conforming (every
     /// edge is shared by at most two triangles with no vertex inside another's edge), keeps the
     /// area and the windings, and leaves a uniform square alone.
+    /// A level gathers at most [`RefineLimits::max_level_points`] new vertices (what the memory
+    /// holds): the unit square's two triangles across a shadow edge split into 5 new vertices
+    /// in one level, into 3 (one triangle, the widest spread) when 3 fit.
+    #[test]
+    fn a_level_gathers_no_more_vertices_than_fit() {
+        let b = |p: DVec3| if p.x + 0.3 * p.y < 0.5 { 1.0 } else { 0.0 };
+        let square = Triangulation {
+            positions: vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            face_of_triangle: vec![0, 0],
+        };
+        let values: Vec<Gathered> = square.positions.iter().map(|p| g(b(*p))).collect();
+        let new_vertices = |max_level_points: usize| {
+            let limits = RefineLimits {
+                levels: 1,
+                spread: 0.2,
+                max_growth: 100.0,
+                min_edge: 0.0,
+                max_level_points,
+            };
+            let gather =
+                |pts: &[(DVec3, u32)]| Ok::<_, ()>(pts.iter().map(|(p, _)| g(b(*p))).collect());
+            let (tri, _) = refine(square.clone(), values.clone(), limits, |_| 0.0, gather).unwrap();
+            tri.positions.len() - 4
+        };
+        assert_eq!(new_vertices(usize::MAX), 5);
+        assert_eq!(new_vertices(3), 3);
+    }
+
     #[test]
     fn refinement_follows_a_shadow_edge_and_stays_conforming() {
         let b = |p: DVec3| if p.x < 0.5 { 1.0 } else { 0.0 };
@@ -201,6 +233,7 @@ mod tests {
             spread: 0.2,
             max_growth: 100.0,
             min_edge: 0.0,
+            max_level_points: usize::MAX,
         };
         let (tri, values) = refine(
             square.clone(),

@@ -32,6 +32,23 @@ pub enum GatherError {
     /// The configured shard has no block ([`super::shard_points`]).
     #[error(transparent)]
     Shard(#[from] super::ShardError),
+    /// The output mesh has more vertices to gather than the memory available holds (checked
+    /// before they are gathered; `crate::output::mesh`).
+    #[error(
+        "the output mesh has {points} vertices to gather: about {:.1} GiB at the gather's peak, \
+         more than the {:.1} GiB available; an image alone gathers only what its camera sees \
+         (leave out --mesh and --ply)",
+        *needed as f64 / f64::from(1u32 << 30),
+        *available as f64 / f64::from(1u32 << 30)
+    )]
+    MeshMemory {
+        /// Vertices to gather.
+        points: usize,
+        /// Bytes they would take.
+        needed: u64,
+        /// Bytes available.
+        available: u64,
+    },
 }
 
 /// Radiosity at many surface points `(point, normal, face)` in parallel by the configured gather.

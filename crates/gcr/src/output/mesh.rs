@@ -251,6 +251,8 @@ pub(crate) fn output_mesh_of(
     // ⟨Gather once where coplanar faces of one material share a vertex (crate::weld)⟩
     let welded = crate::weld::weld(&scene.faces, k.bvh, scene.diagonal(), &vertices);
     let at: Vec<(DVec3, u32)> = welded.gathered.iter().map(|&v| vertices[v]).collect();
+    // ⟨What the memory holds, checked before the gather; each refinement level at most that⟩
+    let fits = super::memory::check_mesh_memory(at.len(), crate::metrics::available_memory())?;
     let phase = crate::progress::phase("mesh");
     let once = gather_at(&at)?;
     drop(phase);
@@ -263,7 +265,10 @@ pub(crate) fn output_mesh_of(
         .collect();
     // ⟨Refine where B varies faster than linear interpolation follows (shadow edges)⟩
     let (tri, gathered) = if config.gather == GatherMode::Paths {
-        let refine_limits = RefineLimits::for_scene(scene.diagonal(), local.uniform);
+        let refine_limits = RefineLimits {
+            max_level_points: fits,
+            ..RefineLimits::for_scene(scene.diagonal(), local.uniform)
+        };
         let finest = |p: DVec3| match extent {
             MeshExtent::Whole => 0.0,
             MeshExtent::SeenBy(images) => 2.0 * finest_pixel(images, p),

@@ -342,6 +342,9 @@ fn one(name: &str, p: &Plan) -> Result<std::result::Result<(Vec<Curve>, String),
             }
         }
     }
+    if let Some(file) = emitters {
+        let _ = std::fs::remove_file(file);
+    }
     Ok(Ok((curves, note)))
 }
 

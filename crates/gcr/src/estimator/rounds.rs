@@ -241,7 +241,7 @@ pub(crate) fn rounds_to_target(
         // replicate, not a union of aligned blocks) had 13× the relative MSE of 512, cornell-box's
         // and wall-floor's the same or 1.5× per ray (docs/guide/images.md). The cap keeps a long
         // extrapolation from overshooting (the points converge faster than 1/√rays at first)⟩
-        let needed = (rays as f64 * (bound / target).powi(2)).ceil() as usize;
+        let needed = rays_to_target(rays, bound, target);
         // ⟨Guiding::Auto: guide from here on when the pilot predicts hard light⟩
         if guiding == Guiding::Auto && rays == pilot_rays && Guiding::pays(rays, bound, needed) {
             fresh = true;
@@ -277,7 +277,7 @@ pub(crate) fn rounds_to_target(
                 match bound_at(&estimates, fresh).2 {
                     Some(b) if b <= target => break,
                     Some(b) => {
-                        let needed = ((rays + done) as f64 * (b / target).powi(2)).ceil() as usize;
+                        let needed = rays_to_target(rays + done, b, target);
                         reporter.round(b, expect(needed), needed.min(max_rays));
                     }
                     None => {}
@@ -385,6 +385,12 @@ fn parts(start: Option<usize>, rays: usize) -> Vec<(usize, usize)> {
     (0..per / part)
         .map(|k| (k * part, part * REPLICATES))
         .collect()
+}
+
+/// The rays per point that bring an error bound `bound` after `rays` rays to `target`
+/// (variance ∝ 1/rays).
+fn rays_to_target(rays: usize, bound: f64, target: f64) -> usize {
+    (rays as f64 * (bound / target).powi(2)).ceil() as usize
 }
 
 /// Where a round in parts `plan` ([`parts`]) after `rays` rays is expected to stop: the end of

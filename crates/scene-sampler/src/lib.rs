@@ -97,7 +97,7 @@ pub use spectrum::{BANDS, Bands, Spectrum};
 pub use texture::{FaceTexture, Mipmaps, Texture, Wrap, srgb_to_linear};
 pub use warp::{
     cosine_halfplane, cosine_hemisphere, hemisphere_quadrature, orthonormal_basis, uniform_cone,
-    uniform_cone_pdf,
+    uniform_cone_about, uniform_cone_pdf,
 };
 
 /// A scene of either dimension, as returned by [`load`](fn@load) and [`builtin`](fn@builtin).

@@ -32,12 +32,22 @@ pub fn cosine_hemisphere(n: DVec3, u: [f64; 2]) -> DVec3 {
 /// `one_minus_cos` = 1 − cos α (pass it as 2 sin²(α/2) so that a sun's 0.27° keeps its digits):
 /// density 1/(2π (1 − cos α)) per steradian ([`uniform_cone_pdf`]; pbrt-v4's `SampleUniformCone`).
 pub fn uniform_cone(axis: DVec3, one_minus_cos: f64, u: [f64; 2]) -> DVec3 {
+    uniform_cone_about((axis, orthonormal_basis(axis)), one_minus_cos, u)
+}
+
+/// [`uniform_cone`] about a frame (the unit `axis` and two unit tangents orthogonal to it and to
+/// each other, as [`orthonormal_basis`] gives) computed once: a sun's cone is sampled at every
+/// path vertex. The direction is unit by construction (sin²θ + cos²θ = 1 up to rounding).
+pub fn uniform_cone_about(
+    (axis, (t, b)): (DVec3, (DVec3, DVec3)),
+    one_minus_cos: f64,
+    u: [f64; 2],
+) -> DVec3 {
     // 1 − cos θ uniform on [0, 1 − cos α]; sin θ from it without cancellation
     let omc = u[0].clamp(0.0, 1.0) * one_minus_cos;
     let sin = (omc * (2.0 - omc)).max(0.0).sqrt();
-    let phi = 2.0 * std::f64::consts::PI * u[1];
-    let (t, b) = orthonormal_basis(axis);
-    (t * (sin * phi.cos()) + b * (sin * phi.sin()) + axis * (1.0 - omc)).normalize()
+    let (s, c) = (2.0 * std::f64::consts::PI * u[1]).sin_cos();
+    t * (sin * c) + b * (sin * s) + axis * (1.0 - omc)
 }
 
 /// The solid-angle density of [`uniform_cone`]: 1/(2π (1 − cos α)).

@@ -6,7 +6,7 @@
 //! ([`crate::uniform_cone`]); a diameter of 0 makes it a delta direction.
 
 use super::{Light, LightSample, Receiver, ShadowTarget};
-use crate::{BANDS, Bands, uniform_cone, uniform_cone_pdf};
+use crate::{BANDS, Bands, uniform_cone_about, uniform_cone_pdf};
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -21,6 +21,10 @@ pub struct Sun {
     half_angle: f64,
     /// 1 − cos α, as 2 sin²(α/2).
     one_minus_cos: f64,
+    /// Two unit tangents orthogonal to `dir` (the cone's frame, computed once).
+    tangents: (DVec3, DVec3),
+    /// The disc's emission π·L = E_n/sin²α (0 for a delta direction).
+    disc_emission: Bands,
 }
 
 impl Sun {
@@ -39,23 +43,20 @@ impl Sun {
             return None;
         }
         let half_angle = (diameter_deg / 2.0).to_radians();
+        let s2 = half_angle.sin().powi(2);
         Some(Self {
             dir,
             normal_irradiance,
             half_angle,
             one_minus_cos: 2.0 * (half_angle / 2.0).sin().powi(2),
+            tangents: crate::orthonormal_basis(dir),
+            disc_emission: normal_irradiance.map(|e| if s2 > 0.0 { e / s2 } else { 0.0 }),
         })
     }
 
     /// Unit direction toward the sun.
     pub fn direction(&self) -> DVec3 {
         self.dir
-    }
-
-    /// The disc's emission π·L = E_n/sin²α.
-    fn disc_emission(&self) -> Bands {
-        let s2 = self.half_angle.sin().powi(2);
-        self.normal_irradiance.map(|e| e / s2)
     }
 
     fn in_disc(&self, dir: DVec3) -> bool {
@@ -74,11 +75,11 @@ impl Light for Sun {
                 pdf: 1.0,
             });
         }
-        let w = uniform_cone(self.dir, self.one_minus_cos, u);
+        let w = uniform_cone_about((self.dir, self.tangents), self.one_minus_cos, u);
         let cy = at.n.dot(w);
         (cy > 0.0).then(|| LightSample {
             target: ShadowTarget::Direction(w),
-            emission: self.disc_emission(),
+            emission: self.disc_emission,
             g: cy / PI,
             pdf: uniform_cone_pdf(self.one_minus_cos),
         })
@@ -86,7 +87,7 @@ impl Light for Sun {
 
     fn escaped(&self, dir: DVec3) -> Bands {
         if self.in_disc(dir) {
-            self.disc_emission()
+            self.disc_emission
         } else {
             [0.0; BANDS]
         }

@@ -1,8 +1,11 @@
 //! The `rays` group (issue 36 item 2): our BVH's ray throughput against Embree's on the same
 //! triangles and the same rays. Scenes: the Cornell box cut into 10⁵ and 10⁶ triangles
-//! (`tessellated-cornell-N`) and 10⁵ random boxes (`random-boxes-100000`, incoherent clutter).
+//! (`tessellated-cornell-N`), 10⁵ random boxes (`random-boxes-100000`, incoherent clutter) and a
+//! public model, the temple compound (124 580 triangles of halls, roofs and pagodas over a
+//! courtyard: `public_models.rs`; `RAYS_TEMPLE=off` leaves it out).
 //! Rays, 2²⁰ of each kind:
-//! * **coherent**: a pinhole camera's primary rays (1024²) from inside the box toward its back;
+//! * **coherent**: a pinhole camera's primary rays (1024²) from inside the box toward its back
+//!   (the temple: from the edge of its bounds across the compound);
 //! * **incoherent**: from points spread over the surfaces, cosine-distributed about the normal
 //!   (the gathers' secondary rays), lifted 10⁻⁴ of the diagonal off the surface.
 //!
@@ -198,8 +201,21 @@ pub fn run(ctx: &Ctx) -> Result<()> {
          | scene | triangles | rays | threads | ours hit | Embree hit | ratio | ours occl. | Embree occl. | ratio | agree |\n\
          |---|---|---|---|---|---|---|---|---|---|---|\n",
     );
+    let mut scenes: Vec<(String, Scene)> = Vec::new();
     for name in sizes {
-        let scene = scene_sampler::builtin(name)?.into_3d()?;
+        scenes.push((name.to_string(), scene_sampler::builtin(name)?.into_3d()?));
+    }
+    // a public model (`RAYS_TEMPLE=off` leaves it out; skipped with a note when not fetchable)
+    let mut skipped = String::new();
+    if !ctx.quick && std::env::var("RAYS_TEMPLE").map_or(true, |v| v != "off") {
+        match super::public_models::temple_compound()
+            .and_then(|p| Ok(scene_sampler::load(&p)?.into_3d()?))
+        {
+            Ok(scene) => scenes.push(("temple compound (public)".into(), scene)),
+            Err(why) => writeln!(skipped, "- temple compound (public): skipped ({why:#}).")?,
+        }
+    }
+    for (name, scene) in &scenes {
         let t = Instant::now();
         let bvh = SceneBvh::new(&scene);
         let build = t.elapsed().as_secs_f64();
@@ -270,6 +286,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     std::fs::remove_dir_all(&dir).ok();
     md.push('\n');
     md.push_str(&builds);
+    md.push_str(&skipped);
     std::fs::write(ctx.out.join("benchmarks-rays.md"), md)?;
     Ok(())
 }

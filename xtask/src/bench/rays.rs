@@ -217,7 +217,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     }
     for (name, scene) in &scenes {
         let t = Instant::now();
-        let bvh = SceneBvh::new(&scene);
+        let bvh = SceneBvh::new(scene);
         let build = t.elapsed().as_secs_f64();
         let tmax = 0.5 * scene.diagonal();
         let (lo, hi) = scene.bounds;
@@ -234,11 +234,11 @@ pub fn run(ctx: &Ctx) -> Result<()> {
             },
             Rays {
                 name: "incoherent",
-                rays: surface_rays(&scene, side * side),
+                rays: surface_rays(scene, side * side),
             },
         ] {
             let (tris, rays) = (dir.join("tris.f32"), dir.join("rays.f32"));
-            write_inputs(&scene, &set.rays, &tris, &rays)?;
+            write_inputs(scene, &set.rays, &tris, &rays)?;
             for threads in [1, 2] {
                 let a = ours(&bvh, &set.rays, tmax, threads)?;
                 let b = embree(&tris, &rays, tmax, threads)?;

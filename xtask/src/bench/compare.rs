@@ -425,7 +425,12 @@ fn plot_curves(path: &std::path::Path, title: &str, curves: &[Curve]) -> Result<
             points: c.points.iter().copied().filter(ok).collect(),
         })
         .collect();
-    super::gcr::plot_curves(path, &title, &curves)
+    super::gcr::plot_curves(
+        path,
+        &title,
+        "relative L2 error of B at the probes",
+        &curves,
+    )
 }
 
 /// Seconds with three significant digits (the Flatland runs take micro- to milliseconds).

@@ -791,6 +791,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
             plot_curves(
                 &figs.join(&png),
                 &format!("{name}, {n} points: error against time"),
+                "relative L2 error at the points",
                 &curves,
             )?;
             for c in &curves {

@@ -227,8 +227,14 @@ pub fn path_tracer_curve(
     }
 }
 
-/// Writes one log-log plot of error against seconds.
-pub fn plot_curves(path: &std::path::Path, title: &str, curves: &[Curve]) -> Result<()> {
+/// Writes one log-log plot of error (`y_desc` says which) against seconds; the error axis spans
+/// the data (no floor: per-pixel relative MSEs reach 10⁻⁶).
+pub fn plot_curves(
+    path: &std::path::Path,
+    title: &str,
+    y_desc: &str,
+    curves: &[Curve],
+) -> Result<()> {
     use plotters::prelude::*;
     let all: Vec<Point> = curves
         .iter()
@@ -237,9 +243,12 @@ pub fn plot_curves(path: &std::path::Path, title: &str, curves: &[Curve]) -> Res
     let (tmin, tmax) = all.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
         (a.min(p.seconds), b.max(p.seconds))
     });
-    let (emin, emax) = all.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
-        (a.min(p.error), b.max(p.error))
-    });
+    let (emin, emax) = (all.iter())
+        .filter(|p| p.error > 0.0)
+        .fold((f64::INFINITY, 0.0f64), |(a, b), p| {
+            (a.min(p.error), b.max(p.error))
+        });
+    let floor = if emin.is_finite() { 0.7 * emin } else { 1e-4 };
     // One colour per curve position (8 distinct), so that a solver keeps its colour in every plot.
     let colours = [
         RED,
@@ -259,7 +268,7 @@ pub fn plot_curves(path: &std::path::Path, title: &str, curves: &[Curve]) -> Res
             .y_label_area_size(60)
             .build_cartesian_2d(
                 (tmin.max(1e-4) * 0.7..tmax * 1.4).log_scale(),
-                (emin.max(1e-4) * 0.7..emax.min(100.0) * 1.4).log_scale(),
+                (floor..emax.clamp(floor, 100.0) * 1.4).log_scale(),
             )
             .map_err(|e| anyhow::anyhow!("{e}"))?;
         chart
@@ -271,11 +280,13 @@ pub fn plot_curves(path: &std::path::Path, title: &str, curves: &[Curve]) -> Res
                     format!("{v:.0}")
                 } else if *v >= 1.0 {
                     format!("{v:.1}")
-                } else {
+                } else if *v >= 0.01 {
                     format!("{v:.3}")
+                } else {
+                    format!("{v:.0e}")
                 }
             })
-            .y_desc("relative L2 error of B at the probes")
+            .y_desc(y_desc)
             .draw()
             .map_err(|e| anyhow::anyhow!("{e}"))?;
         for (curve, colour) in curves.iter().zip(colours.iter().cycle()) {
@@ -285,7 +296,7 @@ pub fn plot_curves(path: &std::path::Path, title: &str, curves: &[Curve]) -> Res
             let pts: Vec<(f64, f64)> = curve
                 .points
                 .iter()
-                .map(|p| (p.seconds.max(1e-4), p.error.clamp(1e-4, 100.0)))
+                .map(|p| (p.seconds.max(1e-4), p.error.clamp(floor, 100.0)))
                 .collect();
             chart
                 .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))
@@ -382,6 +393,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
         plot_curves(
             &ctx.out.join(&png),
             &format!("{name}: error against time"),
+            "relative L2 error of B at the probes",
             &curves,
         )?;
         md.push_str(&markdown(name, &curves));

@@ -394,6 +394,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
                 "{name}, {}x{} pixels: relative MSE against time",
                 p.size.0, p.size.1
             ),
+            "per-pixel relative MSE",
             &curves,
         )?;
         writeln!(

@@ -375,6 +375,11 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     let mut summary = String::from(
         "| scene | GCR run | seconds | GCR rel. MSE | Mitsuba rel. MSE at that time | ratio |\n|---|---|---:|---:|---:|---:|\n",
     );
+    // every scene named is loadable, before any is run (a typo in `IMAGE_SCENES` would otherwise
+    // lose the runs before it: the page is written at the end)
+    for name in p.scenes.iter().filter(|n| *n != "temple") {
+        scene_sampler::load_or_builtin(name).with_context(|| format!("images: scene `{name}`"))?;
+    }
     for name in &p.scenes {
         let (curves, note) = match one(name, &p)? {
             Ok(x) => x,

@@ -154,6 +154,20 @@ proptest! {
         let (t, b) = orthonormal_basis(n);
         prop_assert!(t.dot(n).abs() < 1e-12 && b.dot(n).abs() < 1e-12 && t.dot(b).abs() < 1e-12);
     }
+
+    /// A cone's directions are unit without renormalising (`uniform_cone_about`) and within its
+    /// half-angle, for a sun's 0.27° as for wide cones.
+    #[test]
+    fn cone_directions(a in prop::array::uniform3(-1.0f64..1.0), u in prop::array::uniform2(0.0f64..1.0), half_deg in prop::sample::select(vec![0.265, 5.0, 60.0, 179.0])) {
+        let a = DVec3::from(a);
+        prop_assume!(a.length() > 0.1);
+        let a = a.normalize();
+        let omc = 2.0 * (f64::to_radians(half_deg) / 2.0).sin().powi(2);
+        let d = uniform_cone(a, omc, u);
+        prop_assert!((d.length() - 1.0).abs() < 1e-12, "{}", d.length());
+        prop_assert!(1.0 - d.dot(a) <= omc * (1.0 + 1e-9) + 1e-15);
+        prop_assert_eq!(d, uniform_cone_about((a, orthonormal_basis(a)), omc, u));
+    }
 }
 
 /// Cosine-weighted density: E[cos θ] = 2/3 (3-D, density cos θ/π), E[cos θ] = π/4 (Flatland, density cos θ/2).

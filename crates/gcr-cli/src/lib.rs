@@ -58,43 +58,6 @@ pub fn report(e: &anyhow::Error) -> i32 {
         let _ = clap.print();
         return if clap.use_stderr() { EXIT_USAGE } else { 0 };
     }
-    eprintln!("error: {}", message(e));
+    eprintln!("error: {}", gcr::error_message(e.as_ref()));
     EXIT_ERROR
-}
-
-/// `<message>: <cause>…` of an error's chain, leaving out a cause whose text the message already
-/// ends with (errors that quote their cause in their own message, such as a file that cannot be
-/// read, would otherwise say it twice).
-fn message(e: &anyhow::Error) -> String {
-    let mut out = String::new();
-    for cause in e.chain() {
-        let text = cause.to_string();
-        if out.is_empty() {
-            out = text;
-        } else if !out.ends_with(&text) {
-            out = format!("{out}: {text}");
-        }
-    }
-    out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::message;
-
-    #[test]
-    fn a_cause_quoted_by_its_error_is_said_once() {
-        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "no such file");
-        let quoted = scene_sampler::SceneError::Io {
-            path: "/nowhere".into(),
-            source: io,
-        };
-        let e = anyhow::Error::new(quoted).context("checking the outputs");
-        assert_eq!(
-            message(&e),
-            "checking the outputs: /nowhere: cannot read: no such file"
-        );
-        let plain = anyhow::anyhow!("inner").context("outer");
-        assert_eq!(message(&plain), "outer: inner");
-    }
 }

@@ -25,10 +25,10 @@ pyo3::create_exception!(
      something dropped, a target error not met, no light reaching the output points."
 );
 
-/// The program's message of `e` ([`anyhow`]'s `{:#}`: the context, then each cause) as a
+/// The program's message of `e` (the context, then each cause: [`gcr::error_message`]) as a
 /// [`GcrError`].
 pub(crate) fn gcr_error(e: impl Into<anyhow::Error>) -> PyErr {
-    GcrError::new_err(format!("{:#}", e.into()))
+    GcrError::new_err(gcr::error_message(e.into().as_ref()))
 }
 
 /// A `ValueError` for an argument that does not parse or has the wrong shape.

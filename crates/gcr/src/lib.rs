@@ -42,6 +42,7 @@ mod gather;
 mod kernel_cells;
 mod lightmap;
 mod mesh;
+mod message;
 mod metrics;
 mod network;
 mod options;
@@ -76,6 +77,7 @@ pub use lightmap::{
     assemble_lightmap, bake_lightmap, gather_guide, gather_texels, lay_out_texels,
 };
 pub use mesh::ShadedMesh;
+pub use message::error_message;
 pub use metrics::{
     DenoiseRecord, ImageRecord, LightmapRecord, Metrics, PhaseTimes, peak_memory_bytes,
 };

@@ -186,10 +186,6 @@ mod tests {
         }
     }
 
-    /// A unit square (two triangles of one face) lit on the left half only (B = 1 for x < 0.5):
-    /// refinement concentrates vertices along the edge x = 0.5, keeps the mesh conforming (every
-    /// edge is shared by at most two triangles with no vertex inside another's edge), keeps the
-    /// area and the windings, and leaves a uniform square alone.
     /// A level gathers at most [`RefineLimits::max_level_points`] new vertices (what the memory
     /// holds): the unit square's two triangles across a shadow edge split into 5 new vertices
     /// in one level, into 3 (one triangle, the widest spread) when 3 fit.
@@ -219,6 +215,10 @@ mod tests {
         assert_eq!(new_vertices(3), 3);
     }
 
+    /// A unit square (two triangles of one face) lit on the left half only (B = 1 for x < 0.5):
+    /// refinement concentrates vertices along the edge x = 0.5, keeps the mesh conforming (every
+    /// edge is shared by at most two triangles with no vertex inside another's edge), keeps the
+    /// area and the windings, and leaves a uniform square alone.
     #[test]
     fn refinement_follows_a_shadow_edge_and_stays_conforming() {
         let b = |p: DVec3| if p.x < 0.5 { 1.0 } else { 0.0 };

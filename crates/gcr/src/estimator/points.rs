@@ -35,11 +35,11 @@ pub enum GatherError {
     /// The output mesh has more vertices to gather than the memory available holds (checked
     /// before they are gathered; `crate::output::mesh`).
     #[error(
-        "the output mesh has {points} vertices to gather: about {:.1} GiB at the gather's peak, \
-         more than the {:.1} GiB available; an image alone gathers only what its camera sees \
-         (leave out --mesh and --ply)",
-        *needed as f64 / f64::from(1u32 << 30),
-        *available as f64 / f64::from(1u32 << 30)
+        "the output mesh has {points} vertices to gather: about {} at the gather's peak, more \
+         than the {} available; an image alone gathers only what its camera sees (leave out \
+         --mesh and --ply)",
+        crate::output::memory::gib(*needed),
+        crate::output::memory::gib(*available)
     )]
     MeshMemory {
         /// Vertices to gather.

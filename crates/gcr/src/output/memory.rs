@@ -173,7 +173,7 @@ pub(crate) fn check_image_memory(
 }
 
 /// `bytes` in GiB, for messages.
-fn gib(bytes: u64) -> String {
+pub(crate) fn gib(bytes: u64) -> String {
     format!("{:.1} GiB", bytes as f64 / f64::from(1u32 << 30))
 }
 

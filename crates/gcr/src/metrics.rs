@@ -220,6 +220,11 @@ pub fn peak_memory_bytes() -> Option<u64> {
     Some(kb * 1024)
 }
 
+/// `bytes` in GiB, for the messages of the memory checks.
+pub(crate) fn gib(bytes: u64) -> String {
+    format!("{:.1} GiB", bytes as f64 / f64::from(1u32 << 30))
+}
+
 /// The memory this process may still take: `MemAvailable`, at most what a cgroup v2 limit
 /// leaves; `None` where neither can be read.
 pub fn available_memory() -> Option<u64> {

@@ -38,8 +38,8 @@ pub enum GatherError {
         "the output mesh has {points} vertices to gather: about {} at the gather's peak, more \
          than the {} available; an image alone gathers only what its camera sees (leave out \
          --mesh and --ply)",
-        crate::output::memory::gib(*needed),
-        crate::output::memory::gib(*available)
+        crate::metrics::gib(*needed),
+        crate::metrics::gib(*available)
     )]
     MeshMemory {
         /// Vertices to gather.

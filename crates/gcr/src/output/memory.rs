@@ -30,6 +30,7 @@
 
 use super::camera::{ImageMode, ImageSettings};
 pub use crate::metrics::available_memory;
+use crate::metrics::gib;
 
 /// An image that would take more memory than is available.
 #[derive(Debug, thiserror::Error)]
@@ -170,11 +171,6 @@ pub(crate) fn check_image_memory(
         available,
         fits: (fit(settings.width), fit(settings.height)),
     })
-}
-
-/// `bytes` in GiB, for messages.
-pub(crate) fn gib(bytes: u64) -> String {
-    format!("{:.1} GiB", bytes as f64 / f64::from(1u32 << 30))
 }
 
 #[cfg(test)]

@@ -122,10 +122,14 @@ pub struct SolveArgs {
     /// 1: every point alone.
     #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value_t = SolveOptions::default().share_paths as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub share_paths: u32,
-    /// `--gather paths` to a target error: draw the cosine rays of the points and of their paths'
-    /// bounces from guides learned from earlier rounds (a defensive mixture with the cosine
-    /// density: unbiased). auto: when the pilot round finds hard light (at least 8 192 rays per
-    /// point to the target, each varying by more than 1.7 times the mean); docs/design/estimator.md, "Guiding".
+    /// `--gather paths` to a target error: guide the rays where light is hard to find. At every
+    /// path vertex, join a point drawn from a table of the surfaces the lights reach directly
+    /// (the sun patch on a floor, a lit ceiling), and draw the cosine rays from guides learned
+    /// from earlier rounds (both weighed against plain sampling: unbiased). auto: the table where
+    /// a trial round says it halves the variance per ray (the gather needing at least 1 024 rays
+    /// per point), the learned guides when the pilot round finds hard light (at least 8 192 rays
+    /// per point to the target, each varying by more than 1.7 times the mean); off: plain paths;
+    /// docs/design/estimator.md, "Guiding" and "Secondary sources".
     #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value = "auto", value_parser = ["auto", "on", "off"])]
     pub guiding: String,
     /// Train the shading network and build its base even when the gather does not read it

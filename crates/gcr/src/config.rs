@@ -87,17 +87,21 @@ impl std::str::FromStr for Quality {
     }
 }
 
-/// Whether the paths gather guides its cosine rays by what earlier rounds learned
-/// (`gcr solve --guiding`, `estimator/guide.rs`; docs/design/estimator.md, "Guiding").
+/// Whether the paths gather guides its rays (`gcr solve --guiding`; docs/design/estimator.md,
+/// "Guiding" and "Secondary sources"): by the table of the scene's direct radiosity, drawn at
+/// every path vertex (`estimator/secondary.rs`), and by directional guides that earlier rounds
+/// learned (`estimator/guide.rs`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Guiding {
-    /// Never: every round continues one Sobol sequence of cosine rays.
+    /// Never: plain paths, every round continues one Sobol sequence of cosine rays.
     Off,
-    /// From the first round on.
+    /// Both from the first round on (a per-pixel image: the table only).
     On,
-    /// When the pilot round finds hard light ([`Guiding::pays`]: at least [`GUIDING_FROM`] rays
-    /// per point predicted to the target, at a relative variance per ray of at least
-    /// [`GUIDING_VARIANCE`]); otherwise exactly `Off`.
+    /// The table where a trial round before the rounds to a target says it halves the variance
+    /// per ray (points, probes, texels); the directional guides when the pilot round finds hard
+    /// light ([`Guiding::pays`]: at least [`GUIDING_FROM`] rays per point predicted to the
+    /// target, at a relative variance per ray of at least [`GUIDING_VARIANCE`]). Otherwise
+    /// exactly `Off`.
     #[default]
     Auto,
 }

@@ -24,7 +24,9 @@ pub(crate) mod paths;
 pub(crate) mod pixel_rounds;
 mod points;
 mod pointwise;
+pub(crate) mod relay;
 pub(crate) mod rounds;
+mod secondary;
 
 pub use blocks::{ShardError, shard_points};
 pub use points::{

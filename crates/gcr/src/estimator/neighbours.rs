@@ -213,6 +213,21 @@ impl Group<'_> {
         total
     }
 
+    /// G·V from every member to a point x that none of them cast a ray to (into `weight`), and
+    /// the cosine technique's mixture density there, Σ G·V·q ([`Group::mixture`]).
+    fn seen_from_members(&self, bvh: &SceneBvh, x: &SurfacePoint, weight: &mut [f64]) -> f64 {
+        let mut total = 0.0;
+        for (k, &(yk, nk, fk)) in self.members.iter().enumerate() {
+            let geo = geometry_3d(yk, nk, x.point, x.normal);
+            let seen = geo > 0.0 && bvh.visible(x, &Domain::surface_point_3d(yk, nk, fk));
+            weight[k] = if seen { geo } else { 0.0 };
+            if seen {
+                total += weight[k] * self.q(nk, x.point - yk);
+            }
+        }
+        total
+    }
+
     /// The power heuristic's weight, for member `k`, of the shared cosine technique (count
     /// density `shared` at the point) that hit a point of the emitting `face`, against k's own
     /// shadow rays (their density depends on the member: the light tree's choice); 0 where
@@ -339,6 +354,7 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
             .collect();
         self.group_direct(kernel, &group, &rho, &mut out);
         self.group_hits(kernel, &group, &rho, &mut out, (learner, spatial));
+        self.group_relays(kernel, &group, &rho, &mut out);
         out
     }
 
@@ -468,7 +484,9 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
                 };
                 let first = SobolRay::path_vertex(sb, sobol.set(2));
                 let guides = spatial.as_mut().map(|(g, r)| (*g, &mut **r));
-                let l = self.reflected(&vertex, Some(first), &mut rng, guides);
+                // the table's draws: one per cosine ray of every member (`group_relays`)
+                let arrival = (self.secondary.is_some()).then(|| total / g.members.len() as f64);
+                let l = self.reflected(&vertex, Some(first), &mut rng, guides, arrival);
                 let with_light = |m: f64| -> Bands { std::array::from_fn(|b| l[b] + m * e[b]) };
                 if let Some(learn) = learner.as_deref_mut() {
                     learn.add(u, q, luminance(&with_light(mis(a))));
@@ -476,6 +494,52 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
                 for (k, &w) in weight.iter().enumerate().filter(|(_, w)| **w > 0.0) {
                     let t = if shared == 0.0 { l } else { with_light(mis(k)) };
                     add(out, rho, (k, i % g.replicates), t, w / (g.c as f64 * total));
+                }
+            }
+        }
+    }
+}
+
+impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
+    /// ⟨Secondary sources, shared (`secondary.rs`): each member draws a point z from the table
+    /// per cosine ray, and every member that sees z takes F̂′(z)·G(y_k, z)/(A(z) + N·Q(z)), A the
+    /// members' cosine mixture (count density, [`Group::mixture`]) and N the group's draws⟩
+    fn group_relays(
+        &self,
+        kernel: &KernelSampler,
+        g: &Group,
+        rho: &[Bands],
+        out: &mut [PointEstimate],
+    ) {
+        if self.secondary.is_none() {
+            return;
+        }
+        let draws = (g.c * g.members.len()) as f64;
+        let alone = Mis {
+            emitters: self.emitters,
+            n_e: 1.0,
+            n_c: 0.0,
+        };
+        let mut weight = vec![0.0; g.members.len()];
+        for a in 0..g.members.len() {
+            for i in 0..g.c {
+                let sobol = g.qmc(g.first_c, a, i);
+                let (s3, s4) = (sobol.set(3), sobol.set(4));
+                let Some((z, q)) = self.table_draw([s3[0], s3[1], s3[2]]) else {
+                    continue;
+                };
+                let f = self.direct_radiosity(&z, &alone, [s3[3], s4[0], s4[1]]);
+                if f.iter().all(|v| *v == 0.0) {
+                    continue;
+                }
+                let at = Domain::surface_point_3d(z.p, z.n, z.face);
+                let total = g.c as f64 * g.seen_from_members(kernel.bvh, &at, &mut weight);
+                let density = total + draws * q;
+                if !(density > 0.0 && density.is_finite()) {
+                    continue;
+                }
+                for (k, &w) in weight.iter().enumerate().filter(|(_, w)| **w > 0.0) {
+                    add(out, rho, (k, i % g.replicates), f, w / density);
                 }
             }
         }

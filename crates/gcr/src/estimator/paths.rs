@@ -30,6 +30,7 @@
 //! the cosine density p is small.
 
 use super::guide::{Guide, Record, SpatialGuides};
+use super::secondary::SecondarySources;
 use crate::config::{GatherSamples, PathSettings};
 use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
@@ -119,6 +120,8 @@ pub struct PathGather<'a, C> {
     networks: C,
     samples: GatherSamples,
     pub(crate) settings: PathSettings,
+    /// The secondary sources drawn at every vertex (`secondary.rs`), if any.
+    pub(crate) secondary: Option<std::sync::Arc<SecondarySources>>,
 }
 
 /// What a camera ray sees first ([`PathGather::estimate_footprint`]).
@@ -287,6 +290,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             networks,
             samples,
             settings,
+            secondary: None,
         }
     }
 
@@ -394,9 +398,12 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
                 from_networks[k] += rho[k] * c[k] / n_c as f64;
             }
             if i < corrected {
+                // ⟨Secondary sources: one draw per cosine ray (secondary.rs)⟩
+                add(i, self.relay_from_point(&z, u), 1.0 / corrected as f64);
                 if let Some(x) = hit {
                     let first = SobolRay::path_vertex(b, u.set(2));
-                    let l = self.reflected(&x, Some(first), &mut rng, None);
+                    let arrival = self.arrival(&z, &x, 1.0);
+                    let l = self.reflected(&x, Some(first), &mut rng, None, arrival);
                     let t: Bands = std::array::from_fn(|k| l[k] - c[k]);
                     add(i, t, 1.0 / corrected as f64);
                 }
@@ -472,12 +479,14 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
                 let l = match hit {
                     Some(x) => {
                         let first = SobolRay::path_vertex(s1, pixel);
-                        self.reflected(&x, Some(first), &mut rng, None)
+                        let arrival = self.arrival(&z, &x, 1.0);
+                        self.reflected(&x, Some(first), &mut rng, None, arrival)
                     }
                     None => [0.0; BANDS],
                 };
+                let relay = self.relay_from_point(&z, u);
                 for k in 0..BANDS {
-                    light[k] += d[k] + l[k];
+                    light[k] += d[k] + l[k] + relay[k];
                     b[k] += rho[k] * light[k];
                 }
             }
@@ -530,8 +539,9 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         first: Option<[f64; 5]>,
         rng: &mut ChaCha8Rng,
         guiding: Option<(&SpatialGuides, &mut Vec<Record>)>,
+        arrival: Option<f64>,
     ) -> Bands {
-        self.walk(x, first, rng, guiding, (1.0, None, 0))
+        self.walk(x, first, rng, guiding, (1.0, None, 0, arrival))
     }
 
     /// [`PathGather::reflected`] from `x` on a branch of weight `w` relative to its path, whose
@@ -543,7 +553,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         first: Option<[f64; 5]>,
         rng: &mut ChaCha8Rng,
         mut guiding: Option<(&SpatialGuides, &mut Vec<Record>)>,
-        (w, mut start, splits): (f64, Option<f64>, usize),
+        (w, mut start, splits, mut arrival): (f64, Option<f64>, usize, Option<f64>),
     ) -> Bands {
         let (mut out, mut beta) = ([0.0; BANDS], [1.0; BANDS]);
         let (mut x, mut first) = (*x, first);
@@ -588,9 +598,17 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
                     self.next_event_scaled(&x, &mis, (u[0], [u[1], u[2]]), q)
                 }
             };
+            // ⟨Secondary sources (relay.rs): x's direct light weighted against the previous
+            // vertex's draw from the table, and a draw of its own⟩
+            let count = (guide, q * m as f64);
+            let (w_a, relay) = self.vertex_relay(&x, arrival.take(), count, rng);
+            for k in 0..BANDS {
+                light[k] *= w_a;
+                out[k] += beta[k] * rho[k] * relay[k];
+            }
             if m > 1 {
                 // ⟨m branches, each continued on its own; the path ends here⟩
-                let step = (beta, rho, light);
+                let step = (beta, rho, light, w_a);
                 let branch = guiding.as_mut().map(|(g, r)| (*g, &mut **r));
                 let split = self.branches(
                     &x,
@@ -606,11 +624,10 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
                 }
                 break;
             }
-            let (v, q_g, d, next) = self.bounce(&x, guide, (&mis, q, m), [u[3], u[4]], rng);
+            let (v, q_g, mut d, next) = self.bounce(&x, guide, (&mis, q, m), [u[3], u[4]], rng);
             for k in 0..BANDS {
+                d[k] *= w_a;
                 light[k] += d[k];
-            }
-            for k in 0..BANDS {
                 out[k] += beta[k] * rho[k] * light[k];
             }
             let Some(n) = next else { break };
@@ -620,6 +637,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
             if guiding.is_some() {
                 bounces.push((x, v, q * q_g, q_g, d, out, beta, n));
             }
+            arrival = self.arrival(&x, &n, q * q_g);
             x = n;
         }
         if let Some((guides, records)) = guiding.as_mut() {
@@ -638,7 +656,7 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
         x: &Vertex,
         u: [f64; 5],
         (guide, mis, q, m): (Option<&Guide>, &Mis, f64, usize),
-        (beta, rho, light): (Bands, Bands, Bands),
+        (beta, rho, light, w_a): (Bands, Bands, Bands, f64),
         rng: &mut ChaCha8Rng,
         mut guiding: Option<(&SpatialGuides, &mut Vec<Record>)>,
         (w, start, splits): (f64, f64, usize),
@@ -651,13 +669,15 @@ impl<'a, C: Fn(DVec3, DVec3) -> Bands> PathGather<'a, C> {
                 std::array::from_fn(|_| rng.random())
             };
             let (v, q_g, d, hit) = self.bounce(x, guide, (mis, q, m), [uj[3], uj[4]], rng);
+            let d = d.map(|v| v * w_a);
             let qq = q * q_g * m as f64;
             let wj: Bands = std::array::from_fn(|k| beta[k] * rho[k] / qq);
             let mut beyond = [0.0; BANDS];
             if let Some(h) = hit {
                 let wmax = wj.iter().fold(0.0f64, |m, b| m.max(*b));
                 let branch = guiding.as_mut().map(|(g, r)| (*g, &mut **r));
-                beyond = self.walk(&h, None, rng, branch, (w * wmax, Some(start), splits + 1));
+                let at = (w * wmax, Some(start), splits + 1, self.arrival(x, &h, qq));
+                beyond = self.walk(&h, None, rng, branch, at);
             }
             for k in 0..BANDS {
                 out[k] += beta[k] * rho[k] * d[k] + wj[k] * beyond[k];
@@ -973,7 +993,7 @@ mod guide_diagnostics {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         let t = std::time::Instant::now();
         let plain: Vec<f64> = (0..n_paths)
-            .map(|_| g.reflected(&x, None, &mut rng, None)[0])
+            .map(|_| g.reflected(&x, None, &mut rng, None, None)[0])
             .collect();
         let plain = (plain, t.elapsed().as_secs_f64());
         // learn from unguided paths (guides that are empty), in batches as the rounds do
@@ -981,7 +1001,7 @@ mod guide_diagnostics {
         let empty = SpatialLearner::new(d.frame(), 1).guides();
         let mut records = Vec::new();
         for _ in 0..2 * n_paths {
-            g.reflected(&x, None, &mut rng, Some((&empty, &mut records)));
+            g.reflected(&x, None, &mut rng, Some((&empty, &mut records)), None);
             if records.len() >= empty.cap() {
                 learner.learn(&records);
                 records.clear();
@@ -993,7 +1013,7 @@ mod guide_diagnostics {
             .map(|_| {
                 records.clear();
                 let guiding = Some((&guides, &mut records));
-                g.walk(&x, None, &mut rng, guiding, (w, None, 0))[0]
+                g.walk(&x, None, &mut rng, guiding, (w, None, 0, None))[0]
             })
             .collect();
         [plain, (guided, t.elapsed().as_secs_f64())]

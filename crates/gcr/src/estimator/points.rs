@@ -5,8 +5,9 @@
 
 use super::blocks::Blocks;
 use super::paths::PathGather;
+use super::relay::{group_variance, table_if_it_pays};
 use super::rounds::{StopOn, grouped_rounds, paths_to_target};
-use crate::config::{GatherMode, SolveConfig};
+use crate::config::{GatherMode, Guiding, SolveConfig};
 use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
 use crate::emitters::Emitters;
@@ -79,7 +80,7 @@ pub fn radiosity_at_shard(
 ) -> Result<(Vec<Gathered>, Vec<usize>), GatherError> {
     check_base(trained, config)?;
     let frame = domain.frame();
-    let paths = path_gather(domain, trained, emitters, config);
+    let mut paths = path_gather(domain, trained, emitters, config);
     let seeds: Vec<u64> = (points.iter())
         .map(|&(y, _, _)| point_seed(config.seed, y, frame))
         .collect();
@@ -91,9 +92,13 @@ pub fn radiosity_at_shard(
     let blocks = (target.is_some() || config.paths.shard.is_some())
         .then(|| Blocks::new(domain, points, &config.paths));
     let estimated = estimated(blocks.as_ref(), points.len(), config)?;
-    let gathered = match (target, blocks) {
+    let mut gathered = match (target, blocks) {
         // ⟨The paths gather to a target: in rounds, block by block⟩
         (Some(target), Some(blocks)) => {
+            let material = |(y, _, face): (DVec3, DVec3, u32)| {
+                (domain.reflectance_at(face, y), domain.emission(face))
+            };
+            decide_table(&mut paths, &blocks, (points, &seeds), material, config);
             let target = (target, stop);
             paths_to_target(domain, &paths, (points, &seeds), &blocks, target, config)
         }
@@ -104,6 +109,7 @@ pub fn radiosity_at_shard(
             super::pointwise::radiosity_each(solution, config, (points, &seeds), mine.as_deref())
         }
     };
+    mark_table(&paths, &mut gathered, &estimated);
     Ok((gathered, estimated))
 }
 
@@ -150,7 +156,7 @@ pub fn irradiance_at_shard(
         return Err(GatherError::IrradianceNeedsPaths(config.gather.name()));
     }
     let frame = domain.frame();
-    let paths = path_gather(domain, trained, emitters, config);
+    let mut paths = path_gather(domain, trained, emitters, config);
     let seeds: Vec<u64> = (points.iter())
         .map(|&(y, _)| point_seed(config.seed ^ IRRADIANCE_SALT, y, frame))
         .collect();
@@ -163,10 +169,11 @@ pub fn irradiance_at_shard(
     let blocks = (target.is_some() || config.paths.shard.is_some())
         .then(|| Blocks::new(domain, &receivers, &config.paths));
     let estimated = estimated(blocks.as_ref(), points.len(), config)?;
-    let gathered = match (target, blocks) {
+    let mut gathered = match (target, blocks) {
         (Some(target), Some(blocks)) => {
             let white = |_| ([1.0; BANDS], [0.0; BANDS]);
             let at = (&receivers[..], &seeds[..]);
+            decide_table(&mut paths, &blocks, at, white, config);
             grouped_rounds(domain, &paths, at, &blocks, white, (target, stop), config)
         }
         (_, blocks) => {
@@ -174,6 +181,7 @@ pub fn irradiance_at_shard(
             super::pointwise::irradiance_each(&paths, config, (points, &seeds), mine.as_deref())
         }
     };
+    mark_table(&paths, &mut gathered, &estimated);
     Ok((gathered, estimated))
 }
 
@@ -184,13 +192,45 @@ fn path_gather<'a>(
     emitters: &'a Emitters,
     config: &SolveConfig,
 ) -> PathGather<'a, impl Fn(DVec3, DVec3) -> Bands + Sync + 'a> {
-    PathGather::new(
+    let g = PathGather::new(
         domain,
         emitters,
         |x, n| trained.reflected_kernel(x, n),
         config.gather_samples,
         config.paths,
-    )
+    );
+    match config.paths.guiding {
+        Guiding::On => g.with_secondary_sources(config.seed),
+        _ => g,
+    }
+}
+
+/// `Guiding::Auto` before the rounds to a target: the table of secondary sources for `paths`
+/// where a trial on the points says it pays (`secondary.rs`, [`table_if_it_pays`]).
+fn decide_table(
+    paths: &mut PathGather<'_, impl Fn(DVec3, DVec3) -> Bands + Sync>,
+    blocks: &Blocks,
+    at: (&[(DVec3, DVec3, u32)], &[u64]),
+    material: impl Fn((DVec3, DVec3, u32)) -> (Bands, Bands) + Sync,
+    config: &SolveConfig,
+) {
+    if config.paths.guiding == Guiding::Auto {
+        let samples = config.gather_samples;
+        let variance =
+            |p: &PathGather<'_, _>| group_variance(p, &blocks.groups, at, &material, samples);
+        let rays = samples.direct.max(samples.indirect);
+        table_if_it_pays(paths, variance, (rays, config.seed));
+    }
+}
+
+/// Marks the values of a gather that drew from a table of secondary sources as guided (the
+/// metrics' `guided`; `secondary.rs`).
+fn mark_table<C>(paths: &PathGather<'_, C>, gathered: &mut [Gathered], estimated: &[usize]) {
+    if paths.secondary.is_some() {
+        for &i in estimated {
+            gathered[i].guided = true;
+        }
+    }
 }
 
 /// Mixed into the solve's seed for irradiance probes ([`irradiance_at_points`]).

@@ -22,11 +22,13 @@
 use super::raster::{Coverage, PinholeCamera, RadianceImage};
 use super::tonemap::{Exposure, srgb_encode};
 use crate::Trained;
-use crate::config::GatherMode;
 use crate::config::SolveConfig;
+use crate::config::{GatherMode, Guiding};
 use crate::domain::Domain;
 use crate::emitters::Emitters;
 use crate::estimator::paths::{FirstHit, PathGather, PointEstimate};
+use crate::estimator::pixel_rounds::{pixel_error, relative_floor};
+use crate::estimator::relay::table_if_it_pays;
 use crate::estimator::{GatherError, GatherStats, radiosity_at_points};
 use crate::gather::Gathered;
 use glam::DVec3;
@@ -235,18 +237,14 @@ fn render_footprints(
         .collect();
     // ⟨Each pixel's mean B over its footprint, in rounds to the target⟩
     let emitters = Emitters::new(domain);
-    let gather = PathGather::new(
+    let mut gather = PathGather::new(
         domain,
         &emitters,
         |_, _| [0.0; 3],
         config.gather_samples,
         config.paths,
     );
-    let seed = |p: usize| {
-        let (px, py) = pixel(p);
-        pixel_seed(config.seed, px, py)
-    };
-    let estimate = |p: usize, first: usize, rays: usize| {
+    let footprint = |gather: &PathGather<'_, _>, p: usize, first: usize, rays: usize| {
         let (px, py) = pixel(p);
         let receiver = |u: [f64; 2]| {
             let sx = (px + u[0]) / f64::from(width);
@@ -257,8 +255,12 @@ fn render_footprints(
                 None => FirstHit::Escaped(camera.ray_direction(sx, sy, aspect).normalize()),
             }
         };
-        gather.estimate_footprint(&receiver, seed(p), first, rays)
+        gather.estimate_footprint(&receiver, pixel_seed(config.seed, px, py), first, rays)
     };
+    if merged.is_none() {
+        decide_table(&mut gather, &footprint, n, config);
+    }
+    let estimate = |p: usize, first: usize, rays: usize| footprint(&gather, p, first, rays);
     // ⟨In strips of rows, each to the target on its own (a shard's only), or from the shards⟩
     let strips = PixelStrips::new(width, height, config);
     let mine = strips.mine(config)?;
@@ -284,10 +286,7 @@ fn render_footprints(
             Some((_, stats)) => *stats,
             None => GatherStats {
                 // what the rounds ran to: the per-pixel relative error (estimator::pixel_rounds)
-                relative_std_error: crate::estimator::pixel_rounds::pixel_error(
-                    &gathered,
-                    crate::estimator::pixel_rounds::relative_floor(&gathered),
-                ),
+                relative_std_error: pixel_error(&gathered, relative_floor(&gathered)),
                 ..GatherStats::of(&gathered)
             },
         },
@@ -381,6 +380,35 @@ impl PixelStrips {
         }
         gathered
     }
+}
+
+/// Pixels in the trial that decides whether a table of secondary sources pays, at most.
+const TRIAL_PIXELS: usize = 512;
+
+/// The table of secondary sources for a per-pixel image's `gather` (`estimator/relay.rs`):
+/// with `--guiding on`; with `auto`, before rounds to a target, where a trial round at every k-th
+/// of the `n` pixels (at most [`TRIAL_PIXELS`]; `footprint(gather, pixel, first, rays)` a
+/// pixel's estimate) says it halves the per-pixel relative variance ([`table_if_it_pays`]).
+fn decide_table<'a, C: Fn(DVec3, DVec3) -> crate::element::Bands + Sync>(
+    gather: &mut PathGather<'a, C>,
+    footprint: &(impl Fn(&PathGather<'a, C>, usize, usize, usize) -> PointEstimate + Sync),
+    n: usize,
+    config: &SolveConfig,
+) {
+    match (config.paths.guiding, config.paths.target_error) {
+        (Guiding::On, _) => return gather.build_table(config.seed),
+        (Guiding::Auto, Some(_)) => {}
+        _ => return,
+    }
+    let rays = (config.gather_samples.direct).max(config.gather_samples.indirect);
+    let trial: Vec<usize> = (0..n).step_by(n.div_ceil(TRIAL_PIXELS).max(1)).collect();
+    let variance = |g: &PathGather<'a, C>| {
+        let gathered: Vec<Gathered> = (trial.par_iter())
+            .map(|&p| footprint(g, p, 0, rays).gathered())
+            .collect();
+        pixel_error(&gathered, relative_floor(&gathered)).map(|e| e * e)
+    };
+    table_if_it_pays(gather, variance, (rays, config.seed));
 }
 
 /// A pixel's seed from the solve's seed and its integer coordinates (`point_seed` quantizes to 2⁻²⁴

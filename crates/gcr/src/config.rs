@@ -97,8 +97,8 @@ pub enum Guiding {
     Off,
     /// Both from the first round on (a per-pixel image: the table only).
     On,
-    /// The table where a trial round before the rounds to a target says it halves the variance
-    /// per ray (points, probes, texels); the directional guides when the pilot round finds hard
+    /// The table where a trial round before the rounds to a target finds hard light and the
+    /// table halving its variance per ray (points, probes, texels, pixels); the directional guides when the pilot round finds hard
     /// light ([`Guiding::pays`]: at least [`GUIDING_FROM`] rays per point predicted to the
     /// target, at a relative variance per ray of at least [`GUIDING_VARIANCE`]). Otherwise
     /// exactly `Off`.

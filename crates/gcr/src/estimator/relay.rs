@@ -15,7 +15,7 @@ use rayon::prelude::*;
 
 /// Groups of neighbours in the trial that decides whether the table pays, at most
 /// ([`table_if_it_pays`]).
-const TRIAL_GROUPS: usize = 32;
+const TRIAL_GROUPS: usize = 64;
 /// The table is tried only where one ray's relative variance without it (the trial's squared
 /// relative error × its rays) is at least this: light that plain paths find easily converges
 /// faster than 1/rays on their Sobol points, which the trial's few rays do not show (the Cornell

@@ -186,44 +186,31 @@ impl Group<'_> {
         self.c as f64 * g
     }
 
-    /// G·V from every member to the hit x of member `a`'s cosine ray (into `weight`; the caster
-    /// sees x: its ray hit it), and the mixture's density there, Σ G·V·q (q the guide's toward x
-    /// from each member; the caster's is its ray's `q`).
+    /// G·V from every member to a point x (into `weight`), and the cosine technique's mixture
+    /// density there, Σ G·V·q (q the guide's toward x from each member). `caster`: the member
+    /// whose cosine ray hit x and that ray's q (it sees x: no visibility ray); None for a point
+    /// none of them cast a ray to (a draw from the table of secondary sources, `group_relays`).
     fn mixture(
         &self,
         bvh: &SceneBvh,
         hit: &SurfacePoint,
-        (a, q): (usize, f64),
+        caster: Option<(usize, f64)>,
         weight: &mut [f64],
     ) -> f64 {
         let (x, nx) = (hit.point, hit.normal);
         let mut total = 0.0;
         for (k, &(yk, nk, fk)) in self.members.iter().enumerate() {
             let geo = geometry_3d(yk, nk, x, nx);
-            let seen =
-                k == a || (geo > 0.0 && bvh.visible(hit, &Domain::surface_point_3d(yk, nk, fk)));
+            let cast = caster.filter(|&(a, _)| a == k);
+            let seen = cast.is_some()
+                || (geo > 0.0 && bvh.visible(hit, &Domain::surface_point_3d(yk, nk, fk)));
             weight[k] = if seen { geo } else { 0.0 };
-            total += match (seen, self.guide) {
-                (false, _) => 0.0,
-                (true, None) => weight[k],
-                (true, Some(_)) if k == a => weight[k] * q,
-                (true, Some(_)) => weight[k] * self.q(nk, x - yk),
+            total += match (seen, self.guide, cast) {
+                (false, _, _) => 0.0,
+                (true, None, _) => weight[k],
+                (true, Some(_), Some((_, q))) => weight[k] * q,
+                (true, Some(_), None) => weight[k] * self.q(nk, x - yk),
             };
-        }
-        total
-    }
-
-    /// G·V from every member to a point x that none of them cast a ray to (into `weight`), and
-    /// the cosine technique's mixture density there, Σ G·V·q ([`Group::mixture`]).
-    fn seen_from_members(&self, bvh: &SceneBvh, x: &SurfacePoint, weight: &mut [f64]) -> f64 {
-        let mut total = 0.0;
-        for (k, &(yk, nk, fk)) in self.members.iter().enumerate() {
-            let geo = geometry_3d(yk, nk, x.point, x.normal);
-            let seen = geo > 0.0 && bvh.visible(x, &Domain::surface_point_3d(yk, nk, fk));
-            weight[k] = if seen { geo } else { 0.0 };
-            if seen {
-                total += weight[k] * self.q(nk, x.point - yk);
-            }
         }
         total
     }
@@ -465,7 +452,7 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
                 if nx.dot(y - x) <= 0.0 {
                     continue;
                 }
-                let total = g.mixture(bvh, &hit, (a, q), &mut weight);
+                let total = g.mixture(bvh, &hit, Some((a, q)), &mut weight);
                 if !(total > 0.0 && total.is_finite()) {
                     continue;
                 }
@@ -515,11 +502,7 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
             return;
         }
         let draws = (g.c * g.members.len()) as f64;
-        let alone = Mis {
-            emitters: self.emitters,
-            n_e: 1.0,
-            n_c: 0.0,
-        };
+        let alone = self.lights_alone();
         let mut weight = vec![0.0; g.members.len()];
         for a in 0..g.members.len() {
             for i in 0..g.c {
@@ -533,7 +516,7 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
                     continue;
                 }
                 let at = Domain::surface_point_3d(z.p, z.n, z.face);
-                let total = g.c as f64 * g.seen_from_members(kernel.bvh, &at, &mut weight);
+                let total = g.c as f64 * g.mixture(kernel.bvh, &at, None, &mut weight);
                 let density = total + draws * q;
                 if !(density > 0.0 && density.is_finite()) {
                     continue;

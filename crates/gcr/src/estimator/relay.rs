@@ -115,11 +115,7 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
             self.secondary = None;
             return;
         };
-        let alone = Mis {
-            emitters: self.emitters,
-            n_e: 1.0,
-            n_c: 0.0,
-        };
+        let alone = self.lights_alone();
         let scene = kernel.scene;
         let direct = |face: u32, p: DVec3, u: [f64; 3]| {
             let z = Vertex {
@@ -131,6 +127,16 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
         };
         let table = SecondarySources::new(scene, seed, direct).map(std::sync::Arc::new);
         self.secondary = table;
+    }
+
+    /// The weights of a next-event estimate that stands alone (one light sample, no cosine ray
+    /// to weigh it against: weight 1), as a point drawn from the table gets it.
+    pub(crate) fn lights_alone(&self) -> Mis<'_> {
+        Mis {
+            emitters: self.emitters,
+            n_e: 1.0,
+            n_c: 0.0,
+        }
     }
 
     /// F̂(z) = ρ(z)·Ĥ_d(z): z's direct radiosity by one shadow ray to a light drawn with `u[0]`
@@ -218,12 +224,7 @@ impl<C: Fn(DVec3, DVec3) -> Bands> PathGather<'_, C> {
         {
             return zero;
         }
-        let alone = Mis {
-            emitters: self.emitters,
-            n_e: 1.0,
-            n_c: 0.0,
-        };
-        let f = self.direct_radiosity(&z, &alone, [u[3], u[4], u[5]]);
+        let f = self.direct_radiosity(&z, &self.lights_alone(), [u[3], u[4], u[5]]);
         let w = g / (count * q_g(z.p - x.p) * g + q);
         f.map(|v| v * w)
     }

@@ -59,6 +59,24 @@ pub struct Gathered {
     pub rays: usize,
     /// Whether the paths gather's rounds were guided (`--guiding`, `estimator/guide.rs`).
     pub guided: bool,
+    /// What `--guiding auto`'s trial measured before the rounds, if one ran.
+    pub trial: Option<GuidingTrial>,
+}
+
+/// What `--guiding auto`'s trial measured before the rounds to a target (the table of secondary
+/// sources, `estimator/relay.rs`; docs/design/estimator.md, "Secondary sources"): one ray's
+/// relative variance without the table and, where that was high enough to try it, the ratio of
+/// the variances per ray with and without it and whether it was kept (ratio under 0.5).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct GuidingTrial {
+    /// One ray's relative variance without the table (the trial's squared relative error × its
+    /// rays per point).
+    pub variance_per_ray: f64,
+    /// The variance with the table over that without it; None where the table was not tried
+    /// (plain paths find the light: `variance_per_ray` under 0.5).
+    pub table_ratio: Option<f64>,
+    /// Whether the rounds drew from the table.
+    pub table_kept: bool,
 }
 
 impl Gathered {

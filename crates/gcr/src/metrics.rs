@@ -144,6 +144,10 @@ pub struct Metrics {
     /// Whether the paths gather guided its rays (`--guiding`: `auto`, the default, guides when
     /// the pilot round finds hard light, `Guiding::pays`).
     pub guided: bool,
+    /// What `--guiding auto`'s trial measured before the rounds to a target (one ray's relative
+    /// variance; the table of secondary sources' variance ratio and whether it was kept), None
+    /// where no trial ran (`--guiding on|off`, no target, a merge of shards).
+    pub guiding_trial: Option<crate::gather::GuidingTrial>,
     /// Energy balance of the final projection: the reflected power of the projected kernel,
     /// ∫_S B_refl, over the power the shot samples carry (their Monte-Carlo estimate of the same
     /// integral), before the energy correction rescales it to 1. `None` when not measured

@@ -11,7 +11,7 @@ use crate::config::{GatherMode, Guiding, SolveConfig};
 use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
 use crate::emitters::Emitters;
-use crate::gather::Gathered;
+use crate::gather::{Gathered, GuidingTrial};
 use crate::solve::Trained;
 use glam::DVec3;
 
@@ -92,24 +92,29 @@ pub fn radiosity_at_shard(
     let blocks = (target.is_some() || config.paths.shard.is_some())
         .then(|| Blocks::new(domain, points, &config.paths));
     let estimated = estimated(blocks.as_ref(), points.len(), config)?;
-    let mut gathered = match (target, blocks) {
+    let (mut gathered, trial) = match (target, blocks) {
         // ⟨The paths gather to a target: in rounds, block by block⟩
         (Some(target), Some(blocks)) => {
             let material = |(y, _, face): (DVec3, DVec3, u32)| {
                 (domain.reflectance_at(face, y), domain.emission(face))
             };
-            decide_table(&mut paths, &blocks, (points, &seeds), material, config);
+            let trial = decide_table(&mut paths, &blocks, (points, &seeds), material, config);
             let target = (target, stop);
-            paths_to_target(domain, &paths, (points, &seeds), &blocks, target, config)
+            (
+                paths_to_target(domain, &paths, (points, &seeds), &blocks, target, config),
+                trial,
+            )
         }
         // ⟨Otherwise each point on its own by the configured gather (a shard's points only)⟩
         (_, blocks) => {
             let mine = blocks.map(|b| b.mask(points.len()));
             let solution = (domain, trained, emitters, &paths);
-            super::pointwise::radiosity_each(solution, config, (points, &seeds), mine.as_deref())
+            let each = (points, &seeds[..]);
+            let g = super::pointwise::radiosity_each(solution, config, each, mine.as_deref());
+            (g, None)
         }
     };
-    mark_table(&paths, &mut gathered, &estimated);
+    mark_table(&paths, &mut gathered, (&estimated, trial));
     Ok((gathered, estimated))
 }
 
@@ -169,19 +174,22 @@ pub fn irradiance_at_shard(
     let blocks = (target.is_some() || config.paths.shard.is_some())
         .then(|| Blocks::new(domain, &receivers, &config.paths));
     let estimated = estimated(blocks.as_ref(), points.len(), config)?;
-    let mut gathered = match (target, blocks) {
+    let (mut gathered, trial) = match (target, blocks) {
         (Some(target), Some(blocks)) => {
             let white = |_| ([1.0; BANDS], [0.0; BANDS]);
             let at = (&receivers[..], &seeds[..]);
-            decide_table(&mut paths, &blocks, at, white, config);
-            grouped_rounds(domain, &paths, at, &blocks, white, (target, stop), config)
+            let trial = decide_table(&mut paths, &blocks, at, white, config);
+            let g = grouped_rounds(domain, &paths, at, &blocks, white, (target, stop), config);
+            (g, trial)
         }
         (_, blocks) => {
             let mine = blocks.map(|b| b.mask(points.len()));
-            super::pointwise::irradiance_each(&paths, config, (points, &seeds), mine.as_deref())
+            let each = (points, &seeds[..]);
+            let g = super::pointwise::irradiance_each(&paths, config, each, mine.as_deref());
+            (g, None)
         }
     };
-    mark_table(&paths, &mut gathered, &estimated);
+    mark_table(&paths, &mut gathered, (&estimated, trial));
     Ok((gathered, estimated))
 }
 
@@ -206,30 +214,36 @@ fn path_gather<'a>(
 }
 
 /// `Guiding::Auto` before the rounds to a target: the table of secondary sources for `paths`
-/// where a trial on the points says it pays (`secondary.rs`, [`table_if_it_pays`]).
+/// where a trial on the points says it pays (`secondary.rs`, [`table_if_it_pays`]); what the
+/// trial measured (None: no trial).
 fn decide_table(
     paths: &mut PathGather<'_, impl Fn(DVec3, DVec3) -> Bands + Sync>,
     blocks: &Blocks,
     at: (&[(DVec3, DVec3, u32)], &[u64]),
     material: impl Fn((DVec3, DVec3, u32)) -> (Bands, Bands) + Sync,
     config: &SolveConfig,
-) {
-    if config.paths.guiding == Guiding::Auto {
-        let samples = config.gather_samples;
-        let variance =
-            |p: &PathGather<'_, _>| group_variance(p, &blocks.groups, at, &material, samples);
-        let rays = samples.direct.max(samples.indirect);
-        table_if_it_pays(paths, variance, (rays, config.seed));
+) -> Option<GuidingTrial> {
+    if config.paths.guiding != Guiding::Auto {
+        return None;
     }
+    let samples = config.gather_samples;
+    let variance =
+        |p: &PathGather<'_, _>| group_variance(p, &blocks.groups, at, &material, samples);
+    let rays = samples.direct.max(samples.indirect);
+    table_if_it_pays(paths, variance, (rays, config.seed)).trial()
 }
 
-/// Marks the values of a gather that drew from a table of secondary sources as guided (the
-/// metrics' `guided`; `secondary.rs`).
-fn mark_table<C>(paths: &PathGather<'_, C>, gathered: &mut [Gathered], estimated: &[usize]) {
-    if paths.secondary.is_some() {
-        for &i in estimated {
-            gathered[i].guided = true;
-        }
+/// Marks the `estimated` values of a gather with the `trial` that decided about the table of
+/// secondary sources, and as guided where it drew from one (the metrics' `guided` and
+/// `guiding_trial`; `secondary.rs`).
+fn mark_table<C>(
+    paths: &PathGather<'_, C>,
+    gathered: &mut [Gathered],
+    (estimated, trial): (&[usize], Option<GuidingTrial>),
+) {
+    for &i in estimated {
+        gathered[i].guided |= paths.secondary.is_some();
+        gathered[i].trial = trial;
     }
 }
 

@@ -33,9 +33,9 @@ pub(crate) const TABLE_PAYS: f64 = 0.5;
 pub(crate) enum TableChoice {
     /// The trial's first half found a relative variance per ray under [`TRIAL_VARIANCE`] (that).
     Easy(f64),
-    /// The trial ran: the ratio of the estimated relative variances with and without the table,
-    /// and whether the table was kept.
-    Tried(f64, bool),
+    /// The trial ran: one ray's relative variance without the table, the ratio of the estimated
+    /// relative variances with and without it, and whether the table was kept.
+    Tried(f64, f64, bool),
     /// Nothing to try: no light reflected at the trial's points, or no table to draw.
     Nothing,
 }
@@ -67,7 +67,23 @@ pub(crate) fn table_if_it_pays<'a, C: Fn(DVec3, DVec3) -> Bands + Sync>(
     if !keep {
         paths.secondary = None;
     }
-    TableChoice::Tried(ratio, keep)
+    TableChoice::Tried(per_ray, ratio, keep)
+}
+
+impl TableChoice {
+    /// The trial as the metrics report it (None: nothing was tried).
+    pub(crate) fn trial(self) -> Option<crate::gather::GuidingTrial> {
+        let (variance_per_ray, table_ratio, table_kept) = match self {
+            TableChoice::Easy(v) => (v, None, false),
+            TableChoice::Tried(v, ratio, keep) => (v, Some(ratio), keep),
+            TableChoice::Nothing => return None,
+        };
+        Some(crate::gather::GuidingTrial {
+            variance_per_ray,
+            table_ratio,
+            table_kept,
+        })
+    }
 }
 
 /// The trial of [`table_if_it_pays`] for points in groups of neighbours: one round of `samples`
@@ -390,7 +406,9 @@ mod tests {
             })
             .collect();
         match trial(&shipped("sun-patch-room"), ceiling) {
-            (TableChoice::Tried(ratio, true), true) => assert!(ratio < 0.2, "ratio {ratio}"),
+            (TableChoice::Tried(v, ratio, true), true) => {
+                assert!(ratio < 0.2 && v >= TRIAL_VARIANCE, "ratio {ratio}, {v}")
+            }
             other => panic!("sun patch room: {other:?}"),
         }
         let cornell = scene_sampler::builtin("cornell-box")

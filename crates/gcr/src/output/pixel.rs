@@ -31,6 +31,7 @@ use crate::estimator::pixel_rounds::{pixel_error, relative_floor};
 use crate::estimator::relay::table_if_it_pays;
 use crate::estimator::{GatherError, GatherStats, radiosity_at_points};
 use crate::gather::Gathered;
+use crate::gather::GuidingTrial;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -257,9 +258,10 @@ fn render_footprints(
         };
         gather.estimate_footprint(&receiver, pixel_seed(config.seed, px, py), first, rays)
     };
-    if merged.is_none() {
-        decide_table(&mut gather, &footprint, n, config);
-    }
+    let trial = match merged {
+        None => decide_table(&mut gather, &footprint, n, config),
+        Some(_) => None,
+    };
     let estimate = |p: usize, first: usize, rays: usize| footprint(&gather, p, first, rays);
     // ⟨In strips of rows, each to the target on its own (a shard's only), or from the shards⟩
     let strips = PixelStrips::new(width, height, config);
@@ -287,6 +289,7 @@ fn render_footprints(
             None => GatherStats {
                 // what the rounds ran to: the per-pixel relative error (estimator::pixel_rounds)
                 relative_std_error: pixel_error(&gathered, relative_floor(&gathered)),
+                trial,
                 ..GatherStats::of(&gathered)
             },
         },
@@ -388,17 +391,21 @@ const TRIAL_PIXELS: usize = 512;
 /// The table of secondary sources for a per-pixel image's `gather` (`estimator/relay.rs`):
 /// with `--guiding on`; with `auto`, before rounds to a target, where a trial round at every k-th
 /// of the `n` pixels (at most [`TRIAL_PIXELS`]; `footprint(gather, pixel, first, rays)` a
-/// pixel's estimate) says it halves the per-pixel relative variance ([`table_if_it_pays`]).
+/// pixel's estimate) says it halves the per-pixel relative variance ([`table_if_it_pays`]); what
+/// the trial measured (None: no trial).
 fn decide_table<'a, C: Fn(DVec3, DVec3) -> crate::element::Bands + Sync>(
     gather: &mut PathGather<'a, C>,
     footprint: &(impl Fn(&PathGather<'a, C>, usize, usize, usize) -> PointEstimate + Sync),
     n: usize,
     config: &SolveConfig,
-) {
+) -> Option<GuidingTrial> {
     match (config.paths.guiding, config.paths.target_error) {
-        (Guiding::On, _) => return gather.build_table(config.seed),
+        (Guiding::On, _) => {
+            gather.build_table(config.seed);
+            return None;
+        }
         (Guiding::Auto, Some(_)) => {}
-        _ => return,
+        _ => return None,
     }
     let rays = (config.gather_samples.direct).max(config.gather_samples.indirect);
     let trial: Vec<usize> = (0..n).step_by(n.div_ceil(TRIAL_PIXELS).max(1)).collect();
@@ -408,7 +415,7 @@ fn decide_table<'a, C: Fn(DVec3, DVec3) -> crate::element::Bands + Sync>(
             .collect();
         pixel_error(&gathered, relative_floor(&gathered)).map(|e| e * e)
     };
-    table_if_it_pays(gather, variance, (rays, config.seed));
+    table_if_it_pays(gather, variance, (rays, config.seed)).trial()
 }
 
 /// A pixel's seed from the solve's seed and its integer coordinates (`point_seed` quantizes to 2⁻²⁴

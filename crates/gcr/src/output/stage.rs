@@ -29,6 +29,7 @@ impl Stage {
             metrics.relative_std_error = stats.relative_std_error;
             metrics.gather_rays = stats.rays;
             metrics.guided = stats.guided;
+            metrics.guiding_trial = stats.trial;
             metrics.target_error = config.paths.target_error;
             metrics.warnings.extend(gather_warnings(stats, config));
         }

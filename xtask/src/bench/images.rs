@@ -92,6 +92,7 @@ fn plan(quick: bool) -> Plan {
                     "tessellated-cornell-100000",
                     "random-boxes-10000",
                     "scenes/checker-room.obj",
+                    SUN_PATCH,
                 ]
                 .map(String::from)
                 .to_vec()
@@ -223,16 +224,37 @@ fn reference(
 /// bench's sun and sky, `super::daylit::temple_lit`) and, for lights besides emitting faces, a
 /// file of them as Mitsuba emitters; `Ok(Err(why))` when the scene cannot be had.
 fn lit_scene(name: &str) -> Result<std::result::Result<(Scene, Option<PathBuf>), String>> {
-    if name != "temple" {
-        return Ok(Ok((scene_sampler::load_or_builtin(name)?.into_3d()?, None)));
-    }
-    let (scene, emitters) = match super::daylit::temple_lit()? {
-        Ok(lit) => lit,
-        Err(why) => return Ok(Err(why)),
+    let (scene, emitters) = match name {
+        "temple" => match super::daylit::temple_lit()? {
+            Ok(lit) => lit,
+            Err(why) => return Ok(Err(why)),
+        },
+        SUN_PATCH => sun_patch_room()?,
+        _ => return Ok(Ok((scene_sampler::load_or_builtin(name)?.into_3d()?, None))),
     };
     let path = std::env::temp_dir().join(format!("gcr-images-{}-lights.json", std::process::id()));
     std::fs::write(&path, serde_json::to_string(&emitters)?)?;
     Ok(Ok((scene, Some(path))))
+}
+
+/// The hard-indirect view (issue 36): `scenes/sun-patch-room.obj`, lit only by the sun through
+/// its window (`IMAGE_SCENES=sun-patch-room`).
+const SUN_PATCH: &str = "sun-patch-room";
+
+/// The sun patch room under its lighting file's sun made a delta direction for both renderers
+/// (Mitsuba's `directional` has no disc; a disc's penumbra would differ at the patch's edges),
+/// and the sun as a Mitsuba emitter.
+fn sun_patch_room() -> Result<(Scene, serde_json::Value)> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    let mut scene = scene_sampler::load(root.join("sun-patch-room.obj"))?.into_3d()?;
+    let mut lighting = scene_sampler::Lighting::read(&root.join("sun-patch-room.lights.json"))?;
+    let sun = lighting.sun.as_mut().context("the sun patch room's sun")?;
+    sun.diameter = 0.0;
+    let toward = lighting.up.direction(sun.azimuth, sun.elevation);
+    let mitsuba = serde_json::json!([{"type": "directional",
+        "direction": (-toward).to_array(), "irradiance": sun.illuminance}]);
+    scene.add_lights(lighting.lights()?);
+    Ok((scene, mitsuba))
 }
 
 /// Every solver on one scene: the curves, and a note.
@@ -250,6 +272,13 @@ fn one(name: &str, p: &Plan) -> Result<std::result::Result<(Vec<Curve>, String),
             target: glam::DVec3::new(-2.355, 7.922, -1.041),
             up: glam::DVec3::Y,
             fov_y_degrees: 40.0,
+        },
+        // `gcr solve`'s view of it (`automatic-inside`): the sun patch on the floor, the window
+        SUN_PATCH => PinholeCamera {
+            eye: glam::DVec3::new(5.25, 1.25, 1.583_333),
+            target: glam::DVec3::new(4.542_893, 1.25, 2.290_44),
+            up: glam::DVec3::Y,
+            fov_y_degrees: 60.0,
         },
         _ => PinholeCamera::of_scene(&scene),
     };
@@ -377,7 +406,7 @@ pub fn run(ctx: &Ctx) -> Result<()> {
     );
     // every scene named is loadable, before any is run (a typo in `IMAGE_SCENES` would otherwise
     // lose the runs before it: the page is written at the end)
-    for name in p.scenes.iter().filter(|n| *n != "temple") {
+    for name in (p.scenes.iter()).filter(|n| !["temple", SUN_PATCH].contains(&n.as_str())) {
         scene_sampler::load_or_builtin(name).with_context(|| format!("images: scene `{name}`"))?;
     }
     for name in &p.scenes {

@@ -24,7 +24,9 @@
 //! reference without Mitsuba's runs. The 3-D built-ins (the generated ones at 10 000
 //! random-box and 100 000 tessellated triangles) and `scenes/checker-room.obj`:
 //! checkerboard albedo textures (`map_Kd`), given to Mitsuba as the same linear texels (`bitmap`, raw,
-//! bilinear, repeat), from its bounding-box camera.
+//! bilinear, repeat), from its bounding-box camera; and `sun-patch-room`, the hard-indirect view:
+//! `scenes/sun-patch-room.obj` from inside, lit only by its lighting file's sun (a delta direction
+//! for both) through the window.
 
 use super::field::{mitsuba_runs, read_values, run_mitsuba, write_mitsuba_faces};
 use super::gcr::{Curve, plot_curves};

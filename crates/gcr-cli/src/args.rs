@@ -127,7 +127,8 @@ pub struct SolveArgs {
     /// (the sun patch on a floor, a lit ceiling), and draw the cosine rays from guides learned
     /// from earlier rounds (both weighed against plain sampling: unbiased). auto: the table where
     /// a trial round finds light hard to find (one ray's relative variance at least 0.5) and the
-    /// table halving it, the learned guides when the pilot round finds hard light (at least 8 192 rays
+    /// table halving it, or fairly hard (0.1–0.5, in a job of many rays) and the table dividing it
+    /// by 10; the learned guides when the pilot round finds hard light (at least 8 192 rays
     /// per point to the target, each varying by more than 1.7 times the mean); off: plain paths;
     /// docs/design/estimator.md, "Guiding" and "Secondary sources".
     #[arg(help_heading = RESEARCH, hide_short_help = true, long, default_value = "auto", value_parser = ["auto", "on", "off"])]

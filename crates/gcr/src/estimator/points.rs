@@ -230,7 +230,9 @@ fn decide_table(
     let variance =
         |p: &PathGather<'_, _>| group_variance(p, &blocks.groups, at, &material, samples);
     let rays = samples.direct.max(samples.indirect);
-    table_if_it_pays(paths, variance, (rays, config.seed)).trial()
+    let target = config.paths.target_error.unwrap_or(1.0);
+    let work = at.0.len() as f64 / (target * target);
+    table_if_it_pays(paths, variance, (rays, config.seed, work)).trial()
 }
 
 /// Marks the `estimated` values of a gather with the `trial` that decided about the table of

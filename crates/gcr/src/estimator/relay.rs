@@ -17,21 +17,39 @@ use rayon::prelude::*;
 /// ([`table_if_it_pays`]).
 const TRIAL_GROUPS: usize = 64;
 /// The table is tried only where one ray's relative variance without it (the trial's squared
-/// relative error × its rays) is at least this: light that plain paths find easily converges
-/// faster than 1/rays on their Sobol points, which the trial's few rays do not show (the Cornell
-/// box, 0.03 per ray, tried a ratio of 0.34 but took as long to 0.3 % with the table as without;
-/// the many rooms 0.15, closed room 0.05; the uplight room 1.5, the sun patch room's ceiling 6,
-/// the door gap 26, where the table pays).
-pub(crate) const TRIAL_VARIANCE: f64 = 0.5;
-/// The table is kept where it divides the variance per ray by more than this: its draws cost
-/// about as much as the rest of a path (1.75–1.95× the time per ray, measured on the door gap,
-/// the sun patch room, the uplight room and the many rooms; docs/design/estimator.md).
+/// relative error × its rays) is at least this: below, plain paths find the light easily (the
+/// Cornell box's points above the blocks 0.014, the closed room's 0.046, the sun patch room's
+/// work plane 0.034, lightmaps of two-blockers, wall-floor and the furnace 0.03–0.04).
+pub(crate) const TRIAL_VARIANCE: f64 = 0.1;
+/// Under this relative variance per ray the table must pay [`EASY_PAYS`], above it
+/// [`TABLE_PAYS`]: light that plain paths find fairly well converges faster than 1/rays on their
+/// Sobol points, which a trial of a few rays does not show (the Cornell box's 2 000 spread
+/// points, 0.22 per ray, tried a ratio of 0.34 but took as long to 0.3 % with the table as
+/// without; the closed room's lightmap, 0.23, tried 0.245 and took 81.9 s to 2 % against 61.6 s;
+/// the uplight room's lightmap, 0.24, tried 0.07 and took 21.6 s against 53.6 s).
+pub(crate) const EASY_VARIANCE: f64 = 0.5;
+/// The table is kept where it divides the variance per ray by more than this (hard light: one
+/// ray's relative variance at least [`EASY_VARIANCE`]; the uplight room 1.5, the sun patch room's
+/// ceiling 6, the door gap 26): its draws cost about as much as the rest of a path (1.75–1.95×
+/// the time per ray, measured on the door gap, the sun patch room, the uplight room and the many
+/// rooms; docs/design/estimator.md).
 pub(crate) const TABLE_PAYS: f64 = 0.5;
+/// The ratio the table must reach where one ray's relative variance is between
+/// [`TRIAL_VARIANCE`] and [`EASY_VARIANCE`] ([`EASY_VARIANCE`]'s measurements).
+pub(crate) const EASY_PAYS: f64 = 0.1;
+/// Where one ray's relative variance is under [`EASY_VARIANCE`], the table is tried only when the
+/// rays the trial predicts to the target over all the points (variance per ray × points/target²)
+/// are at least this many times the table's own next-event rays: a small job pays for the
+/// table's build and the trial's second half out of its own time (a 96 × 96 per-pixel image of
+/// two-blockers to 5 %, 0.136 per ray, ran 1.16× slower trying it: 0.5 million rays predicted
+/// against the table's 131 000).
+const EASY_WORK: f64 = 20.0;
 
 /// What `Guiding::Auto` decided about the table of secondary sources ([`table_if_it_pays`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum TableChoice {
-    /// The trial's first half found a relative variance per ray under [`TRIAL_VARIANCE`] (that).
+    /// The trial's first half found a relative variance per ray under [`TRIAL_VARIANCE`], or under
+    /// [`EASY_VARIANCE`] for a job too small to pay for a table ([`EASY_WORK`]): that variance.
     Easy(f64),
     /// The trial ran: one ray's relative variance without the table, the ratio of the estimated
     /// relative variances with and without it, and whether the table was kept.
@@ -43,19 +61,24 @@ pub(crate) enum TableChoice {
 /// `Guiding::Auto`'s choice for `paths` (module docs): `variance(paths)`, a trial round's
 /// estimated relative variance with `rays` rays per point, first without a table; where one
 /// ray's is at least [`TRIAL_VARIANCE`], the table is built (seeded by `seed`) and the trial run
-/// again with it, and kept if the ratio of the two variances is under [`TABLE_PAYS`].
+/// again with it, and kept if the ratio of the two variances is under [`TABLE_PAYS`]
+/// ([`EASY_PAYS`] where one ray's is under [`EASY_VARIANCE`], and tried there only where the job
+/// is large enough, `work` = points/target² the rays per unit variance to the target:
+/// [`EASY_WORK`]).
 /// Deterministic (a ratio of variances, not of times).
 pub(crate) fn table_if_it_pays<'a, C: Fn(DVec3, DVec3) -> Bands + Sync>(
     paths: &mut PathGather<'a, C>,
     variance: impl Fn(&PathGather<'a, C>) -> Option<f64>,
-    (rays, seed): (usize, u64),
+    (rays, seed, work): (usize, u64, f64),
 ) -> TableChoice {
     paths.secondary = None;
     let Some(plain) = variance(paths) else {
         return TableChoice::Nothing;
     };
     let per_ray = rays as f64 * plain;
-    if per_ray < TRIAL_VARIANCE {
+    let table_rays = (super::secondary::CELLS * super::secondary::SAMPLES) as f64;
+    let small = per_ray < EASY_VARIANCE && per_ray * work < EASY_WORK * table_rays;
+    if per_ray < TRIAL_VARIANCE || small {
         return TableChoice::Easy(per_ray);
     }
     paths.build_table(seed);
@@ -63,7 +86,12 @@ pub(crate) fn table_if_it_pays<'a, C: Fn(DVec3, DVec3) -> Bands + Sync>(
         return TableChoice::Nothing;
     }
     let ratio = variance(paths).map_or(0.0, |with| with / plain);
-    let keep = ratio < TABLE_PAYS;
+    let keep = ratio
+        < if per_ray < EASY_VARIANCE {
+            EASY_PAYS
+        } else {
+            TABLE_PAYS
+        };
     if !keep {
         paths.secondary = None;
     }
@@ -373,8 +401,8 @@ mod tests {
     }
 
     /// `Guiding::Auto`'s trial: under the sun patch room's ceiling the table divides the variance
-    /// per ray many times over and is kept; in the Cornell box plain paths find the light easily
-    /// (variance per ray under `TRIAL_VARIANCE`) and no table is built.
+    /// per ray many times over and is kept; in the Cornell box plain paths find the light fairly
+    /// easily (variance per ray under `EASY_VARIANCE`) and the table is not kept.
     #[test]
     fn the_trial_keeps_the_table_where_light_is_hard_to_find() {
         let trial = |scene: &Scene, points: Vec<(DVec3, DVec3, u32)>| {
@@ -396,7 +424,7 @@ mod tests {
             let at = (&points[..], &seeds[..]);
             let variance =
                 |p: &PathGather<'_, _>| group_variance(p, &groups, at, &material, samples);
-            let choice = table_if_it_pays(&mut g, variance, (16, 1));
+            let choice = table_if_it_pays(&mut g, variance, (16, 1, 1e12));
             (choice, g.secondary.is_some())
         };
         let ceiling = (0..64)
@@ -422,6 +450,9 @@ mod tests {
             .collect();
         match trial(&cornell, points) {
             (TableChoice::Easy(v), false) => assert!(v < TRIAL_VARIANCE, "variance {v}"),
+            (TableChoice::Tried(v, ratio, false), false) => {
+                assert!(v < EASY_VARIANCE && ratio >= EASY_PAYS, "{v}, {ratio}")
+            }
             other => panic!("cornell box: {other:?}"),
         }
     }

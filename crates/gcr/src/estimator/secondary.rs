@@ -46,7 +46,7 @@ use scene_sampler::{Discrete, Scene, uniform_triangle};
 /// Cells of the table over the whole scene, about (every face has one at least).
 pub(crate) const CELLS: usize = 1 << 16;
 /// Next-event samples per cell.
-const SAMPLES: usize = 2;
+pub(crate) const SAMPLES: usize = 2;
 
 /// The table of direct radiosity over the scene's faces (module docs).
 pub(crate) struct SecondarySources {

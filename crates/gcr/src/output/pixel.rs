@@ -415,7 +415,9 @@ fn decide_table<'a, C: Fn(DVec3, DVec3) -> crate::element::Bands + Sync>(
             .collect();
         pixel_error(&gathered, relative_floor(&gathered)).map(|e| e * e)
     };
-    table_if_it_pays(gather, variance, (rays, config.seed)).trial()
+    let target = config.paths.target_error.unwrap_or(1.0);
+    let work = n as f64 / (target * target);
+    table_if_it_pays(gather, variance, (rays, config.seed, work)).trial()
 }
 
 /// A pixel's seed from the solve's seed and its integer coordinates (`point_seed` quantizes to 2⁻²⁴

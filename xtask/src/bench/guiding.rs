@@ -67,7 +67,18 @@ fn shipped(stem: &str) -> Result<Scene> {
 }
 
 fn cases(quick: bool) -> Result<Vec<Case>> {
-    let (a, b) = if quick { (10, 10) } else { (50, 40) };
+    // `GUIDING_POINTS=20000`: about that many points a case instead of 2 000 (the grids' sides
+    // scaled by the square root of the ratio)
+    let scale = std::env::var("GUIDING_POINTS")
+        .ok()
+        .and_then(|n| n.parse::<f64>().ok())
+        .map_or(1.0, |n| (n / 2000.0).sqrt());
+    let side = |n: usize| ((n as f64 * scale).round() as usize).max(2);
+    let (a, b) = if quick {
+        (10, 10)
+    } else {
+        (side(50), side(40))
+    };
     let builtin = |name: &str| -> Result<Scene> { Ok(scene_sampler::builtin(name)?.into_3d()?) };
     Ok(vec![
         Case {
@@ -106,7 +117,7 @@ fn cases(quick: bool) -> Result<Vec<Case>> {
                 std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/many-rooms.obj"),
             )?
             .into_3d()?,
-            points: many_rooms_points(if quick { 2 } else { 10 }),
+            points: many_rooms_points(if quick { 2 } else { side(10) }),
             // the lamps are emitting faces: no emitter beside the mesh's
             mitsuba: Some(serde_json::json!([])),
         },
@@ -230,7 +241,8 @@ pub fn run_group(ctx: &Ctx) -> Result<()> {
          at that time, and the time they would take to 2 % and 1 % if the error falls as \
          1/√spp (extrapolated, not run). `GUIDING_CASES=door,sun` runs only the cases whose \
          names contain one of the words; `GUIDING_MODE=on` forces the guided column on \
-         (`--guiding on`), `GUIDING_PEERS=off` leaves the peers out. \
+         (`--guiding on`), `GUIDING_PEERS=off` leaves the peers out, `GUIDING_POINTS=20000` \
+         sets about that many points a case. \
          Design and what was tried: docs/design/estimator.md, \"Guiding\".\n\n{md}{note}",
         quick = if ctx.quick { " --quick" } else { "" },
         threads = rayon::current_num_threads(),

@@ -46,10 +46,11 @@ fn grid(
 
 /// `n` × `n` points at 0.8 m in each room of `scenes/many-rooms.obj` (5 × 4 rooms of 4 m at a
 /// pitch of 4.1 m), facing up.
-fn many_rooms_points(n: usize) -> Vec<(DVec3, DVec3)> {
+fn many_rooms_points(n: usize, unlit_only: bool) -> Vec<(DVec3, DVec3)> {
     let mut out = Vec::new();
     for i in 0..5 {
-        for j in 0..4 {
+        // the lamps are in the rooms with i + j even (`xtask/py/make_light_scenes.py`)
+        for j in (0..4).filter(|j| !unlit_only || (i + j) % 2 == 1) {
             let (x0, z0) = (4.1 * i as f64 + 0.1, 4.1 * j as f64 + 0.1);
             out.extend(grid((x0, x0 + 4.0, n), (z0, z0 + 4.0, n), 0.8, DVec3::Y));
         }
@@ -117,8 +118,17 @@ fn cases(quick: bool) -> Result<Vec<Case>> {
                 std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/many-rooms.obj"),
             )?
             .into_3d()?,
-            points: many_rooms_points(if quick { 2 } else { side(10) }),
+            points: many_rooms_points(if quick { 2 } else { side(10) }, false),
             // the lamps are emitting faces: no emitter beside the mesh's
+            mitsuba: Some(serde_json::json!([])),
+        },
+        Case {
+            name: "many rooms: work planes in the 10 unlit rooms",
+            scene: scene_sampler::load(
+                std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/many-rooms.obj"),
+            )?
+            .into_3d()?,
+            points: many_rooms_points(if quick { 2 } else { side(14) }, true),
             mitsuba: Some(serde_json::json!([])),
         },
         Case {

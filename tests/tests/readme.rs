@@ -56,14 +56,12 @@ fn the_readmes_main_command_writes_a_lit_image_a_valid_mesh_and_metrics() {
     assert_eq!(metrics["target_error"].as_f64().unwrap(), 0.02);
     let e = metrics["relative_std_error"].as_f64().unwrap();
     assert!(e > 0.0 && e <= 0.02, "estimated error {e}");
-    // `--guiding auto`'s trial ran and found the Cornell box's light easy: no table tried
+    // `--guiding auto`'s trial ran before the mesh's last gather, and the Cornell box, whose
+    // light plain paths find, keeps no table
     let trial = &metrics["guiding_trial"];
     let v = trial["variance_per_ray"].as_f64().unwrap();
-    assert!(v > 0.0 && v < 0.5, "{trial}");
-    assert!(
-        trial["table_ratio"].is_null() && trial["table_kept"] == false,
-        "{trial}"
-    );
+    assert!(v > 0.0 && v.is_finite(), "{trial}");
+    assert_eq!(trial["table_kept"], false, "{trial}");
 
     check_image(Path::new(value_after(&args, "--image")));
     check_mesh(Path::new(value_after(&args, "--mesh")), &metrics);

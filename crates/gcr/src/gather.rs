@@ -59,8 +59,6 @@ pub struct Gathered {
     pub rays: usize,
     /// Whether the paths gather's rounds were guided (`--guiding`, `estimator/guide.rs`).
     pub guided: bool,
-    /// What `--guiding auto`'s trial measured before the rounds, if one ran.
-    pub trial: Option<GuidingTrial>,
 }
 
 /// What `--guiding auto`'s trial measured before the rounds to a target (the table of secondary

@@ -145,7 +145,8 @@ pub struct Metrics {
     /// the pilot round finds hard light, `Guiding::pays`).
     pub guided: bool,
     /// What `--guiding auto`'s trial measured before the rounds to a target (one ray's relative
-    /// variance; the table of secondary sources' variance ratio and whether it was kept), None
+    /// variance; the table of secondary sources' variance ratio and whether it was kept) of the
+    /// output the error is reported for (its last gather: a mesh's last refinement level), None
     /// where no trial ran (`--guiding on|off`, no target, a merge of shards).
     pub guiding_trial: Option<crate::gather::GuidingTrial>,
     /// Energy balance of the final projection: the reflected power of the projected kernel,

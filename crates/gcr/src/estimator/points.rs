@@ -235,9 +235,9 @@ fn decide_table(
     table_if_it_pays(paths, variance, (rays, config.seed, work)).trial()
 }
 
-/// Marks the `estimated` values of a gather with the `trial` that decided about the table of
-/// secondary sources, and as guided where it drew from one (the metrics' `guided` and
-/// `guiding_trial`; `secondary.rs`).
+/// Marks the `estimated` values of a gather as guided where it drew from a table of secondary
+/// sources (the metrics' `guided`; `secondary.rs`), and records the `trial` that decided about
+/// it for the output stage (the metrics' `guiding_trial`, [`super::relay::record_trial`]).
 fn mark_table<C>(
     paths: &PathGather<'_, C>,
     gathered: &mut [Gathered],
@@ -245,8 +245,8 @@ fn mark_table<C>(
 ) {
     for &i in estimated {
         gathered[i].guided |= paths.secondary.is_some();
-        gathered[i].trial = trial;
     }
+    super::relay::record_trial(trial);
 }
 
 /// Mixed into the solve's seed for irradiance probes ([`irradiance_at_points`]).

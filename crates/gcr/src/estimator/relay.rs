@@ -98,6 +98,24 @@ pub(crate) fn table_if_it_pays<'a, C: Fn(DVec3, DVec3) -> Bands + Sync>(
     TableChoice::Tried(per_ray, ratio, keep)
 }
 
+thread_local! {
+    /// The trial of the last gather on this thread ([`record_trial`]).
+    static LAST_TRIAL: std::cell::Cell<Option<crate::gather::GuidingTrial>> =
+        const { std::cell::Cell::new(None) };
+}
+
+/// Records what the trial before a gather measured (None: none ran), on the gather's calling
+/// thread, for the output stage that reports it ([`take_trial`]): one value a gather, kept out
+/// of its points' values.
+pub(crate) fn record_trial(trial: Option<crate::gather::GuidingTrial>) {
+    LAST_TRIAL.with(|t| t.set(trial));
+}
+
+/// What [`record_trial`] recorded last on this thread, cleared.
+pub(crate) fn take_trial() -> Option<crate::gather::GuidingTrial> {
+    LAST_TRIAL.with(std::cell::Cell::take)
+}
+
 impl TableChoice {
     /// The trial as the metrics report it (None: nothing was tried).
     pub(crate) fn trial(self) -> Option<crate::gather::GuidingTrial> {

@@ -526,8 +526,8 @@ pub struct GatherStats {
     pub dark: bool,
     /// Whether the rounds were guided ([`Gathered::guided`]; `--guiding auto` decides).
     pub guided: bool,
-    /// What `--guiding auto`'s trial measured ([`Gathered::trial`]: the first point's that has
-    /// one).
+    /// What `--guiding auto`'s trial measured before the gather's rounds (None from
+    /// [`GatherStats::of`]: the output stage adds it, `estimator::relay::take_trial`).
     pub trial: Option<crate::gather::GuidingTrial>,
 }
 
@@ -543,7 +543,7 @@ impl GatherStats {
             network_share: if total > 0.0 { net / total } else { 0.0 },
             relative_std_error: relative_std_error(gathered),
             guided: gathered.iter().any(|g| g.guided),
-            trial: gathered.iter().find_map(|g| g.trial),
+            trial: None,
             rays: gathered.iter().map(|g| g.rays).max().unwrap_or(0),
             dark: !gathered.is_empty()
                 && gathered

@@ -81,7 +81,7 @@ pub(super) fn write_lightmap(
     if let Some(shard) = config.paths.shard {
         // ⟨A shard writes its texels' estimates with their indices, nothing else⟩
         let theirs: Vec<Gathered> = mine.iter().map(|&i| gathered[i]).collect();
-        stage.gathers.push(GatherStats::of(&theirs));
+        stage.push_gather(GatherStats::of(&theirs));
         stage.metrics.seconds.gather += tg.elapsed().as_secs_f64();
         let lines: Vec<String> = gathered.iter().map(super::shards::gathered_line).collect();
         let kind = super::shards::Kind::Lightmap;
@@ -94,7 +94,7 @@ pub(super) fn write_lightmap(
     stage.metrics.warnings.extend(texels.atlas.note.clone());
     let lightmap =
         crate::lightmap::assemble_lightmap(domain, texels, &gathered, guide.as_ref(), settings);
-    stage.gathers.push(lightmap.stats);
+    stage.push_gather(lightmap.stats);
     let (metrics, staged) = (&mut stage.metrics, &mut stage.files);
     metrics.seconds.gather += tg.elapsed().as_secs_f64();
     let to = Instant::now();

@@ -262,6 +262,7 @@ fn render_footprints(
         None => decide_table(&mut gather, &footprint, n, config),
         Some(_) => None,
     };
+    crate::estimator::relay::record_trial(trial);
     let estimate = |p: usize, first: usize, rays: usize| footprint(&gather, p, first, rays);
     // ⟨In strips of rows, each to the target on its own (a shard's only), or from the shards⟩
     let strips = PixelStrips::new(width, height, config);

@@ -36,7 +36,7 @@ pub(super) fn write_probes(
     let _phase = crate::progress::phase("probes");
     let (text, stats) = probe_values(domain, trained, emitters, config, probes)?;
     stage.metrics.probe_quantity = probes.1.quantity.name().into();
-    stage.gathers.push(stats);
+    stage.push_gather(stats);
     stage.metrics.seconds.gather += tg.elapsed().as_secs_f64();
     stage.files.write_bytes(path, text.as_bytes())
 }

@@ -155,8 +155,6 @@ pub fn parse_gathered(line: &str) -> Option<Gathered> {
             "1" => true,
             _ => return None,
         },
-        // the trial is not in the shard files: a merge reports none
-        trial: None,
     })
 }
 
@@ -495,7 +493,6 @@ mod tests {
             spread: [-f64::MIN_POSITIVE, 2.5e-17, -7.0],
             rays: 65536,
             guided: true,
-            trial: None,
         };
         let line = gathered_line(&g);
         assert!(line.ends_with('\n'));

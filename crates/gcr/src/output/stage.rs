@@ -19,6 +19,13 @@ pub(super) struct Stage {
 }
 
 impl Stage {
+    /// Adds what an output gather measured, with the trial recorded before it on this thread
+    /// (`estimator::relay::take_trial`; the metrics' `guiding_trial`).
+    pub(super) fn push_gather(&mut self, mut stats: GatherStats) {
+        stats.trial = stats.trial.or(crate::estimator::relay::take_trial());
+        self.gathers.push(stats);
+    }
+
     /// Records what each output gather measured into the metrics, in order (the last output set
     /// wins: the mesh after the probes), the target they ran to, and their warnings
     /// ([`gather_warnings`]).

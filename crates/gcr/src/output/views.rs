@@ -43,6 +43,8 @@ pub(super) fn write_3d(
     // ⟨Each image's camera (the automatic one from a quick gather where its candidates look)⟩
     let tg = Instant::now();
     let jobs = image_cameras(domain, trained, config, &images, settings)?;
+    // the cameras' quick gathers are not outputs: their trial is not reported
+    let _ = crate::estimator::relay::take_trial();
     stage.metrics.seconds.gather += tg.elapsed().as_secs_f64();
     // ⟨The output mesh, when an output needs it: whole for a file of its own, else what the
     // mesh-mode images see⟩
@@ -68,7 +70,7 @@ pub(super) fn write_3d(
         let size = (settings.width, settings.height, settings.pixel_samples);
         let merged = merged_pixels(domain, config, plan, camera)?;
         let img = render_pixel_shard(domain, trained, config, camera, size, merged)?;
-        stage.gathers.push(img.stats);
+        stage.push_gather(img.stats);
         rendered.push(img);
     }
     stage.metrics.seconds.gather += tg.elapsed().as_secs_f64();
@@ -137,7 +139,7 @@ fn staged_mesh(
     let tg = Instant::now();
     let limits = RetriangulateLimits::default();
     let (mesh, stats) = output_mesh_of(domain, trained, config, limits, extent)?;
-    stage.gathers.push(stats);
+    stage.push_gather(stats);
     stage.metrics.output_vertices = mesh.vertex_count();
     stage.metrics.output_triangles = mesh.triangle_count();
     stage.metrics.seconds.gather += tg.elapsed().as_secs_f64();

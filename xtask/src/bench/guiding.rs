@@ -58,6 +58,12 @@ fn many_rooms_points(n: usize, unlit_only: bool) -> Vec<(DVec3, DVec3)> {
     out
 }
 
+/// `scenes/many-rooms.obj` (no lighting file: its lamps are emitting faces).
+fn many_rooms() -> Result<Scene> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    Ok(scene_sampler::load(root.join("many-rooms.obj"))?.into_3d()?)
+}
+
 /// A shipped scene with its lighting file (`scenes/<stem>.obj`, `scenes/<stem>.lights.json`).
 fn shipped(stem: &str) -> Result<Scene> {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
@@ -114,20 +120,14 @@ fn cases(quick: bool) -> Result<Vec<Case>> {
         },
         Case {
             name: "many rooms: work planes in 20 rooms, 10 lamps",
-            scene: scene_sampler::load(
-                std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/many-rooms.obj"),
-            )?
-            .into_3d()?,
+            scene: many_rooms()?,
             points: many_rooms_points(if quick { 2 } else { side(10) }, false),
             // the lamps are emitting faces: no emitter beside the mesh's
             mitsuba: Some(serde_json::json!([])),
         },
         Case {
             name: "many rooms: work planes in the 10 unlit rooms",
-            scene: scene_sampler::load(
-                std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/many-rooms.obj"),
-            )?
-            .into_3d()?,
+            scene: many_rooms()?,
             points: many_rooms_points(if quick { 2 } else { side(14) }, true),
             mitsuba: Some(serde_json::json!([])),
         },

@@ -64,14 +64,16 @@ pub struct Gathered {
 /// What `--guiding auto`'s trial measured before the rounds to a target (the table of secondary
 /// sources, `estimator/relay.rs`; docs/design/estimator.md, "Secondary sources"): one ray's
 /// relative variance without the table and, where that was high enough to try it, the ratio of
-/// the variances per ray with and without it and whether it was kept (ratio under 0.5).
+/// the variances per ray with and without it and whether it was kept (under 0.5, or 0.1 where
+/// plain paths find the light fairly well).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct GuidingTrial {
     /// One ray's relative variance without the table (the trial's squared relative error × its
     /// rays per point).
     pub variance_per_ray: f64,
     /// The variance with the table over that without it; None where the table was not tried
-    /// (plain paths find the light: `variance_per_ray` under 0.5).
+    /// (plain paths find the light easily, `variance_per_ray` under 0.1, or fairly well in a job
+    /// too small to pay for a table).
     pub table_ratio: Option<f64>,
     /// Whether the rounds drew from the table.
     pub table_kept: bool,

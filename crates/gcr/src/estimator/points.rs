@@ -232,7 +232,7 @@ fn decide_table(
     let rays = samples.direct.max(samples.indirect);
     let target = config.paths.target_error.unwrap_or(1.0);
     let work = at.0.len() as f64 / (target * target);
-    table_if_it_pays(paths, variance, (rays, config.seed, work)).trial()
+    table_if_it_pays(paths, variance, (rays, config.seed, work))
 }
 
 /// Marks the `estimated` values of a gather as guided where it drew from a table of secondary

@@ -7,7 +7,7 @@ use super::paths::{PathGather, SobolRay, Vertex};
 use super::secondary::SecondarySources;
 use crate::domain::Domain;
 use crate::element::{BANDS, Bands};
-use crate::gather::{Mis, geometry_3d};
+use crate::gather::{GuidingTrial, Mis, geometry_3d};
 use glam::DVec3;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -45,46 +45,34 @@ pub(crate) const EASY_PAYS: f64 = 0.1;
 /// against the table's 131 000).
 const EASY_WORK: f64 = 20.0;
 
-/// What `Guiding::Auto` decided about the table of secondary sources ([`table_if_it_pays`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) enum TableChoice {
-    /// The trial's first half found a relative variance per ray under [`TRIAL_VARIANCE`], or under
-    /// [`EASY_VARIANCE`] for a job too small to pay for a table ([`EASY_WORK`]): that variance.
-    Easy(f64),
-    /// The trial ran: one ray's relative variance without the table, the ratio of the estimated
-    /// relative variances with and without it, and whether the table was kept.
-    Tried(f64, f64, bool),
-    /// Nothing to try: no light reflected at the trial's points, or no table to draw.
-    Nothing,
-}
-
 /// `Guiding::Auto`'s choice for `paths` (module docs): `variance(paths)`, a trial round's
 /// estimated relative variance with `rays` rays per point, first without a table; where one
 /// ray's is at least [`TRIAL_VARIANCE`], the table is built (seeded by `seed`) and the trial run
 /// again with it, and kept if the ratio of the two variances is under [`TABLE_PAYS`]
 /// ([`EASY_PAYS`] where one ray's is under [`EASY_VARIANCE`], and tried there only where the job
 /// is large enough, `work` = points/target² the rays per unit variance to the target:
-/// [`EASY_WORK`]).
-/// Deterministic (a ratio of variances, not of times).
+/// [`EASY_WORK`]). What the trial measured, None where nothing could be tried (no light reflected
+/// at the trial's points, or no table to draw). Deterministic (a ratio of variances, not of
+/// times).
 pub(crate) fn table_if_it_pays<'a, C: Fn(DVec3, DVec3) -> Bands + Sync>(
     paths: &mut PathGather<'a, C>,
     variance: impl Fn(&PathGather<'a, C>) -> Option<f64>,
     (rays, seed, work): (usize, u64, f64),
-) -> TableChoice {
+) -> Option<GuidingTrial> {
     paths.secondary = None;
-    let Some(plain) = variance(paths) else {
-        return TableChoice::Nothing;
-    };
+    let plain = variance(paths)?;
     let per_ray = rays as f64 * plain;
     let table_rays = (super::secondary::CELLS * super::secondary::SAMPLES) as f64;
     let small = per_ray < EASY_VARIANCE && per_ray * work < EASY_WORK * table_rays;
     if per_ray < TRIAL_VARIANCE || small {
-        return TableChoice::Easy(per_ray);
+        return Some(GuidingTrial {
+            variance_per_ray: per_ray,
+            table_ratio: None,
+            table_kept: false,
+        });
     }
     paths.build_table(seed);
-    if paths.secondary.is_none() {
-        return TableChoice::Nothing;
-    }
+    paths.secondary.as_ref()?;
     let ratio = variance(paths).map_or(0.0, |with| with / plain);
     let keep = ratio
         < if per_ray < EASY_VARIANCE {
@@ -95,41 +83,28 @@ pub(crate) fn table_if_it_pays<'a, C: Fn(DVec3, DVec3) -> Bands + Sync>(
     if !keep {
         paths.secondary = None;
     }
-    TableChoice::Tried(per_ray, ratio, keep)
+    Some(GuidingTrial {
+        variance_per_ray: per_ray,
+        table_ratio: Some(ratio),
+        table_kept: keep,
+    })
 }
 
 thread_local! {
     /// The trial of the last gather on this thread ([`record_trial`]).
-    static LAST_TRIAL: std::cell::Cell<Option<crate::gather::GuidingTrial>> =
-        const { std::cell::Cell::new(None) };
+    static LAST_TRIAL: std::cell::Cell<Option<GuidingTrial>> = const { std::cell::Cell::new(None) };
 }
 
 /// Records what the trial before a gather measured (None: none ran), on the gather's calling
 /// thread, for the output stage that reports it ([`take_trial`]): one value a gather, kept out
 /// of its points' values.
-pub(crate) fn record_trial(trial: Option<crate::gather::GuidingTrial>) {
+pub(crate) fn record_trial(trial: Option<GuidingTrial>) {
     LAST_TRIAL.with(|t| t.set(trial));
 }
 
 /// What [`record_trial`] recorded last on this thread, cleared.
-pub(crate) fn take_trial() -> Option<crate::gather::GuidingTrial> {
+pub(crate) fn take_trial() -> Option<GuidingTrial> {
     LAST_TRIAL.with(std::cell::Cell::take)
-}
-
-impl TableChoice {
-    /// The trial as the metrics report it (None: nothing was tried).
-    pub(crate) fn trial(self) -> Option<crate::gather::GuidingTrial> {
-        let (variance_per_ray, table_ratio, table_kept) = match self {
-            TableChoice::Easy(v) => (v, None, false),
-            TableChoice::Tried(v, ratio, keep) => (v, Some(ratio), keep),
-            TableChoice::Nothing => return None,
-        };
-        Some(crate::gather::GuidingTrial {
-            variance_per_ray,
-            table_ratio,
-            table_kept,
-        })
-    }
 }
 
 /// The trial of [`table_if_it_pays`] for points in groups of neighbours: one round of `samples`
@@ -452,7 +427,8 @@ mod tests {
             })
             .collect();
         match trial(&shipped("sun-patch-room"), ceiling) {
-            (TableChoice::Tried(v, ratio, true), true) => {
+            (Some(t), true) if t.table_kept => {
+                let (v, ratio) = (t.variance_per_ray, t.table_ratio.unwrap());
                 assert!(ratio < 0.2 && v >= TRIAL_VARIANCE, "ratio {ratio}, {v}")
             }
             other => panic!("sun patch room: {other:?}"),
@@ -467,10 +443,13 @@ mod tests {
             .map(|q| (q.point, q.normal, q.face))
             .collect();
         match trial(&cornell, points) {
-            (TableChoice::Easy(v), false) => assert!(v < TRIAL_VARIANCE, "variance {v}"),
-            (TableChoice::Tried(v, ratio, false), false) => {
-                assert!(v < EASY_VARIANCE && ratio >= EASY_PAYS, "{v}, {ratio}")
-            }
+            (Some(t), false) if !t.table_kept => match t.table_ratio {
+                None => assert!(t.variance_per_ray < TRIAL_VARIANCE, "variance {t:?}"),
+                Some(ratio) => {
+                    let v = t.variance_per_ray;
+                    assert!(v < EASY_VARIANCE && ratio >= EASY_PAYS, "{v}, {ratio}")
+                }
+            },
             other => panic!("cornell box: {other:?}"),
         }
     }

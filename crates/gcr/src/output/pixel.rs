@@ -290,7 +290,6 @@ fn render_footprints(
             None => GatherStats {
                 // what the rounds ran to: the per-pixel relative error (estimator::pixel_rounds)
                 relative_std_error: pixel_error(&gathered, relative_floor(&gathered)),
-                trial,
                 ..GatherStats::of(&gathered)
             },
         },
@@ -418,7 +417,7 @@ fn decide_table<'a, C: Fn(DVec3, DVec3) -> crate::element::Bands + Sync>(
     };
     let target = config.paths.target_error.unwrap_or(1.0);
     let work = n as f64 / (target * target);
-    table_if_it_pays(gather, variance, (rays, config.seed, work)).trial()
+    table_if_it_pays(gather, variance, (rays, config.seed, work))
 }
 
 /// A pixel's seed from the solve's seed and its integer coordinates (`point_seed` quantizes to 2⁻²⁴

@@ -22,7 +22,7 @@ impl Stage {
     /// Adds what an output gather measured, with the trial recorded before it on this thread
     /// (`estimator::relay::take_trial`; the metrics' `guiding_trial`).
     pub(super) fn push_gather(&mut self, mut stats: GatherStats) {
-        stats.trial = stats.trial.or(crate::estimator::relay::take_trial());
+        stats.trial = crate::estimator::relay::take_trial();
         self.gathers.push(stats);
     }
 
